@@ -1,0 +1,45 @@
+"""Shared value types and the occupancy-grid cell encoding used by every phase.
+
+Grid convention (all phases): a grid is a 2-D array indexed ``[row, col]``; cell
+(row r, col c) covers x in [c, c+1) and y in [r, r+1) in world units (cells), so
+its centre is ``(c + 0.5, r + 0.5)``. x grows with the column, y with the row
+(downwards in an image).
+
+Belief grids are ``uint8`` with the ordered encoding UNKNOWN < FREE < OCCUPIED,
+so merging two robots' knowledge is one ``np.maximum`` (a seen obstacle beats a
+seen free cell, and anything known beats unknown).
+"""
+
+from __future__ import annotations
+
+from typing import Final
+
+import numpy as np
+from numpy.typing import NDArray
+
+UNKNOWN: Final = np.uint8(0)
+FREE: Final = np.uint8(1)
+OCCUPIED: Final = np.uint8(2)
+
+BoolGrid = NDArray[np.bool_]
+BeliefGrid = NDArray[np.uint8]
+FloatArray = NDArray[np.float64]
+IntArray = NDArray[np.intp]
+
+
+def cell_of(x: float, y: float) -> tuple[int, int]:
+    """Return the (row, col) of the cell containing world point (x, y).
+
+    >>> cell_of(3.7, 1.2)
+    (1, 3)
+    """
+    return int(np.floor(y)), int(np.floor(x))
+
+
+def centre_of(row: int, col: int) -> tuple[float, float]:
+    """Return the world (x, y) of the centre of cell (row, col).
+
+    >>> centre_of(1, 3)
+    (3.5, 1.5)
+    """
+    return col + 0.5, row + 0.5
