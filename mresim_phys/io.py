@@ -1,0 +1,375 @@
+"""Phase 0 (input edge): read map files and YAML into plain values.
+
+This is the only module that touches user files on the way in. It turns image maps
+(PNG/BMP/GIF/JPEG, dark = obstacle), MRESim text maps (``.txt``: rows, columns, then
+rows of ``0``/``1``) and ROS ``map_server`` maps (YAML + PGM/PNG) into a
+:class:`LoadedMap` holding a boolean occupancy grid (True = obstacle, image row r = grid
+row r), and reads scenario YAML into a mapping. Every user mistake ends in a
+:class:`~mresim_phys.errors.MapError` or :class:`~mresim_phys.errors.ScenarioError` whose
+one-paragraph message names the file and what to do; no raw PIL/YAML traceback escapes.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterator
+from contextlib import contextmanager
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+from numpy.typing import NDArray
+from PIL import Image
+
+from mresim_phys.errors import MapError, MresimError, ScenarioError
+from mresim_phys.types import BoolGrid, FloatArray
+
+__all__ = [
+    "LoadedMap",
+    "load_image_map",
+    "load_map",
+    "load_ros_map",
+    "load_text_map",
+    "read_yaml_mapping",
+]
+
+TEXT_FORMAT = (
+    "The text map format is: line 1 = number of rows, line 2 = number of columns, then one "
+    "line per row made of '0' (free) and '1' (obstacle) characters."
+)
+IMAGE_HINT = (
+    "Use a PNG, BMP, GIF or JPEG image (dark = obstacle), a .txt map in MRESim's text "
+    "format, or a ROS map_server .yaml file."
+)
+_SIXTEEN_BIT_MODES = frozenset({"I", "I;16", "I;16L", "I;16B", "I;16N"})
+_IMAGE_ERRORS = (OSError, ValueError, SyntaxError, EOFError, Image.DecompressionBombError)
+_ROS_MODES = ("trinary", "scale", "raw")
+
+
+@dataclass(frozen=True)
+class LoadedMap:
+    """A map as read from disk.
+
+    Attributes:
+        occupied: ``(rows, cols)`` bool grid, True = obstacle; row 0 is the top image row.
+        resolution: metres per cell if the file says (ROS maps), else None.
+        origin: ROS origin ``(x, y, yaw)`` of the lower-left pixel, reported only.
+        source: the file the map was read from.
+    """
+
+    occupied: BoolGrid
+    resolution: float | None
+    origin: tuple[float, float, float] | None
+    source: Path
+
+
+def _require_file(path: Path, what: str, error: type[MresimError]) -> Path:
+    """Return ``path`` if it is an existing file, else raise ``error`` with a fix."""
+    if not path.exists():
+        raise error(f"{what} {path} does not exist. Check the path and its spelling.")
+    if not path.is_file():
+        raise error(f"{what} {path} is not a file (it is a directory?). Give the file's path.")
+    return path
+
+
+def _finish(
+    occupied: NDArray[np.bool_],
+    source: Path,
+    resolution: float | None = None,
+    origin: tuple[float, float, float] | None = None,
+) -> LoadedMap:
+    """Wrap a grid into a :class:`LoadedMap`, rejecting an empty grid."""
+    if occupied.ndim != 2 or occupied.size == 0:
+        raise MapError(f"Map {source} is empty (shape {occupied.shape}). Use a non-empty map.")
+    return LoadedMap(np.ascontiguousarray(occupied, dtype=np.bool_), resolution, origin, source)
+
+
+@contextmanager
+def _opened_image(path: Path) -> Iterator[Image.Image]:
+    """Open an image fully loaded, turning every Pillow failure into a MapError."""
+    _require_file(path, "Map image", MapError)
+    try:
+        with Image.open(path) as img:
+            img.load()
+            yield img
+    except _IMAGE_ERRORS as exc:
+        raise MapError(f"Map file {path} is not a readable image ({exc}). {IMAGE_HINT}") from exc
+
+
+def _grey(img: Image.Image) -> FloatArray:
+    """Grey level 0..255 per pixel (Pillow luminance; 16-bit images scaled down)."""
+    if img.mode in _SIXTEEN_BIT_MODES:
+        return np.asarray(img, dtype=np.float64) / 257.0
+    return np.asarray(img.convert("L"), dtype=np.float64)
+
+
+def _on_white(img: Image.Image) -> Image.Image:
+    """Drop transparency by compositing the image on a white background."""
+    if img.mode in _SIXTEEN_BIT_MODES or not img.has_transparency_data:
+        return img
+    rgba = img.convert("RGBA")
+    return Image.alpha_composite(Image.new("RGBA", rgba.size, (255, 255, 255, 255)), rgba)
+
+
+def load_image_map(path: Path, threshold: float = 0.5, negate: bool = False) -> LoadedMap:
+    """Read an image map: a pixel is an obstacle iff its luminance < ``threshold * 255``.
+
+    Transparent pixels are composited on white first; palette images use their colours.
+    With ``negate`` the luminance is inverted (255 - L) first, so bright means obstacle.
+
+    Args:
+        path: PNG, BMP, GIF or JPEG file (any size; a GIF's first frame).
+        threshold: darkness threshold in (0, 1].
+        negate: bright pixels are obstacles instead of dark ones.
+
+    Returns:
+        The map, with ``resolution`` and ``origin`` None.
+
+    Raises:
+        MapError: bad threshold, missing or unreadable file, or an empty image.
+    """
+    path = Path(path)
+    if not 0.0 < threshold <= 1.0:
+        raise MapError(
+            f"Map threshold {threshold!r} for {path} is out of range. Give a number in (0, 1]: "
+            "a pixel darker than threshold * 255 is an obstacle."
+        )
+    with _opened_image(path) as img:
+        level = _grey(_on_white(img))
+    if negate:
+        level = 255.0 - level
+    return _finish(level < threshold * 255.0, path)
+
+
+def _text_error(path: Path, line: int, expected: str, found: str) -> MapError:
+    return MapError(
+        f"Text map {path}, line {line}: expected {expected}, found {found}. {TEXT_FORMAT}"
+    )
+
+
+def _read_text_lines(path: Path) -> list[str]:
+    """Read a text map's lines (LF, CRLF or CR), dropping trailing blank lines."""
+    _require_file(path, "Text map", MapError)
+    try:
+        lines = path.read_bytes().decode("utf-8-sig").splitlines()
+    except OSError as exc:
+        raise MapError(f"Text map {path} cannot be read ({exc}). Check its permissions.") from exc
+    except UnicodeDecodeError as exc:
+        raise MapError(f"Text map {path} is not a text file ({exc}). {TEXT_FORMAT}") from exc
+    while lines and not lines[-1].strip():
+        lines.pop()
+    return [line.rstrip() for line in lines]
+
+
+def _header_count(path: Path, lines: list[str], index: int, name: str) -> int:
+    """Parse header line ``index`` (0-based) as a positive count of rows or columns."""
+    text = lines[index].strip() if index < len(lines) else ""
+    try:
+        count = int(text)
+    except ValueError:
+        count = 0
+    if count <= 0:
+        found = repr(text[:40]) if index < len(lines) else "the end of the file"
+        raise _text_error(path, index + 1, f"the number of {name} (a positive integer)", found)
+    return count
+
+
+def _check_row_lengths(path: Path, body: list[str], rows: int, cols: int) -> None:
+    """Check the number of row lines and each row's length."""
+    for number, line in enumerate(body[:rows], start=3):
+        if len(line) != cols:
+            raise _text_error(
+                path,
+                number,
+                f"{cols} characters of '0'/'1' (row {number - 2} of {rows})",
+                f"{len(line)} characters: {line[:40]!r}",
+            )
+    if len(body) < rows:
+        raise _text_error(
+            path, len(body) + 3, f"row {len(body) + 1} of {rows}", "the end of the file"
+        )
+    if len(body) > rows:
+        raise _text_error(
+            path, rows + 3, f"the end of the file after {rows} rows", repr(body[rows][:40])
+        )
+
+
+def load_text_map(path: Path) -> LoadedMap:
+    """Read a map in the original MRESim text format (``1`` = obstacle).
+
+    Args:
+        path: the ``.txt`` file.
+
+    Returns:
+        The map, with ``resolution`` and ``origin`` None.
+
+    Raises:
+        MapError: missing file, bad header, wrong row count or length, or a character
+            other than ``0``/``1`` (the message gives the line number).
+    """
+    path = Path(path)
+    lines = _read_text_lines(path)
+    rows = _header_count(path, lines, 0, "rows")
+    cols = _header_count(path, lines, 1, "columns")
+    body = lines[2:]
+    _check_row_lengths(path, body, rows, cols)
+    codes = np.frombuffer("".join(body).encode("utf-32-le"), dtype=np.uint32).reshape(rows, cols)
+    bad = (codes != ord("0")) & (codes != ord("1"))
+    if bad.any():
+        row, col = np.argwhere(bad)[0]
+        raise _text_error(
+            path, int(row) + 3, f"'0' or '1' at column {col + 1}", repr(chr(codes[row, col]))
+        )
+    return _finish(codes == ord("1"), path)
+
+
+def _yaml_mapping(path: Path, what: str, error: type[MresimError]) -> dict[str, Any]:
+    """Read a YAML file holding a mapping at top level, raising ``error`` on any problem."""
+    _require_file(path, what, error)
+    try:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+    except OSError as exc:
+        raise error(f"{what} {path} cannot be read ({exc}). Check its permissions.") from exc
+    except UnicodeDecodeError as exc:
+        raise error(f"{what} {path} is not UTF-8 text ({exc}). Save it as UTF-8.") from exc
+    except yaml.YAMLError as exc:
+        mark = getattr(exc, "problem_mark", None)
+        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+        problem = getattr(exc, "problem", None) or str(exc)
+        raise error(
+            f"{what} {path} is not valid YAML{where}: {problem}. Fix the syntax "
+            "there (indentation, ':' after keys, quotes)."
+        ) from exc
+    if not isinstance(data, dict):
+        kind = "empty" if data is None else f"a {type(data).__name__}, not a mapping"
+        raise error(f"{what} {path} is {kind}. It must hold 'key: value' pairs at top level.")
+    return data
+
+
+def read_yaml_mapping(path: Path) -> dict[str, Any]:
+    """Read a YAML file that must hold a mapping at its top level.
+
+    Raises:
+        ScenarioError: missing or unreadable file, a YAML syntax error (with line and
+            column) or a top level that is not a mapping.
+    """
+    return _yaml_mapping(Path(path), "Scenario file", ScenarioError)
+
+
+def _ros_number(meta: dict[str, Any], key: str, path: Path, default: float | None) -> float:
+    """Fetch a numeric ROS map key (booleans are not numbers)."""
+    value = meta.get(key, default)
+    if value is None:
+        raise MapError(f"ROS map {path} has no '{key}' key. Add it (see the ROS map_server docs).")
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise MapError(f"ROS map {path}: '{key}' must be a number, found {value!r}.")
+    return float(value)
+
+
+def _ros_origin(meta: dict[str, Any], path: Path) -> tuple[float, float, float] | None:
+    """Parse the optional ``origin: [x, y, yaw]`` (yaw defaults to 0 if omitted)."""
+    origin = meta.get("origin")
+    if origin is None:
+        return None
+    ok = isinstance(origin, list) and len(origin) in (2, 3)
+    if not ok or any(isinstance(v, bool) or not isinstance(v, int | float) for v in origin):
+        raise MapError(
+            f"ROS map {path}: 'origin' must be a list [x, y, yaw] of numbers, found {origin!r}."
+        )
+    x, y, *yaw = (float(v) for v in origin)
+    return x, y, yaw[0] if yaw else 0.0
+
+
+def _ros_settings(meta: dict[str, Any], path: Path) -> tuple[float, float, bool, str]:
+    """Validate (free_thresh, occupied_thresh, negate, mode) of a ROS map YAML."""
+    free = _ros_number(meta, "free_thresh", path, 0.196)
+    occ = _ros_number(meta, "occupied_thresh", path, 0.65)
+    if not 0.0 <= free <= occ <= 1.0:
+        raise MapError(
+            f"ROS map {path}: need 0 <= free_thresh <= occupied_thresh <= 1, "
+            f"found free_thresh={free}, occupied_thresh={occ}."
+        )
+    negate = meta.get("negate", 0)
+    if negate not in (0, 1):  # also True/False
+        raise MapError(f"ROS map {path}: 'negate' must be 0 or 1, found {negate!r}.")
+    mode = str(meta.get("mode", "trinary")).lower()
+    if mode not in _ROS_MODES:
+        raise MapError(
+            f"ROS map {path}: 'mode' must be one of {', '.join(_ROS_MODES)}, "
+            f"found {meta['mode']!r}."
+        )
+    return free, occ, bool(negate), mode
+
+
+def _ros_image_path(meta: dict[str, Any], path: Path) -> Path:
+    image = meta.get("image")
+    if not isinstance(image, str) or not image:
+        raise MapError(
+            f"ROS map {path} needs an 'image' key naming the PGM/PNG file "
+            "(relative to the YAML file)."
+        )
+    image_path = path.parent / image
+    if not image_path.is_file():
+        raise MapError(
+            f"ROS map {path} names image '{image}', but {image_path} does not "
+            "exist. Put the image next to the YAML file or fix the 'image' key."
+        )
+    return image_path
+
+
+def _ros_free(
+    grey: FloatArray, opaque: NDArray[np.bool_], free: float, negate: bool, mode: str
+) -> NDArray[np.bool_]:
+    """ROS semantics reduced to truth: a cell is free iff its occupancy p < free_thresh.
+
+    Occupied (p > occupied_thresh) and unknown cells (in between, or not opaque in scale
+    mode) both count as obstacles. Raw mode reads p = value / 100 (values over 100 unknown).
+    """
+    if mode == "raw":
+        value = np.rint(grey)
+        return (value <= 100) & (value / 100.0 < free)
+    p = grey / 255.0 if negate else (255.0 - grey) / 255.0
+    is_free = p < free
+    return is_free & opaque if mode == "scale" else is_free
+
+
+def load_ros_map(yaml_path: Path) -> LoadedMap:
+    """Read a ROS ``map_server`` map (YAML + the PGM/PNG it names).
+
+    Keys: ``image`` (relative to the YAML), ``resolution``, optional ``origin``,
+    ``negate`` (0), ``occupied_thresh`` (0.65), ``free_thresh`` (0.196), ``mode``
+    (trinary, scale or raw). Other keys are ignored. The image orientation is kept
+    (image row 0 = grid row 0); unknown cells count as obstacles.
+
+    Raises:
+        MapError: missing/invalid YAML or keys, or a missing/unreadable image.
+    """
+    path = Path(yaml_path)
+    meta = _yaml_mapping(path, "ROS map file", MapError)
+    resolution = _ros_number(meta, "resolution", path, None)
+    if resolution <= 0:
+        raise MapError(f"ROS map {path}: 'resolution' must be positive (metres per cell).")
+    origin = _ros_origin(meta, path)
+    free, _, negate, mode = _ros_settings(meta, path)
+    with _opened_image(_ros_image_path(meta, path)) as img:
+        opaque = np.ones((img.height, img.width), dtype=bool)
+        if img.has_transparency_data:
+            opaque = np.asarray(img.convert("RGBA"))[:, :, 3] == 255
+        grey = _grey(img)
+    return _finish(~_ros_free(grey, opaque, free, negate, mode), path, resolution, origin)
+
+
+def load_map(path: Path, threshold: float = 0.5, negate: bool = False) -> LoadedMap:
+    """Read any supported map, choosing the loader by file suffix.
+
+    ``.txt`` -> :func:`load_text_map`, ``.yaml``/``.yml`` -> :func:`load_ros_map`,
+    anything else -> :func:`load_image_map` (``threshold`` and ``negate`` apply there only).
+    """
+    path = Path(path)
+    suffix = path.suffix.lower()
+    if suffix == ".txt":
+        return load_text_map(path)
+    if suffix in (".yaml", ".yml"):
+        return load_ros_map(path)
+    return load_image_map(path, threshold, negate)
