@@ -2,7 +2,11 @@
 
 from __future__ import annotations
 
+import importlib.util
 import math
+import sys
+from pathlib import Path
+from types import ModuleType
 
 import numpy as np
 import pymunk
@@ -13,6 +17,7 @@ from hypothesis.extra.numpy import arrays
 from numpy.typing import NDArray
 
 from mresim_phys.errors import MapError
+from mresim_phys.io import load_map
 from mresim_phys.maps import free_components_mask, wall_segments
 
 Grid = NDArray[np.bool_]
@@ -87,8 +92,9 @@ def build_space(segments: NDArray[np.float64]) -> pymunk.Space:
 
 def pymunk_first_hit(space: pymunk.Space, x: float, y: float, dx: float, dy: float) -> float:
     length = 1000.0
-    hit = space.segment_query_first((x, y), (x + dx * length, y + dy * length), 0,
-                                    pymunk.ShapeFilter())
+    hit = space.segment_query_first(
+        (x, y), (x + dx * length, y + dy * length), 0, pymunk.ShapeFilter()
+    )
     assert hit is not None, f"ray from ({x}, {y}) dir ({dx}, {dy}) escaped"
     return hit.alpha * length
 
@@ -245,3 +251,56 @@ def test_free_components_mask_treats_corner_contact_as_closed() -> None:
 def test_free_components_mask_rejects_bad_seeds(seed: tuple[float, float], message: str) -> None:
     with pytest.raises(MapError, match=message):
         free_components_mask(grid_of(".#"), seed)
+
+
+# --- shipped maps -----------------------------------------------------------------------
+
+REPO = Path(__file__).resolve().parent.parent
+
+
+@pytest.fixture(scope="module")
+def make_maps() -> ModuleType:
+    """The map generator script, imported from ``tools/make_maps.py``."""
+    spec = importlib.util.spec_from_file_location("make_maps", REPO / "tools" / "make_maps.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module  # dataclasses look their module up while executing
+    spec.loader.exec_module(module)
+    return module
+
+
+def generated_truth(make_maps: ModuleType, name: str) -> Grid:
+    picture = make_maps.BUILDERS[name]()
+    if name == "cave":
+        return picture
+    return picture != (make_maps.ROS_FREE if name == "warehouse" else make_maps.FREE)
+
+
+@pytest.mark.parametrize("name", ["office", "small_rooms", "cave", "warehouse"])
+def test_shipped_maps_are_up_to_date_and_their_starts_are_usable(
+    make_maps: ModuleType, name: str
+) -> None:
+    loaded = load_map(REPO / "maps" / make_maps.MAPS[name].file)
+    np.testing.assert_array_equal(loaded.occupied, generated_truth(make_maps, name))
+    stats = make_maps.check(name, loaded)  # raises if a start is blocked or cut off
+    assert stats.reachable == stats.free
+
+
+def test_shipped_map_metadata() -> None:
+    office = load_map(REPO / "maps" / "office.png").occupied
+    assert office.shape == (600, 800) and 0.55 < 1 - office.mean() < 0.75
+    assert load_map(REPO / "maps" / "small_rooms.png").occupied.shape == (120, 160)
+    warehouse = load_map(REPO / "maps" / "warehouse.yaml")
+    assert warehouse.resolution == 0.05 and warehouse.origin == (-7.5, -5.0, 0.0)
+
+
+def test_rays_on_the_office_map_match_the_dda() -> None:
+    grid = load_map(REPO / "maps" / "office.png").occupied
+    segments = wall_segments(grid)
+    assert 500 < len(segments) < 5000
+    space = build_space(segments)
+    rng = np.random.default_rng(11)
+    for x, y, dx, dy in ray_cases(grid, rng, 300):
+        truth, near_vertex = dda_first_hit(grid, x, y, dx, dy)
+        if not near_vertex:
+            assert pymunk_first_hit(space, x, y, dx, dy) == pytest.approx(truth, abs=1e-6)
