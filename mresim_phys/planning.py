@@ -1,0 +1,335 @@
+"""Phase 4b of the simulation cycle: grid planning on a robot's OWN belief grid.
+
+Pipeline: ``traversable`` turns a belief grid into a configuration-space mask, then
+``distance_field`` runs one Dijkstra from the robot over that mask and answers cost queries
+for every cell (frontier selection) and paths to any of them; ``plan_path`` is the
+point-to-point shortcut.
+
+Move rules (shared by every function here, and by the reference Dijkstra in the tests):
+
+* 8-connected moves between passable cells, octile costs: 1 straight, sqrt(2) diagonal.
+* No corner cutting: a diagonal move is forbidden when BOTH orthogonal cells it squeezes
+  between are non-passable. A diagonal next to one blocked cell is allowed. Either way, every
+  point of a move lies within sqrt(2)/2 of a passable cell centre. Those centres are at
+  least ``clearance`` from known obstacles, so a path clears walls by ``clearance - 0.71``.
+  With ``clearance >= robot radius + 0.71`` a robot following the path never touches a known wall.
+
+Engine (measured on an 800x600 fully known maze, see ``benchmarks/bench_planning.py``): the
+graph is a CSR matrix with a fixed 8 entries per cell (forbidden moves weigh ``inf``), and the
+search is ``scipy.sparse.csgraph.dijkstra``. It builds the graph in ~20 ms and searches in
+~60 ms, where ``skimage.graph.MCP_Geometric`` takes ~125 ms and cannot forbid corner cutting.
+Searches are limited to the bounding box of passable cells. Both engines hold the GIL.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from functools import cached_property, lru_cache
+
+import cv2
+import numpy as np
+from numpy.typing import NDArray
+from scipy import sparse
+from scipy.sparse import csgraph
+
+from mresim_phys.types import FREE, OCCUPIED, BeliefGrid, BoolGrid, FloatArray, IntArray
+
+_SQRT2 = float(np.sqrt(2.0))
+# Neighbour offsets (drow, dcol) in raster order, and the length of each move.
+_OFFSETS: tuple[tuple[int, int], ...] = (
+    (-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1),
+)  # fmt: skip
+_LENGTHS = np.array([_SQRT2 if dr and dc else 1.0 for dr, dc in _OFFSETS])
+_NO_PRED = -9999  # scipy.sparse.csgraph's marker for "no predecessor"
+
+Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)
+
+
+# --------------------------------------------------------------------------- C-space
+
+
+@lru_cache(maxsize=32)
+def _clearance_kernel(clearance: float) -> NDArray[np.uint8]:
+    """Offsets (as a dilation kernel) of the cells whose square lies closer than ``clearance``.
+
+    The distance from a cell centre to the square of a cell at offset (dr, dc) is
+    ``hypot(max(|dr| - 0.5, 0), max(|dc| - 0.5, 0))``.
+
+    >>> _clearance_kernel(0.6)
+    array([[0, 1, 0],
+           [1, 1, 1],
+           [0, 1, 0]], dtype=uint8)
+    """
+    radius = max(int(np.ceil(clearance + 0.5)) - 1, 0)
+    gap = np.maximum(np.abs(np.arange(-radius, radius + 1)) - 0.5, 0.0)
+    return (gap[:, None] ** 2 + gap[None, :] ** 2 < clearance**2).astype(np.uint8)
+
+
+def _bbox(mask: BoolGrid) -> Box | None:
+    """Half-open bounding box (row0, row1, col0, col1) of the True cells, None if none."""
+    rows = np.flatnonzero(mask.any(axis=1))
+    if rows.size == 0:
+        return None
+    cols = np.flatnonzero(mask[rows[0] : rows[-1] + 1].any(axis=0))
+    return int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
+
+
+def _grow(box: Box, margin: int, shape: tuple[int, ...]) -> Box:
+    """Grow a box by ``margin`` cells on every side, clipped to the grid."""
+    r0, r1, c0, c1 = box
+    return (max(r0 - margin, 0), min(r1 + margin, shape[0]),
+            max(c0 - margin, 0), min(c1 + margin, shape[1]))  # fmt: skip
+
+
+def traversable(belief: BeliefGrid, clearance: float) -> BoolGrid:
+    """Configuration space: the cells a robot centre may occupy.
+
+    A cell is traversable iff it is known FREE and the Euclidean distance from its centre to
+    the nearest OCCUPIED cell's square (its boundary, not its centre) is ``>= clearance``.
+    Cells outside the grid count as occupied. UNKNOWN cells are never traversable, but they
+    are not inflated: only known obstacles are.
+
+    The test is exact, not an approximation from a distance transform: the OCCUPIED mask is
+    dilated (``cv2.dilate``) with the kernel of every offset whose square is closer than
+    ``clearance``. Only the bounding box of FREE cells (+ kernel radius) is processed. On
+    800x600 this takes 0.4 ms at clearance 2.2 and 3 ms at 10. ``scipy``'s EDT takes ~35 ms,
+    and centre distance - 0.5 overestimates the boundary distance by up to 0.21 cells on
+    diagonals.
+
+    Args:
+        belief: Belief grid (UNKNOWN / FREE / OCCUPIED).
+        clearance: Robot radius plus wall margin, in cells.
+
+    Returns:
+        Boolean grid of the same shape, True where the robot centre may be.
+    """
+    free = belief == FREE
+    box = _bbox(free)
+    if box is None or clearance <= 0.0:
+        return free
+    kernel = _clearance_kernel(float(clearance))
+    r0, r1, c0, c1 = _grow(box, kernel.shape[0] // 2, belief.shape)
+    occupied = (belief[r0:r1, c0:c1] == OCCUPIED).view(np.uint8)
+    # Border value 1: cells outside the grid are walls. Inner crop edges are >= the kernel
+    # radius from every FREE cell, so the border never reaches them.
+    blocked = cv2.dilate(occupied, kernel, borderType=cv2.BORDER_CONSTANT, borderValue=1)
+    out = np.zeros(belief.shape, dtype=bool)
+    out[r0:r1, c0:c1] = free[r0:r1, c0:c1] & (blocked == 0)
+    return out
+
+
+# --------------------------------------------------------------------------- search
+
+
+def snap_to_passable(
+    passable: BoolGrid, xy: tuple[float, float], max_snap: float
+) -> tuple[int, int] | None:
+    """The passable cell for a world point: its own cell, or the nearest passable one.
+
+    If the cell containing ``xy`` is passable it is returned. Otherwise the result is the
+    passable cell whose centre is nearest to ``xy`` and within ``max_snap`` cells; ties go
+    to the smaller (row, col). Returns None if there is none.
+    """
+    x, y = float(xy[0]), float(xy[1])
+    row, col = int(np.floor(y)), int(np.floor(x))
+    rows, cols = passable.shape
+    if 0 <= row < rows and 0 <= col < cols and passable[row, col]:
+        return row, col
+    reach = int(np.ceil(max_snap)) + 1
+    r0, r1 = max(row - reach, 0), min(row + reach + 1, rows)
+    c0, c1 = max(col - reach, 0), min(col + reach + 1, cols)
+    if r0 >= r1 or c0 >= c1:
+        return None
+    rr, cc = np.nonzero(passable[r0:r1, c0:c1])
+    rr, cc = rr + r0, cc + c0
+    dist2 = (cc + 0.5 - x) ** 2 + (rr + 0.5 - y) ** 2
+    ok = dist2 <= max_snap**2
+    if not ok.any():
+        return None
+    best = np.lexsort((cc[ok], rr[ok], dist2[ok]))[0]
+    return int(rr[ok][best]), int(cc[ok][best])
+
+
+def _grid_graph(passable: BoolGrid) -> sparse.csr_matrix:
+    """CSR move graph of ``passable`` padded by one blocked cell on every side.
+
+    Node ``i`` is padded cell ``(i // (w + 2), i % (w + 2))``. Every node has exactly 8
+    entries (the ``_OFFSETS`` neighbours); moves that are not allowed weigh ``inf``.
+    """
+    h, w = passable.shape
+    hp, wp = h + 2, w + 2
+    pad = np.zeros((hp, wp), dtype=bool)
+    pad[1:-1, 1:-1] = passable
+    allowed = np.zeros((hp, wp, 8), dtype=bool)
+    for k, (dr, dc) in enumerate(_OFFSETS):
+        move = pad[1 + dr : hp - 1 + dr, 1 + dc : wp - 1 + dc]
+        if dr and dc:  # forbid squeezing between two blocked orthogonal cells
+            move = move & (pad[1 + dr : hp - 1 + dr, 1:-1] | pad[1:-1, 1 + dc : wp - 1 + dc])
+        np.logical_and(passable, move, out=allowed[1:-1, 1:-1, k])
+    weights = np.where(allowed, _LENGTHS, np.inf).ravel()
+    steps = np.array([dr * wp + dc for dr, dc in _OFFSETS], dtype=np.int32)
+    neighbours = (np.arange(hp * wp, dtype=np.int32)[:, None] + steps).ravel()
+    np.clip(neighbours, 0, hp * wp - 1, out=neighbours)  # border rows: inf-weight dummies
+    indptr = np.arange(0, 8 * hp * wp + 1, 8, dtype=np.int32)
+    return sparse.csr_matrix((weights, neighbours, indptr), shape=(hp * wp, hp * wp))
+
+
+def _search(
+    passable: BoolGrid, start_rc: tuple[int, int], box: Box, limit: float = np.inf
+) -> tuple[FloatArray, NDArray[np.int32]]:
+    """Dijkstra from ``start_rc`` over ``passable[box]``; padded (costs 2-D, preds flat)."""
+    r0, r1, c0, c1 = box
+    graph = _grid_graph(passable[r0:r1, c0:c1])
+    wp = c1 - c0 + 2
+    source = (start_rc[0] - r0 + 1) * wp + (start_rc[1] - c0 + 1)
+    dist, pred = csgraph.dijkstra(
+        graph, directed=True, indices=source, return_predecessors=True, limit=limit
+    )
+    return dist.reshape(r1 - r0 + 2, wp), pred
+
+
+def _empty_f() -> FloatArray:
+    return np.full((0, 0), np.inf)
+
+
+def _empty_i() -> NDArray[np.int32]:
+    return np.zeros(0, dtype=np.int32)
+
+
+@dataclass(frozen=True, eq=False)
+class DistanceField:
+    """Path costs from one start cell to every cell, with paths on demand.
+
+    Attributes:
+        shape: Shape of the full grid.
+        start_rc: The (snapped) start cell, or None if no passable start was found.
+        origin: Full-grid (row, col) of element [0, 0] of the padded search window.
+        window_costs: Costs on the padded search window (inf = unreachable).
+        window_pred: Flat window index of each cell's predecessor (-9999 = none).
+    """
+
+    shape: tuple[int, int]
+    start_rc: tuple[int, int] | None
+    origin: tuple[int, int] = (0, 0)
+    window_costs: FloatArray = field(default_factory=_empty_f, repr=False)
+    window_pred: NDArray[np.int32] = field(default_factory=_empty_i, repr=False)
+
+    @cached_property
+    def costs(self) -> FloatArray:
+        """Read-only full-grid cost array (inf where unreachable)."""
+        out = np.full(self.shape, np.inf)
+        hp, wp = self.window_costs.shape
+        if hp:
+            r0, c0 = self.origin
+            out[r0 + 1 : r0 + hp - 1, c0 + 1 : c0 + wp - 1] = self.window_costs[1:-1, 1:-1]
+        out.flags.writeable = False
+        return out
+
+    def cost_at(self, rows: IntArray, cols: IntArray) -> FloatArray:
+        """Path costs of cells (rows[i], cols[i]); inf where unreachable or off the grid."""
+        rows = np.asarray(rows, dtype=np.intp) - self.origin[0]
+        cols = np.asarray(cols, dtype=np.intp) - self.origin[1]
+        hp, wp = self.window_costs.shape
+        inside = (rows >= 0) & (rows < hp) & (cols >= 0) & (cols < wp)
+        out = np.full(np.broadcast(rows, cols).shape, np.inf)
+        out[inside] = self.window_costs[rows[inside], cols[inside]]
+        return out
+
+    def reachable(self, row: int, col: int) -> bool:
+        """Whether cell (row, col) can be reached from the start."""
+        return bool(np.isfinite(self.cost_at(np.array(row), np.array(col))))
+
+    def path_to(self, row: int, col: int) -> FloatArray:
+        """Cell-centre path (n, 2) of world (x, y) from the start cell to cell (row, col).
+
+        The first point is the centre of the (snapped) start cell, the last the goal's. The
+        octile length of the path equals ``cost_at`` of the goal. Empty (0, 2) if unreachable.
+        """
+        if not self.reachable(row, col):
+            return np.empty((0, 2))
+        wp = self.window_costs.shape[1]
+        node = (row - self.origin[0]) * wp + (col - self.origin[1])
+        nodes = [node]
+        pred = self.window_pred
+        while (node := int(pred[node])) != _NO_PRED:
+            nodes.append(node)
+        flat = np.array(nodes[::-1])
+        rows, cols = np.divmod(flat, wp)
+        return np.column_stack((cols + self.origin[1] + 0.5, rows + self.origin[0] + 0.5))
+
+
+def distance_field(
+    passable: BoolGrid, start_xy: tuple[float, float], *, max_snap: float = 3.0
+) -> DistanceField:
+    """One Dijkstra from ``start_xy`` over the passable cells (see the module move rules).
+
+    The start is the cell containing ``start_xy`` if passable, else the nearest passable
+    cell within ``max_snap`` cells (``snap_to_passable``); if none, every cost is inf. The
+    search covers the bounding box of passable cells only.
+
+    Args:
+        passable: Configuration-space mask, e.g. from ``traversable``.
+        start_xy: Robot position in world coordinates (cells).
+        max_snap: Largest distance to snap a non-passable start onto a passable cell.
+
+    Returns:
+        The ``DistanceField`` of the start.
+    """
+    shape = (int(passable.shape[0]), int(passable.shape[1]))
+    start = snap_to_passable(passable, start_xy, max_snap)
+    box = _bbox(passable)
+    if start is None or box is None:
+        return DistanceField(shape, None)
+    costs, pred = _search(passable, start, box)
+    return DistanceField(shape, start, (box[0] - 1, box[2] - 1), costs, pred)
+
+
+def plan_path(
+    passable: BoolGrid,
+    start_xy: tuple[float, float],
+    goal_xy: tuple[float, float],
+    *,
+    max_snap: float = 3.0,
+) -> FloatArray:
+    """Shortest cell-centre path (n, 2) of world (x, y) from ``start_xy`` to ``goal_xy``.
+
+    The start is snapped as in ``distance_field``; the goal is the cell containing
+    ``goal_xy`` and must be passable. Early exit: the search is bounded by a cost limit
+    (and a window of that radius around the start), starting at twice the octile
+    distance and doubling until the goal is settled or the whole passable box is searched.
+
+    Returns:
+        The path, or an empty (0, 2) array if the goal is unreachable.
+    """
+    start = snap_to_passable(passable, start_xy, max_snap)
+    goal = int(np.floor(goal_xy[1])), int(np.floor(goal_xy[0]))
+    box = _bbox(passable)
+    rows, cols = passable.shape
+    if start is None or box is None or not (0 <= goal[0] < rows and 0 <= goal[1] < cols):
+        return np.empty((0, 2))
+    if not passable[goal]:
+        return np.empty((0, 2))
+    dr, dc = abs(goal[0] - start[0]), abs(goal[1] - start[1])
+    limit = 2.0 * (max(dr, dc) + (_SQRT2 - 1.0) * min(dr, dc)) + 8.0
+    while True:
+        reach = int(np.ceil(limit))
+        window = (max(box[0], start[0] - reach), min(box[1], start[0] + reach + 1),
+                  max(box[2], start[1] - reach), min(box[3], start[1] + reach + 1))  # fmt: skip
+        whole = window == box
+        costs, pred = _search(passable, start, window, np.inf if whole else limit)
+        fld = DistanceField(passable.shape, start, (window[0] - 1, window[2] - 1), costs, pred)
+        if fld.reachable(*goal) or whole:
+            return fld.path_to(*goal)
+        limit *= 2.0
+
+
+def path_length(points: FloatArray) -> float:
+    """Sum of the segment lengths of a polyline (n, 2); 0 for fewer than two points.
+
+    >>> path_length(np.array([[0.5, 0.5], [1.5, 1.5], [1.5, 2.5]]))  # doctest: +ELLIPSIS
+    2.414...
+    """
+    pts = np.asarray(points, dtype=float)
+    if len(pts) < 2:
+        return 0.0
+    return float(np.hypot(*np.diff(pts, axis=0).T).sum())
