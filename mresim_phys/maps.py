@@ -18,8 +18,6 @@ y in [r, r+1); cells outside the grid count as occupied.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
-
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 from scipy import ndimage
@@ -138,7 +136,7 @@ def _seed_cells(seeds_xy: ArrayLike, shape: tuple[int, int]) -> NDArray[np.intp]
     return cells
 
 
-def free_components_mask(occupied: BoolGrid, seeds_xy: ArrayLike | Sequence[float]) -> BoolGrid:
+def free_components_mask(occupied: BoolGrid, seeds_xy: ArrayLike) -> BoolGrid:
     """Return the free cells 4-connected to any of the seed points.
 
     Diagonal steps are not connections, so two obstacles touching at a corner close the

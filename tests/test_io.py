@@ -99,6 +99,12 @@ def test_jpeg_blocks_survive_compression(tmp_path: Path) -> None:
     np.testing.assert_array_equal(occupied[8::16, 8::16], PATTERN == 0)
 
 
+@pytest.mark.parametrize("value", [0, 255])
+def test_all_obstacle_or_all_free_images_are_allowed(tmp_path: Path, value: int) -> None:
+    path = write_image(tmp_path / "plain.png", np.full((3, 5), value, np.uint8))
+    assert load_image_map(path).occupied.tolist() == [[value == 0] * 5] * 3
+
+
 def test_any_image_size_is_accepted(tmp_path: Path) -> None:
     path = write_image(tmp_path / "big.png", np.full((7, 1234), 255, np.uint8))
     assert load_image_map(path).occupied.shape == (7, 1234)
