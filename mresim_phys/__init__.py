@@ -1,0 +1,38 @@
+"""mresim_phys: multi-robot exploration in continuous space (a Python MRESim).
+
+The simulation cycle, one module per phase (paper, Algorithm 1)::
+
+    scenario/load/io -> build -> world -> sensing -> mapping -> frontiers
+    -> planning -> strategies/ -> motion -> comms/ -> metrics -> recorders -> cli
+
+Typical use::
+
+    from mresim_phys import Simulation
+    sim = Simulation.from_yaml("scenarios/01_quickstart.yaml")
+    last = sim.run()
+"""
+
+from __future__ import annotations
+
+from .comms import COMM_MODELS
+from .errors import MapError, MresimError, ScenarioError, UnknownPluginError
+from .load import load_scenario, validate_scenario
+from .metrics import StepRecord
+from .scenario import Scenario
+from .sim import Simulation
+from .strategies import STRATEGIES
+
+__all__ = [
+    "COMM_MODELS",
+    "STRATEGIES",
+    "MapError",
+    "MresimError",
+    "Scenario",
+    "ScenarioError",
+    "Simulation",
+    "StepRecord",
+    "UnknownPluginError",
+    "load_scenario",
+    "validate_scenario",
+]
+__version__ = "0.1.0"

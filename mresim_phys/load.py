@@ -1,0 +1,128 @@
+"""Scenario loading (phase 0, input edge): YAML file -> validated :class:`Scenario`.
+
+Reads the file, validates it against the schema, resolves relative map paths
+against the YAML file's folder and validates every plugin's parameters against
+that plugin's own ``Params`` model, so ``mresim validate`` catches an unknown
+strategy or a misspelt strategy parameter before anything runs. Every failure is
+a :class:`ScenarioError` naming the file, the field path and what was expected.
+"""
+
+from __future__ import annotations
+
+import difflib
+from pathlib import Path
+from typing import Any
+
+from pydantic import BaseModel, ValidationError
+
+from .comms import COMM_MODELS
+from .errors import ScenarioError, UnknownPluginError
+from .io import read_yaml_mapping
+from .registry import Registry
+from .scenario import PluginSpec, Scenario
+from .strategies import STRATEGIES
+
+
+def load_scenario(path: str | Path, **overrides: Any) -> Scenario:
+    """Read, validate and resolve the scenario at ``path``; ``overrides`` replace top keys."""
+    source = Path(path)
+    data = read_yaml_mapping(source)
+    data.update({k: v for k, v in overrides.items() if v is not None})
+    scenario = validate_scenario(data, str(source))
+    return resolve_map_path(scenario, source.resolve().parent)
+
+
+def validate_scenario(data: dict[str, Any], source: str = "<scenario>") -> Scenario:
+    """Schema-validate ``data`` and each plugin's params; errors name ``source``."""
+    try:
+        scenario = Scenario.model_validate(data)
+    except ValidationError as exc:
+        raise ScenarioError(describe_errors(source, exc)) from None
+    robots = [
+        r.model_copy(update={"strategy": resolve_plugin(STRATEGIES, r.strategy, source,
+                                                         f"robots[{i}].strategy")})
+        for i, r in enumerate(scenario.robots)
+    ]
+    team = scenario.team.model_copy(
+        update={"strategy": resolve_plugin(STRATEGIES, scenario.team.strategy, source,
+                                           "team.strategy")}
+    )
+    comm = resolve_plugin(COMM_MODELS, scenario.communication, source, "communication")
+    return scenario.model_copy(update={"robots": robots, "team": team, "communication": comm})
+
+
+def resolve_plugin(
+    registry: Registry[Any], spec: PluginSpec, source: str, where: str
+) -> PluginSpec:
+    """``spec`` with its params validated (defaults filled) by the named plugin's model."""
+    try:
+        cls = registry.get(spec.name)
+    except UnknownPluginError as exc:
+        raise ScenarioError(f"{source}: {where}.name: {exc}") from None
+    params_model: type[BaseModel] = cls.Params
+    try:
+        params = params_model.model_validate(spec.params)
+    except ValidationError as exc:
+        raise ScenarioError(describe_errors(source, exc, prefix=f"{where}.params")) from None
+    return PluginSpec(name=spec.name, params=params.model_dump())
+
+
+def resolve_map_path(scenario: Scenario, folder: Path) -> Scenario:
+    """The scenario with its map path made absolute (relative paths are to the YAML file)."""
+    kind, value = scenario.map.source
+    absolute = str((folder / Path(value).expanduser()).resolve())
+    return scenario.model_copy(update={"map": scenario.map.model_copy(update={kind: absolute})})
+
+
+def describe_errors(source: str, exc: ValidationError, prefix: str = "") -> str:
+    """One readable line per problem: ``file: field.path: what was wrong (got value)``."""
+    lines = [
+        describe_error(error, prefix) for error in exc.errors(include_url=False)
+        if not inherited_from_team(error, exc)
+    ]
+    count = len(lines)
+    head = f"{source}: {count} problem{'s' if count > 1 else ''} in the scenario:"
+    return "\n".join([head, *(f"  - {line}" for line in lines)])
+
+
+def describe_error(error: Any, prefix: str) -> str:
+    """One validation error as ``field.path: message``, with a hint for unknown keys."""
+    path = field_path((*([prefix] if prefix else []), *error["loc"]))
+    if error["type"] == "extra_forbidden":
+        key = str(error["loc"][-1])
+        close = difflib.get_close_matches(key, known_keys(), n=1)
+        hint = f"; did you mean {close[0]!r}?" if close else "; remove it or check the spelling"
+        return f"{path}: unknown key {key!r}{hint}"
+    message = str(error["msg"]).removeprefix("Value error, ")
+    got = "" if error["type"] == "missing" else f" (got {error.get('input')!r})"
+    return f"{path}: {message}{got}"
+
+
+def field_path(loc: tuple[Any, ...]) -> str:
+    """``('robots', 1, 'speed')`` -> ``robots[1].speed``."""
+    text = ""
+    for part in loc:
+        if isinstance(part, int):
+            text += f"[{part}]"
+        elif part not in ("function-before[_from_name(), PluginSpec]",):
+            text += f".{part}" if text else str(part)
+    return text or "<top level>"
+
+
+def inherited_from_team(error: Any, exc: ValidationError) -> bool:
+    """A robot error that only repeats a ``team`` error (robots inherit team fields)."""
+    loc = error["loc"]
+    if len(loc) < 3 or loc[0] != "robots":
+        return False
+    return any(e["loc"] == ("team", *loc[2:]) for e in exc.errors(include_url=False))
+
+
+def known_keys() -> list[str]:
+    """Every key any scenario model accepts, for 'did you mean' hints."""
+    from . import scenario as schema
+
+    keys: set[str] = set()
+    for obj in vars(schema).values():
+        if isinstance(obj, type) and issubclass(obj, BaseModel):
+            keys.update(obj.model_fields)
+    return sorted(keys)

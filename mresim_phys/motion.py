@@ -1,0 +1,111 @@
+"""Motion (phase 5): one robot's step along its path (paper, Algorithms 1 and 2).
+
+While the robot has moved less than its speed this step it takes the next path
+point, replanning through its strategy when the path has run out or the replan
+interval has passed; the move is checked with a swept circle of the robot's
+radius against the true walls. A valid move is made and (by default) followed by
+a scan; an invalid one sets the robot's error flag, marks what it bumped into
+in its own map, and ends its motion for this step. The last partial move of a
+step is scaled down to the remaining budget, as in the original.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+
+from .agents import Robot
+from .mapping import mark_bump
+from .world import World
+
+EPS = 1e-9
+
+
+@dataclass(frozen=True)
+class MoveRules:
+    """How robots move and when they scan."""
+
+    scan_every_point: bool
+    shape_filter_of: Callable[[Robot], tuple[int, int, int]]
+
+
+def wants_plan(robot: Robot, step: int, interval: int) -> bool:
+    """Replan after an error, after reaching the goal, or when the interval has passed."""
+    return robot.status == "error" or robot.reached_goal or step - robot.last_plan_step >= interval
+
+
+def take_step(
+    robot: Robot,
+    step: int,
+    world: World,
+    rules: MoveRules,
+    replan: Callable[[Robot], None],
+    sense: Callable[[Robot], None],
+) -> None:
+    """Move ``robot`` up to its speed along its path, sensing after each path point."""
+    budget = robot.speed
+    planned = False
+    assert robot.strategy is not None
+    if wants_plan(robot, step, robot.strategy.params.replan_interval):
+        replan(robot)
+        planned = True
+    moved = False
+    while budget > EPS:
+        if len(robot.path) == 0:
+            if planned or not robot.reached_goal:
+                break
+            replan(robot)
+            planned = True
+            continue
+        used = move_towards(robot, world, rules, budget)
+        if used is None:
+            break
+        budget -= used
+        moved = True
+        if rules.scan_every_point:
+            sense(robot)
+    if moved and not rules.scan_every_point:
+        sense(robot)
+
+
+def move_towards(robot: Robot, world: World, rules: MoveRules, budget: float) -> float | None:
+    """Move toward the next path point by at most ``budget``; None if a wall is in the way."""
+    target = (float(robot.path[0, 0]), float(robot.path[0, 1]))
+    x, y = robot.position
+    gap = math.hypot(target[0] - x, target[1] - y)
+    if gap <= EPS:
+        pop_point(robot)
+        return 0.0
+    share = min(1.0, budget / gap)
+    end = (x + share * (target[0] - x), y + share * (target[1] - y))
+    hit = world.blocked(robot.position, end, robot.radius, rules.shape_filter_of(robot))
+    if hit is not None:
+        stop_with_error(robot, hit.point)
+        return None
+    robot.advance_to(end)
+    robot.status = "active"
+    if share >= 1.0:
+        pop_point(robot)
+    return share * gap
+
+
+def pop_point(robot: Robot) -> None:
+    """Drop the path point just reached; note when that was the goal."""
+    robot.path = robot.path[1:]
+    if len(robot.path) == 0:
+        robot.reached_goal = True
+
+
+def stop_with_error(robot: Robot, contact: tuple[float, float]) -> None:
+    """The move was invalid: error flag, forget the path, remember the obstacle."""
+    direction = np.array([math.cos(robot.heading), math.sin(robot.heading)])
+    dx, dy = contact[0] - robot.position[0], contact[1] - robot.position[1]
+    if math.hypot(dx, dy) > EPS:
+        direction = np.array([dx, dy]) / math.hypot(dx, dy)
+    mark_bump(robot.belief, contact, direction)
+    robot.status = "error"
+    robot.path = robot.path[:0]
+    robot.reached_goal = False

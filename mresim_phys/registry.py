@@ -1,0 +1,87 @@
+"""Plugin registries: a YAML name -> a class, for strategies and communication models.
+
+A registry is filled at import time by a class decorator, can be extended by a
+third-party package through an entry point group, and resolves
+``"package.module:ClassName"`` references for one-off user classes. Unknown names
+raise :class:`~mresim_phys.errors.UnknownPluginError` listing the close matches.
+"""
+
+from __future__ import annotations
+
+import difflib
+import importlib
+from collections.abc import Callable
+from importlib.metadata import entry_points
+from typing import Generic, TypeVar
+
+from .errors import UnknownPluginError
+
+T = TypeVar("T")
+
+
+class Registry(Generic[T]):
+    """Name -> plugin class, with entry-point discovery and ``module:Class`` references."""
+
+    def __init__(self, kind: str, entry_point_group: str) -> None:
+        self.kind = kind
+        self.entry_point_group = entry_point_group
+        self._classes: dict[str, type[T]] = {}
+        self._discovered = False
+
+    def register(self, name: str) -> Callable[[type[T]], type[T]]:
+        """Class decorator adding ``cls`` under ``name``; a duplicate name is an error."""
+
+        def add(cls: type[T]) -> type[T]:
+            if name in self._classes and self._classes[name] is not cls:
+                raise ValueError(f"{self.kind} {name!r} is already registered")
+            self._classes[name] = cls
+            cls.name = name  # type: ignore[attr-defined]
+            return cls
+
+        return add
+
+    def names(self) -> list[str]:
+        """All registered names (built-ins and discovered plugins), sorted."""
+        self._discover()
+        return sorted(self._classes)
+
+    def get(self, name: str) -> type[T]:
+        """The class for ``name``: a registered name or a ``package.module:Class`` path."""
+        if ":" in name:
+            return self._import(name)
+        self._discover()
+        if name not in self._classes:
+            raise UnknownPluginError(self._unknown_message(name))
+        return self._classes[name]
+
+    def _unknown_message(self, name: str) -> str:
+        close = difflib.get_close_matches(name, self.names(), n=3, cutoff=0.5)
+        hint = f" Did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
+        return (
+            f"unknown {self.kind} {name!r}.{hint} Known {self.kind}s: {', '.join(self.names())}."
+            f" A class of your own can be given as 'package.module:ClassName'."
+        )
+
+    def _import(self, reference: str) -> type[T]:
+        module_name, _, attr = reference.partition(":")
+        try:
+            module = importlib.import_module(module_name)
+        except ImportError as exc:
+            raise UnknownPluginError(
+                f"cannot import {self.kind} {reference!r}: {exc}. Check that the module is"
+                " installed or on PYTHONPATH and that the reference reads 'package.module:Class'."
+            ) from None
+        cls = getattr(module, attr, None)
+        if not isinstance(cls, type):
+            raise UnknownPluginError(
+                f"module {module_name!r} has no class {attr!r} for {self.kind} {reference!r}."
+            )
+        return cls
+
+    def _discover(self) -> None:
+        if self._discovered:
+            return
+        self._discovered = True
+        for ep in entry_points(group=self.entry_point_group):
+            if ep.name not in self._classes:
+                self._classes[ep.name] = ep.load()

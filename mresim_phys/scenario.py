@@ -1,0 +1,193 @@
+"""Scenario schema (phase 0, input): the pydantic models behind the YAML contract.
+
+Pure: no file I/O here (``io.py`` reads files, ``load.py`` turns a file into a
+validated :class:`Scenario`). Every model forbids unknown keys, so a typo at any
+depth is an error naming its field path. ``team`` holds the defaults every robot
+inherits; a robot entry may override any of them (nested ``sensor`` keys merge).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Literal
+
+from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+
+Point = tuple[float, float]
+
+
+class Strict(BaseModel):
+    """Base for every scenario model: unknown keys are errors, values are immutable."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+class MapSpec(Strict):
+    """Where the ground truth comes from: exactly one of ``image``, ``grid``, ``ros``."""
+
+    image: str | None = Field(None, description="PNG/JPG/GIF/BMP floor plan; dark = obstacle.")
+    grid: str | None = Field(None, description="Text grid in the original MRESim format.")
+    ros: str | None = Field(None, description="ROS map_server YAML (with its PGM).")
+    resolution: float | None = Field(
+        None, gt=0, description="Metres per cell, only used to report metres."
+    )
+    threshold: float = Field(
+        0.5, gt=0, le=1, description="Image maps: luminance below threshold*255 is obstacle."
+    )
+    negate: bool = Field(False, description="Image maps: bright = obstacle instead of dark.")
+
+    @model_validator(mode="after")
+    def _one_source(self) -> MapSpec:
+        given = [k for k in ("image", "grid", "ros") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise ValueError(
+                "give exactly one map source: 'image: file.png', 'grid: file.txt' or"
+                f" 'ros: map.yaml' (got {given or 'none'})"
+            )
+        return self
+
+    @property
+    def source(self) -> tuple[str, str]:
+        """(kind, path) of the one map source."""
+        for kind in ("image", "grid", "ros"):
+            value = getattr(self, kind)
+            if value is not None:
+                return kind, value
+        raise AssertionError("validated MapSpec has a source")
+
+
+class PluginSpec(Strict):
+    """A plugin chosen by registry name (or ``package.module:Class``) with its params."""
+
+    name: str
+    params: dict[str, Any] = Field(default_factory=dict)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _from_name(cls, value: Any) -> Any:
+        return {"name": value} if isinstance(value, str) else value
+
+
+class SensorSpec(Strict):
+    """A planar laser scanner: ``rays`` rays evenly over ``fov_deg`` centred on the heading."""
+
+    range: float = Field(100.0, gt=0, description="Maximum range in cells.")
+    fov_deg: float = Field(180.0, gt=0, le=360, description="Field of view in degrees.")
+    rays: int = Field(181, ge=2, le=4096, description="Number of rays (181 = 1 degree apart).")
+    noise_std: float = Field(0.0, ge=0, description="Gaussian range noise (cells); 0 = exact.")
+    safe_fraction: float = Field(
+        0.1, gt=0, le=1, description="Safe space = rays clipped to this fraction of the range."
+    )
+
+
+class RobotParams(Strict):
+    """Everything a robot can have; ``team`` gives the defaults, a robot may override."""
+
+    speed: float = Field(3.0, gt=0, description="Cells moved at most per step.")
+    radius: float = Field(2.0, gt=0, description="Body radius in cells.")
+    sensor: SensorSpec = Field(default_factory=SensorSpec)
+    comm_range: float = Field(150.0, ge=0, description="Communication range in cells.")
+    role: Literal["explorer", "relay"] = "explorer"
+    strategy: PluginSpec = Field(default_factory=lambda: PluginSpec(name="frontier"))
+    wall_margin: float = Field(
+        1.0, ge=0, description="Extra clearance (cells) the planner keeps from known walls."
+    )
+
+
+class RobotSpec(RobotParams):
+    """One robot: its name, start pose and any overridden team fields."""
+
+    name: str = Field(pattern=r"^[A-Za-z0-9_.-]+$", description="Unique robot name.")
+    start: Point
+    heading_deg: float = 0.0
+
+
+class BaseStationSpec(Strict):
+    """The static base station collecting what reaches it."""
+
+    position: Point
+    comm_range: float = Field(150.0, ge=0)
+
+
+class StopSpec(Strict):
+    """Optional early stop rules (the run also stops at ``steps``)."""
+
+    explored: float | None = Field(None, gt=0, le=1, description="Team-known fraction.")
+    known_at_base: float | None = Field(None, gt=0, le=1, description="Base-known fraction.")
+    all_done: bool = Field(True, description="Stop when every robot is done or failed.")
+
+
+class SimulationSpec(Strict):
+    """How the cycle runs."""
+
+    scan: Literal["point", "step"] = Field(
+        "point", description="Scan after every path point (as the original) or once per step."
+    )
+    robots_block: bool = Field(
+        False, description="Robots block each other's rays and motion."
+    )
+    multi_hop: bool = Field(
+        True, description="Information flows along chains of linked agents within a step."
+    )
+
+
+class FailEvent(Strict):
+    """At ``step``, robot ``fail`` stops for good: no motion, sensing or communication."""
+
+    step: int = Field(ge=0)
+    fail: str
+
+
+class Scenario(Strict):
+    """A whole run: map, base station, team, communication and events."""
+
+    name: str = Field(pattern=r"^[A-Za-z0-9_.-]+$", description="Names the output folder.")
+    seed: int = Field(0, ge=0)
+    steps: int = Field(3000, ge=1, description="Hard cap on the number of steps.")
+    stop: StopSpec = Field(default_factory=StopSpec)
+    map: MapSpec
+    base_station: BaseStationSpec
+    team: RobotParams = Field(default_factory=RobotParams)
+    robots: list[RobotSpec] = Field(min_length=1)
+    communication: PluginSpec = Field(default_factory=lambda: PluginSpec(name="disk"))
+    simulation: SimulationSpec = Field(default_factory=SimulationSpec)
+    events: list[FailEvent] = Field(default_factory=list)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _apply_team_defaults(cls, data: Any) -> Any:
+        if not isinstance(data, dict) or not isinstance(data.get("robots"), list):
+            return data
+        team = data.get("team") or {}
+        if not isinstance(team, dict):
+            return data
+        robots = [_inherit(team, r) if isinstance(r, dict) else r for r in data["robots"]]
+        return {**data, "robots": robots}
+
+    @field_validator("robots")
+    @classmethod
+    def _unique_names(cls, robots: list[RobotSpec]) -> list[RobotSpec]:
+        names = [r.name for r in robots]
+        dupes = sorted({n for n in names if names.count(n) > 1})
+        if dupes or "base" in names:
+            raise ValueError(f"robot names must be unique and not 'base' (repeated: {dupes})")
+        return robots
+
+    @model_validator(mode="after")
+    def _events_name_robots(self) -> Scenario:
+        names = {r.name for r in self.robots}
+        for event in self.events:
+            if event.fail not in names:
+                raise ValueError(
+                    f"event at step {event.step} fails unknown robot {event.fail!r};"
+                    f" robots are {sorted(names)}"
+                )
+        return self
+
+
+def _inherit(team: dict[str, Any], robot: dict[str, Any]) -> dict[str, Any]:
+    """Robot fields over team defaults; a robot's ``sensor`` dict merges into the team's."""
+    merged = {**team, **robot}
+    team_sensor, robot_sensor = team.get("sensor"), robot.get("sensor")
+    if isinstance(team_sensor, dict) and isinstance(robot_sensor, dict):
+        merged["sensor"] = {**team_sensor, **robot_sensor}
+    return merged

@@ -1,0 +1,176 @@
+"""The simulation cycle (paper, Algorithm 1): one :meth:`Simulation.step` per time step.
+
+Each step: scheduled events; every alive robot moves up to its speed along its
+path, replanning through its strategy when needed, and scans after each path
+point (``motion``); then robot bodies are placed in the world; then links are
+found and knowledge exchanged (``comms``); then the step is measured
+(``metrics``). Robots act as if simultaneously: during the movement phase a
+robot reads and writes only its own state (teammate records change only in the
+communication phase, other robots' bodies stay where the step began), so the
+order in which robots are processed never changes the result.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .agents import Agent, Robot
+from .build import Parts, build_parts
+from .comms.exchange import exchange
+from .load import load_scenario
+from .mapping import integrate_scan
+from .metrics import Milestones, RobotRecord, StepRecord
+from .motion import MoveRules, take_step
+from .rng import named_stream
+from .scenario import Scenario
+from .sensing import scan
+from .strategies import RobotView
+from .types import FREE
+
+
+class Simulation:
+    """A running scenario: the world, the agents and the per-step records."""
+
+    def __init__(self, scenario: Scenario, parts: Parts | None = None) -> None:
+        self.scenario = scenario
+        self.parts = parts or build_parts(scenario)
+        self.world, self.base, self.robots = self.parts.world, self.parts.base, self.parts.robots
+        self.coverage = self.parts.coverage
+        self.t = 0
+        self.links = np.zeros((len(self.agents), len(self.agents)), dtype=bool)
+        self.known_at_base = 0.0
+        self.milestones = Milestones()
+        self._sensing_rngs = [named_stream(scenario.seed, "sensing", r.index) for r in self.robots]
+        self.rules = MoveRules(scenario.simulation.scan == "point", self.robot_filter)
+        for robot in self.robots:
+            self.sense(robot)
+        self.communicate()
+        self.record = self.measure()
+
+    @classmethod
+    def from_yaml(cls, path: str | Path, **overrides: Any) -> Simulation:
+        """Load, validate and build the scenario at ``path`` (``seed=``, ``steps=`` override)."""
+        return cls(load_scenario(path, **overrides))
+
+    @property
+    def agents(self) -> list[Agent]:
+        """Base station (index 0) then robots, the order of the link matrix."""
+        return [self.base, *self.robots]
+
+    def robot(self, name: str) -> Robot:
+        """The robot called ``name``."""
+        return next(r for r in self.robots if r.name == name)
+
+    def step(self) -> StepRecord:
+        """Advance one time step and return its measurements."""
+        self.t += 1
+        self.apply_events()
+        for robot in self.robots:
+            if robot.alive:
+                take_step(robot, self.t, self.world, self.rules, self.replan, self.sense)
+        self.world.place_robots([r.position for r in self.robots])
+        self.communicate()
+        self.record = self.measure()
+        return self.record
+
+    def run(self, on_step: Callable[[StepRecord], None] | None = None) -> StepRecord:
+        """Step until the step cap or a stop rule; ``on_step`` sees every record."""
+        for record in self.iterate():
+            if on_step is not None:
+                on_step(record)
+        return self.record
+
+    def iterate(self) -> Iterator[StepRecord]:
+        """Yield the step-0 record, then one record per step until the run stops."""
+        yield self.record
+        while not self.finished():
+            yield self.step()
+
+    def finished(self) -> bool:
+        """The step cap is reached or a stop rule holds."""
+        return self.stop_reason() is not None
+
+    def stop_reason(self) -> str | None:
+        """Why the run stops now (``steps``, ``explored``, ``known_at_base``, ``all_done``)."""
+        stop = self.scenario.stop
+        if stop.explored is not None and self.record.explored >= stop.explored:
+            return "explored"
+        if stop.known_at_base is not None and self.record.known_at_base >= stop.known_at_base:
+            return "known_at_base"
+        if stop.all_done and self.all_idle():
+            return "all_done"
+        return "steps" if self.t >= self.scenario.steps else None
+
+    def all_idle(self) -> bool:
+        """Every robot has failed, or is done and has arrived where it was going."""
+        return all(not r.alive or (r.done and len(r.path) == 0) for r in self.robots)
+
+    def apply_events(self) -> None:
+        """Events scheduled for this step (robot failures)."""
+        for event in self.scenario.events:
+            if event.step == self.t:
+                failed = self.robot(event.fail)
+                failed.status, failed.path = "failed", failed.path[:0]
+
+    def robot_filter(self, robot: Robot) -> tuple[int, int, int]:
+        """What ``robot``'s rays and motion collide with."""
+        return self.world.query_filter(robot.index - 1, self.scenario.simulation.robots_block)
+
+    def sense(self, robot: Robot) -> None:
+        """Scan at the robot's pose and fold the scan into its map and the team coverage."""
+        assert robot.spec is not None
+        sensor = robot.spec.sensor
+        result = scan(self.world, robot.position, robot.heading, sensor,
+                      self.robot_filter(robot), self._sensing_rngs[robot.index - 1])
+        update = integrate_scan(robot.belief, robot.safe, result, sensor.safe_fraction)
+        if update is not None:
+            self.coverage.add(update)
+
+    def replan(self, robot: Robot) -> None:
+        """Ask the robot's strategy for a new path from what the robot knows."""
+        assert robot.strategy is not None and robot.spec is not None
+        robot.adopt(robot.strategy.decide(self.view_of(robot)), self.t)
+
+    def view_of(self, robot: Robot) -> RobotView:
+        """The robot's knowledge, read-only, as its strategy may see it."""
+        assert robot.spec is not None
+        belief = robot.belief.view()
+        belief.flags.writeable = False
+        return RobotView(
+            step=self.t, name=robot.name, position=robot.position, heading=robot.heading,
+            belief=belief, radius=robot.radius,
+            clearance=robot.radius + robot.spec.wall_margin, speed=robot.speed,
+            sensor_range=robot.spec.sensor.range, role=robot.role,
+            base_position=self.base.position, teammates=dict(robot.teammates), rng=robot.rng,
+            bumped=robot.status == "error", reached_goal=robot.reached_goal,
+        )
+
+    def communicate(self) -> None:
+        """Find links among alive agents and exchange knowledge along them."""
+        agents = self.agents
+        positions = np.array([a.position for a in agents], dtype=float)
+        ranges = np.array([a.comm_range for a in agents], dtype=float)
+        alive = np.array([a.alive for a in agents])
+        links = self.parts.comm.links(positions, ranges, self.world) & np.outer(alive, alive)
+        self.links = links
+        exchange(agents, links, self.t, self.scenario.simulation.multi_hop)
+        if links[0].any() or self.t == 0:
+            known = np.count_nonzero((self.base.belief == FREE) & self.coverage.reachable)
+            fraction = known / self.coverage.total if self.coverage.total else 1.0
+            self.known_at_base = max(self.known_at_base, min(fraction, 1.0))
+
+    def measure(self) -> StepRecord:
+        """This step's row of metrics."""
+        robots = tuple(RobotRecord(r.name, r.distance, r.state) for r in self.robots)
+        record = StepRecord(
+            step=self.t, explored=min(self.coverage.fraction, 1.0),
+            known_at_base=self.known_at_base, distance=sum(r.distance for r in robots),
+            alive=sum(r.alive for r in self.robots), links=int(np.triu(self.links).sum()),
+            robots=robots,
+        )
+        self.milestones.update(record)
+        return record

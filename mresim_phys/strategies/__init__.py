@@ -1,0 +1,24 @@
+"""Exploration strategies (phase 4): a plugin family keyed by the YAML name.
+
+Built-ins register themselves on import. Third-party strategies register through
+the ``mresim_phys.strategies`` entry-point group, or are named in a scenario as
+``package.module:ClassName``. See docs/writing-a-strategy.md.
+"""
+
+from __future__ import annotations
+
+from . import frontier, random_walk
+from .base import STRATEGIES, Decision, RobotView, Strategy, StrategyParams, plan_context
+
+BUILT_IN = ("frontier", "random_walk")
+assert {frontier.FrontierExploration.name, random_walk.RandomWalk.name} == set(BUILT_IN)
+
+__all__ = [
+    "BUILT_IN",
+    "STRATEGIES",
+    "Decision",
+    "RobotView",
+    "Strategy",
+    "StrategyParams",
+    "plan_context",
+]

@@ -1,0 +1,122 @@
+"""Strategy contract (phase 4): what a robot may know, and what it must decide.
+
+A strategy sees ONLY a :class:`RobotView`: its robot's own belief grid (read
+only), its pose and body, the base station position (known before the mission,
+as in the original) and the last communicated state of each teammate. It never
+sees the true map. It returns a :class:`Decision`: a path of world points to
+follow, the goal it is heading for, and whether it has nothing left to explore.
+
+:func:`plan_context` gives a strategy the configuration space and one distance
+field from the robot, computed once per decision.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import TYPE_CHECKING, Any, ClassVar, Protocol, runtime_checkable
+
+import numpy as np
+from pydantic import BaseModel, ConfigDict
+
+from ..planning import DistanceField, distance_field, traversable
+from ..registry import Registry
+from ..types import BeliefGrid, FloatArray
+
+if TYPE_CHECKING:
+    from ..agents import TeammateInfo
+
+
+class StrategyParams(BaseModel):
+    """Base for strategy parameters: unknown keys are errors."""
+
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+    replan_interval: int = 15
+
+
+@dataclass(frozen=True)
+class RobotView:
+    """Everything a strategy may use to decide: its robot's knowledge, never the truth."""
+
+    step: int
+    name: str
+    position: tuple[float, float]
+    heading: float
+    belief: BeliefGrid
+    radius: float
+    clearance: float
+    speed: float
+    sensor_range: float
+    role: str
+    base_position: tuple[float, float]
+    teammates: Mapping[str, TeammateInfo]
+    rng: np.random.Generator
+    bumped: bool = False
+    reached_goal: bool = False
+
+
+@dataclass(frozen=True)
+class Decision:
+    """A strategy's answer: where to go (path of world points) and why."""
+
+    path: FloatArray = field(default_factory=lambda: np.zeros((0, 2)))
+    goal: tuple[float, float] | None = None
+    done: bool = False
+    info: Mapping[str, Any] = field(default_factory=dict)
+
+
+@runtime_checkable
+class Strategy(Protocol):
+    """An exploration strategy: one instance per robot, built from its validated params."""
+
+    name: ClassVar[str]
+    Params: ClassVar[type[StrategyParams]]
+    params: StrategyParams
+
+    def decide(self, view: RobotView) -> Decision:
+        """Choose the robot's next path from what it knows."""
+        ...
+
+
+STRATEGIES: Registry[Strategy] = Registry("strategy", "mresim_phys.strategies")
+
+
+class PlanContext:
+    """Configuration space and distance field of one robot, computed lazily once."""
+
+    def __init__(self, view: RobotView) -> None:
+        self.view = view
+
+    @cached_property
+    def passable(self) -> np.ndarray:
+        """Known-free cells at least the robot's clearance from any known obstacle."""
+        return traversable(self.view.belief, self.view.clearance)
+
+    @cached_property
+    def field(self) -> DistanceField:
+        """Path costs from the robot to every passable cell it can reach."""
+        return distance_field(self.passable, self.view.position)
+
+    def path_towards(self, x: float, y: float) -> FloatArray:
+        """Path to the reachable cell nearest (straight-line) to world point (x, y)."""
+        costs = self.field.costs
+        rows, cols = np.nonzero(np.isfinite(costs))
+        if len(rows) == 0:
+            return np.zeros((0, 2))
+        d2 = (cols + 0.5 - x) ** 2 + (rows + 0.5 - y) ** 2
+        best = int(np.lexsort((costs[rows, cols], d2))[0])
+        return self.field.path_to(int(rows[best]), int(cols[best]))
+
+
+def plan_context(view: RobotView) -> PlanContext:
+    """The planning helpers for ``view``, each computed at most once."""
+    return PlanContext(view)
+
+
+def return_to_base(view: RobotView, context: PlanContext) -> Decision:
+    """Nothing left to explore: head for the base station (as near as it can get) and stay."""
+    path = context.path_towards(*view.base_position)
+    goal = tuple(path[-1]) if len(path) else view.position
+    return Decision(path=path, goal=goal, done=True)  # type: ignore[arg-type]

@@ -1,0 +1,195 @@
+"""``frontier``: the original's greedy frontier exploration ("return when done").
+
+At every replan the robot finds the frontiers of its own map, scores each as
+``U = size * 1e8 / d**4`` (``d`` = path length; original ``FrontierExploration``)
+and runs a greedy auction with the teammates it heard from within
+``teammate_memory`` steps: the best (robot, frontier) pair is fixed, that robot
+and that frontier leave the auction, until the best pair is this robot's. So two
+robots in contact do not chase the same frontier. A teammate's distance starts as
+the straight line from its last known position and is replaced by its exact path
+length on this robot's map before its bid can win (as the original does).
+With nothing reachable left to explore the robot returns to the base: ``done``.
+
+A frontier the robot reached without resolving it (unknown cells it cannot see
+into) is remembered and skipped, like the original's "bad frontiers".
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from pydantic import Field
+
+from ..frontiers import Frontiers, find_frontiers, frontier_targets
+from ..planning import distance_field
+from .base import (
+    STRATEGIES,
+    Decision,
+    PlanContext,
+    RobotView,
+    StrategyParams,
+    plan_context,
+    return_to_base,
+)
+
+UTILITY_SCALE = 1e8  # original: U = area * 10^8 / d^4
+
+
+class FrontierParams(StrategyParams):
+    """Parameters of greedy frontier exploration (defaults: the original's constants)."""
+
+    replan_interval: int = Field(15, ge=1, description="Steps between replans.")
+    min_frontier_size: int = Field(3, ge=1, description="Smallest frontier cluster (cells).")
+    max_frontiers: int = Field(6, ge=1, description="Best frontiers entered in the auction.")
+    teammate_memory: int = Field(500, ge=0, description="Steps a teammate's report stays valid.")
+    reach: float | None = Field(
+        None, gt=0, description="How far (cells) a target may be from its frontier; "
+        "default: clearance + 2."
+    )
+
+
+@dataclass
+class Bidder:
+    """One robot in the auction: its path costs to every candidate frontier."""
+
+    name: str
+    costs: np.ndarray
+    exact: bool
+    position: tuple[float, float]
+
+
+def utility(sizes: np.ndarray, costs: np.ndarray) -> np.ndarray:
+    """The original's frontier utility; unreachable frontiers get -inf."""
+    with np.errstate(divide="ignore", over="ignore"):
+        u = sizes * UTILITY_SCALE / np.maximum(costs, 1.0) ** 4
+    return np.where(np.isfinite(costs), u, -np.inf)
+
+
+@STRATEGIES.register("frontier")
+class FrontierExploration:
+    """Greedy utility-based frontier exploration with a teammate auction."""
+
+    Params = FrontierParams
+
+    def __init__(self, params: FrontierParams) -> None:
+        self.params = params
+        self._ignored: np.ndarray | None = None
+        self._chasing: np.ndarray | None = None
+
+    def decide(self, view: RobotView) -> Decision:
+        """Pick the frontier this robot wins in the auction and plan a path to it."""
+        context = plan_context(view)
+        frontiers = self._frontiers(view)
+        reach = self.params.reach or view.clearance + 2.0
+        targets, costs = frontier_targets(frontiers, context.field, context.passable, reach)
+        candidates = self._candidates(frontiers, costs)
+        if len(candidates) == 0:
+            self._chasing = None
+            return return_to_base(view, context)
+        chosen = self._auction(view, context, frontiers, targets, costs, candidates)
+        self._chasing = frontiers.cells_rc[frontiers.cluster_of == chosen]
+        row, col = (int(v) for v in targets[chosen])
+        info = {"frontiers": frontiers, "target_cluster": chosen}
+        return Decision(path=context.field.path_to(row, col), goal=(col + 0.5, row + 0.5), info=info)
+
+    def _frontiers(self, view: RobotView) -> Frontiers:
+        if self._ignored is None:
+            self._ignored = np.zeros(view.belief.shape, dtype=bool)
+        if view.reached_goal and self._chasing is not None:
+            self._ignored[self._chasing[:, 0], self._chasing[:, 1]] = True
+        return find_frontiers(view.belief, self.params.min_frontier_size)
+
+    def _candidates(self, frontiers: Frontiers, costs: np.ndarray) -> np.ndarray:
+        """Indices of the best reachable, not-given-up frontiers, best first."""
+        assert self._ignored is not None
+        cells = frontiers.cells_rc
+        ignored = np.bincount(
+            frontiers.cluster_of, weights=self._ignored[cells[:, 0], cells[:, 1]],
+            minlength=len(frontiers),
+        )
+        fresh = ignored * 2 < frontiers.sizes
+        u = utility(frontiers.sizes.astype(float), costs)
+        order = np.argsort(-u, kind="stable")
+        keep = order[np.isfinite(u[order]) & fresh[order]]
+        return keep[: self.params.max_frontiers]
+
+    def _auction(
+        self,
+        view: RobotView,
+        context: PlanContext,
+        frontiers: Frontiers,
+        targets: np.ndarray,
+        costs: np.ndarray,
+        candidates: np.ndarray,
+    ) -> int:
+        sizes = frontiers.sizes[candidates].astype(float)
+        goals = targets[candidates]
+        bidders = [Bidder(view.name, costs[candidates], True, view.position)]
+        bidders += [
+            Bidder(t.name, straight_line(t.position, goals), False, t.position)
+            for t in self._teammates(view)
+        ]
+        won = greedy_auction(bidders, sizes, lambda b: exact_costs(context, b.position, goals))
+        return int(candidates[won])
+
+    def _teammates(self, view: RobotView) -> list:
+        memory = self.params.teammate_memory
+        return sorted(
+            (
+                t for t in view.teammates.values()
+                if t.name != view.name and t.role == "explorer"
+                and t.state in ("active", "error") and view.step - t.step <= memory
+            ),
+            key=lambda t: t.name,
+        )
+
+
+def straight_line(position: tuple[float, float], goals_rc: np.ndarray) -> np.ndarray:
+    """Straight-line distance from ``position`` to each goal cell centre."""
+    return np.hypot(goals_rc[:, 1] + 0.5 - position[0], goals_rc[:, 0] + 0.5 - position[1])
+
+
+def exact_costs(
+    context: PlanContext, position: tuple[float, float], goals_rc: np.ndarray
+) -> np.ndarray | None:
+    """Path costs on this robot's map from a teammate's position (None if off the map)."""
+    field = distance_field(context.passable, position)
+    found = field.cost_at(goals_rc[:, 0], goals_rc[:, 1])
+    return found if np.isfinite(found).any() else None
+
+
+def greedy_auction(bidders: list[Bidder], sizes: np.ndarray, refine) -> int:  # type: ignore[no-untyped-def]
+    """Index of the frontier bidder 0 wins; estimates are refined before they can win."""
+    assigned: set[int] = set()
+    taken = np.zeros(len(sizes), dtype=bool)
+    while len(assigned) < len(bidders) and not taken.all():
+        who, which = best_pair(bidders, sizes, assigned, taken)
+        if who < 0:
+            break
+        bidder = bidders[who]
+        if not bidder.exact:
+            refined = refine(bidder)
+            bidder.costs = bidder.costs if refined is None else refined
+            bidder.exact = True
+            continue
+        if who == 0:
+            return which
+        assigned.add(who)
+        taken[which] = True
+    return int(np.argmax(utility(sizes, bidders[0].costs)))
+
+
+def best_pair(
+    bidders: list[Bidder], sizes: np.ndarray, assigned: set[int], taken: np.ndarray
+) -> tuple[int, int]:
+    """The (bidder, frontier) pair with the highest utility; (-1, -1) if none is left."""
+    best, who, which = -np.inf, -1, -1
+    for i, bidder in enumerate(bidders):
+        if i in assigned:
+            continue
+        u = np.where(taken, -np.inf, utility(sizes, bidder.costs))
+        j = int(np.argmax(u))
+        if u[j] > best:
+            best, who, which = u[j], i, j
+    return who, which

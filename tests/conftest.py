@@ -1,0 +1,66 @@
+"""Shared fixtures: tiny maps and scenarios built in code, written into tmp_path."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import yaml
+from PIL import Image
+
+
+def rooms_grid() -> np.ndarray:
+    """A 60x80 map: outer wall, a vertical wall with a door, a room with a diagonal wall."""
+    occ = np.zeros((60, 80), dtype=bool)
+    occ[:2, :] = occ[-2:, :] = True
+    occ[:, :2] = occ[:, -2:] = True
+    occ[:, 40:42] = True
+    occ[25:37, 40:42] = False  # a 12-cell door
+    for i in range(12):  # a staircase diagonal wall in the right room
+        occ[10 + i, 55 + i : 57 + i] = True
+    return occ
+
+
+def write_png(path: Path, occupied: np.ndarray) -> Path:
+    """Save ``occupied`` as a black (obstacle) on white PNG."""
+    Image.fromarray(np.where(occupied, 0, 255).astype(np.uint8)).save(path)
+    return path
+
+
+@pytest.fixture
+def rng() -> np.random.Generator:
+    return np.random.default_rng(0)
+
+
+@pytest.fixture
+def rooms() -> np.ndarray:
+    return rooms_grid()
+
+
+@pytest.fixture
+def scenario_file(tmp_path: Path) -> Callable[..., Path]:
+    """Write a scenario over the rooms map; keyword arguments replace top-level keys."""
+
+    def make(**changes: Any) -> Path:
+        write_png(tmp_path / "rooms.png", rooms_grid())
+        data: dict[str, Any] = {
+            "name": "tiny",
+            "seed": 3,
+            "steps": 60,
+            "map": {"image": "rooms.png", "resolution": 0.1},
+            "base_station": {"position": [8, 30], "comm_range": 20},
+            "team": {"speed": 2, "radius": 1.0, "sensor": {"range": 30}, "comm_range": 20},
+            "robots": [
+                {"name": "A", "start": [8, 20], "heading_deg": 0},
+                {"name": "B", "start": [8, 40], "heading_deg": 0, "speed": 3},
+            ],
+        }
+        data.update(changes)
+        path = tmp_path / "scenario.yaml"
+        path.write_text(yaml.safe_dump(data, sort_keys=False))
+        return path
+
+    return make
