@@ -102,7 +102,8 @@ def find_frontiers(belief: BeliefGrid, min_size: int = 3) -> Frontiers:
     )
     if n <= 1:
         return _empty_frontiers()
-    rows, cols = np.nonzero(labels)
+    xy = cv2.findNonZero(mask).reshape(-1, 2).astype(np.intp)  # raster order, 4x np.nonzero
+    rows, cols = xy[:, 1], xy[:, 0]
     seq = labels[rows, cols]
     ranks = _raster_ranks(seq, n)  # SAUF labels in raster order; checked, not trusted
     order = np.argsort(ranks[1:])  # label - 1 of the cluster at each rank
