@@ -133,10 +133,11 @@ def bench_map(name: str, occ: BoolGrid, *, mcp: bool) -> None:
     kernels: list[tuple[str, Callable[[], object]]] = [
         ("traversable (fully known)", lambda: traversable(belief, CLEARANCE)),
         ("distance_field from a corner (fully known)", lambda: distance_field(passable, start)),
+        ("distance_field limit 150", lambda: distance_field(passable, start, limit=150.0)),
         ("path_to the far corner", lambda: field.path_to(goal_r, goal_c)),
         ("plan_path corner to corner", lambda: plan_path(passable, start, goal_xy)),
         ("plan_path to a cell ~32 away", lambda: plan_path(passable, start, near_xy)),
-    ]
+    ]  # fmt: skip
     if mcp:
         costs = np.where(passable, 1.0, np.inf)
         start_rc = (int(start[1]), int(start[0]))

@@ -129,28 +129,54 @@ def _disc(reach: float) -> IntArray:
     return np.column_stack((dr[inside], dc[inside]))
 
 
+def _candidate_costs(
+    field: DistanceField, passable: BoolGrid, rows: IntArray, cols: IntArray
+) -> FloatArray:
+    """Field costs at cells (rows, cols) of any shape; inf off the field or not passable."""
+    wr0, wc0 = field.origin  # the field's padded search window (inf on its border ring)
+    hp, wp = field.window_costs.shape
+    lr, lc = rows - wr0, cols - wc0
+    inside = (lr >= 0) & (lr < hp) & (lc >= 0) & (lc < wp)
+    values = np.full(rows.shape, np.inf)
+    values[inside] = field.window_costs[lr[inside], lc[inside]]
+    finite = np.isfinite(values)  # finite only on in-grid cells reached by the search
+    values[finite] = np.where(passable[rows[finite], cols[finite]], values[finite], np.inf)
+    return values
+
+
 def _best_in_offsets(
-    values: FloatArray, cells: IntArray, offsets: IntArray
+    field: DistanceField, passable: BoolGrid, cells: IntArray, offsets: IntArray
 ) -> tuple[FloatArray, IntArray]:
-    """For each cell, min of ``values`` over ``cell + offsets`` and its flat index there.
+    """For each cell, the min candidate cost over ``cell + offsets`` and its flat index.
 
     Ties go to the first offset; with raster-ordered offsets that is the smallest index.
     """
-    width = values.shape[1]
-    flat_values = values.ravel()
-    steps = offsets[:, 0] * width + offsets[:, 1]
-    base = cells[:, 0] * width + cells[:, 1]
+    width = passable.shape[1]
     best = np.empty(len(cells))
     where = np.empty(len(cells), dtype=np.intp)
-    chunk = max(_GATHER_CHUNK // max(len(steps), 1), 1)
+    chunk = max(_GATHER_CHUNK // len(offsets), 1)
     for lo in range(0, len(cells), chunk):  # loop over blocks of cells, not cells
-        idx = base[lo : lo + chunk, None] + steps
-        vals = flat_values[idx]
-        arg = np.argmin(vals, axis=1)
+        rows = cells[lo : lo + chunk, :1] + offsets[:, 0]
+        cols = cells[lo : lo + chunk, 1:] + offsets[:, 1]
+        values = _candidate_costs(field, passable, rows, cols)
+        arg = np.argmin(values, axis=1)
         pick = np.arange(len(arg))
-        best[lo : lo + chunk] = vals[pick, arg]
-        where[lo : lo + chunk] = idx[pick, arg]
+        best[lo : lo + chunk] = values[pick, arg]
+        where[lo : lo + chunk] = rows[pick, arg] * width + cols[pick, arg]
     return best, where
+
+
+def _parent_direction(cells: IntArray) -> IntArray:
+    """Index in ``_EARLIER`` of a cell's first earlier 8-neighbour in ``cells``; 4 if none."""
+    width = int(cells[:, 1].max()) + 3
+    flat = (cells[:, 0] + 1) * width + cells[:, 1] + 1
+    known = np.sort(flat)
+    group = np.full(len(cells), len(_EARLIER))
+    for d, (dr, dc) in reversed(list(enumerate(_EARLIER))):  # first listed direction wins
+        wanted = flat + dr * width + dc
+        at = np.minimum(np.searchsorted(known, wanted), len(known) - 1)
+        group[known[at] == wanted] = d
+    return group
 
 
 def frontier_targets(
@@ -181,45 +207,22 @@ def frontier_targets(
     if k == 0 or reach < 0 or field.start_rc is None:
         return targets, costs
     disc = _disc(reach)
-    margin = max(int(np.floor(reach)), 1)
     cells = frontiers.cells_rc
-    r0, c0 = cells.min(axis=0) - margin
-    r1, c1 = cells.max(axis=0) + margin + 1
-    # Candidate values on the cells' box + margin (inf outside the grid / not passable).
-    rows, cols = field.shape
-    values = np.full((r1 - r0, c1 - c0), np.inf)
-    gr0, gr1, gc0, gc1 = max(r0, 0), min(r1, rows), max(c0, 0), min(c1, cols)
-    window = (slice(gr0, gr1), slice(gc0, gc1))
-    values[gr0 - r0 : gr1 - r0, gc0 - c0 : gc1 - c0] = np.where(
-        passable[window], field.costs[window], np.inf
-    )
-    local = cells - (r0, c0)
-    member = np.zeros(values.shape, dtype=bool)
-    member[local[:, 0], local[:, 1]] = True
-    group = np.full(len(cells), len(_EARLIER))  # index of the parent direction; last = root
-    for d, (dr, dc) in reversed(list(enumerate(_EARLIER))):  # first listed direction wins
-        group[member[local[:, 0] + dr, local[:, 1] + dc]] = d
+    group = _parent_direction(cells)
     best = np.full(len(cells), np.inf)
     where = np.zeros(len(cells), dtype=np.intp)
     for d in range(len(_EARLIER) + 1):
         sel = np.flatnonzero(group == d)
-        if sel.size == 0:
-            continue
         offsets = disc
         if d < len(_EARLIER):  # the parent's disc is already covered by the parent
-            parent = np.array(_EARLIER[d])
-            offsets = disc[((disc - parent) ** 2).sum(axis=1) > reach**2]
-        if offsets.size:
-            best[sel], where[sel] = _best_in_offsets(values, local[sel], offsets)
-    # Grouped min per cluster by (cost, row-major index), first row of each cluster.
+            offsets = disc[((disc - _EARLIER[d]) ** 2).sum(axis=1) > reach**2]
+        if sel.size and offsets.size:
+            best[sel], where[sel] = _best_in_offsets(field, passable, cells[sel], offsets)
+    # Grouped min per cluster by (cost, row-major index): first row of each cluster.
     order = np.lexsort((where, best, frontiers.cluster_of))
-    first = np.r_[True, np.diff(frontiers.cluster_of[order]) != 0]
-    pick = order[first]
+    pick = order[np.r_[True, np.diff(frontiers.cluster_of[order]) != 0]]
+    pick = pick[np.isfinite(best[pick])]
     clusters = frontiers.cluster_of[pick]
-    found = np.isfinite(best[pick])
-    width = values.shape[1]
-    costs[clusters[found]] = best[pick][found]
-    targets[clusters[found]] = np.column_stack(
-        (where[pick][found] // width + r0, where[pick][found] % width + c0)
-    )
+    costs[clusters] = best[pick]
+    targets[clusters] = np.column_stack(np.divmod(where[pick], passable.shape[1]))
     return targets, costs

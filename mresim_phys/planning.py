@@ -274,30 +274,54 @@ class DistanceField:
         return np.column_stack((cols + self.origin[1] + 0.5, rows + self.origin[0] + 0.5))
 
 
+def _window(start: tuple[int, int], box: Box, limit: float) -> Box:
+    """``box`` cut to the cells within Chebyshev distance ``limit`` of ``start``.
+
+    Every path of cost <= limit stays inside (each move costs >= 1), so a search bounded by
+    ``limit`` loses nothing by being confined to it.
+    """
+    reach = int(min(np.ceil(limit), max(box[1], box[3])))
+    return (max(box[0], start[0] - reach), min(box[1], start[0] + reach + 1),
+            max(box[2], start[1] - reach), min(box[3], start[1] + reach + 1))  # fmt: skip
+
+
+def _field_in(
+    passable: BoolGrid, start: tuple[int, int], window: Box, limit: float
+) -> DistanceField:
+    """The ``DistanceField`` of a search confined to ``window``."""
+    costs, pred = _search(passable, start, window, limit)
+    shape = (int(passable.shape[0]), int(passable.shape[1]))
+    return DistanceField(shape, start, (window[0] - 1, window[2] - 1), costs, pred)
+
+
 def distance_field(
-    passable: BoolGrid, start_xy: tuple[float, float], *, max_snap: float = 3.0
+    passable: BoolGrid,
+    start_xy: tuple[float, float],
+    *,
+    max_snap: float = 3.0,
+    limit: float = np.inf,
 ) -> DistanceField:
     """One Dijkstra from ``start_xy`` over the passable cells (see the module move rules).
 
     The start is the cell containing ``start_xy`` if passable, else the nearest passable
     cell within ``max_snap`` cells (``snap_to_passable``); if none, every cost is inf. The
-    search covers the bounding box of passable cells only.
+    search covers the bounding box of passable cells only, and with a finite ``limit``
+    only the window of that radius around the start.
 
     Args:
         passable: Configuration-space mask, e.g. from ``traversable``.
         start_xy: Robot position in world coordinates (cells).
         max_snap: Largest distance to snap a non-passable start onto a passable cell.
+        limit: Cells whose path cost exceeds this are left unreached (inf).
 
     Returns:
         The ``DistanceField`` of the start.
     """
-    shape = (int(passable.shape[0]), int(passable.shape[1]))
     start = snap_to_passable(passable, start_xy, max_snap)
     box = _bbox(passable)
     if start is None or box is None:
-        return DistanceField(shape, None)
-    costs, pred = _search(passable, start, box)
-    return DistanceField(shape, start, (box[0] - 1, box[2] - 1), costs, pred)
+        return DistanceField((int(passable.shape[0]), int(passable.shape[1])), None)
+    return _field_in(passable, start, _window(start, box, limit), limit)
 
 
 def plan_path(
@@ -328,14 +352,11 @@ def plan_path(
     dr, dc = abs(goal[0] - start[0]), abs(goal[1] - start[1])
     limit = 2.0 * (max(dr, dc) + (_SQRT2 - 1.0) * min(dr, dc)) + 8.0
     while True:
-        reach = int(np.ceil(limit))
-        window = (max(box[0], start[0] - reach), min(box[1], start[0] + reach + 1),
-                  max(box[2], start[1] - reach), min(box[3], start[1] + reach + 1))  # fmt: skip
+        window = _window(start, box, limit)
         whole = window == box
-        costs, pred = _search(passable, start, window, np.inf if whole else limit)
-        fld = DistanceField(passable.shape, start, (window[0] - 1, window[2] - 1), costs, pred)
-        if fld.reachable(*goal) or whole:
-            return fld.path_to(*goal)
+        field = _field_in(passable, start, window, np.inf if whole else limit)
+        if whole or field.reachable(*goal):
+            return field.path_to(*goal)
         limit *= 2.0
 
 

@@ -113,6 +113,25 @@ def test_paths_are_valid_and_cost_what_the_field_says(seed: int) -> None:
         assert path_length(path) == pytest.approx(cost, abs=1e-9)
 
 
+@settings(max_examples=60, deadline=None)
+@given(seed=SEEDS, limit=st.floats(0.0, 30.0))
+def test_limit_keeps_exact_costs_up_to_the_limit_and_drops_the_rest(
+    seed: int, limit: float
+) -> None:
+    passable = random_passable(seed, (25, 30))
+    start = random_start(passable, seed)
+    if start is None:
+        return
+    field = distance_field(passable, (start[1] + 0.5, start[0] + 0.5), limit=limit)
+    expected = reference_dijkstra(passable, start)
+    expected[expected > limit] = np.inf
+    np.testing.assert_array_equal(np.isinf(field.costs), np.isinf(expected))
+    finite = np.isfinite(expected)
+    np.testing.assert_allclose(field.costs[finite], expected[finite], atol=1e-9)
+    row, col = np.argwhere(finite)[-1]
+    assert path_length(field.path_to(row, col)) == pytest.approx(expected[row, col], abs=1e-9)
+
+
 def test_search_restricted_to_a_corner_of_a_big_grid_matches_reference() -> None:
     passable = np.zeros((60, 70), dtype=bool)
     passable[40:52, 50:62] = random_passable(7)
