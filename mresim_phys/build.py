@@ -20,7 +20,7 @@ from .io import LoadedMap, load_image_map, load_ros_map, load_text_map
 from .mapping import Coverage
 from .maps import free_components_mask
 from .rng import named_stream
-from .scenario import MapSpec, PluginSpec, RobotSpec, Scenario
+from .scenario import MapSpec, RobotSpec, Scenario
 from .strategies import STRATEGIES, Strategy
 from .world import World
 
@@ -47,10 +47,10 @@ def load_map(spec: MapSpec) -> LoadedMap:
     return load_ros_map(Path(path))
 
 
-def make_plugin(registry: Any, spec: PluginSpec) -> Any:
-    """Instantiate a plugin from its (already validated) spec."""
-    cls = registry.get(spec.name)
-    return cls(cls.Params.model_validate(spec.params))
+def make_plugin(registry: Any, name: str, params: dict[str, Any]) -> Any:
+    """Instantiate plugin ``name`` from its (already validated) params."""
+    cls = registry.get(name)
+    return cls(cls.Params.model_validate(params))
 
 
 def check_start(world: World, robot: RobotSpec) -> None:
@@ -84,7 +84,7 @@ def check_base(world: World, scenario: Scenario) -> None:
 def make_robot(spec: RobotSpec, index: int, seed: int, shape: tuple[int, int]) -> Robot:
     """A robot with an all-unknown map, its strategy and its own random stream."""
     belief, safe = empty_belief(shape)
-    strategy: Strategy = make_plugin(STRATEGIES, spec.strategy)
+    strategy: Strategy = make_plugin(STRATEGIES, spec.strategy.name, spec.strategy.params)
     return Robot(
         name=spec.name, index=index, position=(float(spec.start[0]), float(spec.start[1])),
         comm_range=spec.comm_range, belief=belief, safe=safe, role=spec.role, spec=spec,
@@ -110,5 +110,7 @@ def build_parts(scenario: Scenario) -> Parts:
     robots = [make_robot(s, i + 1, scenario.seed, shape) for i, s in enumerate(scenario.robots)]
     world.place_robots([r.position for r in robots])
     reachable = free_components_mask(truth.occupied, [r.start for r in scenario.robots])
-    comm: CommModel = make_plugin(COMM_MODELS, scenario.communication)
+    comm: CommModel = make_plugin(
+        COMM_MODELS, scenario.communication.model, scenario.communication.params
+    )
     return Parts(truth, world, base, robots, comm, Coverage(reachable))

@@ -38,33 +38,41 @@ def validate_scenario(data: dict[str, Any], source: str = "<scenario>") -> Scena
         scenario = Scenario.model_validate(data)
     except ValidationError as exc:
         raise ScenarioError(describe_errors(source, exc)) from None
+    team = scenario.team.model_copy(
+        update={"strategy": resolve_strategy(scenario.team.strategy, source, "team.strategy")}
+    )
     robots = [
-        r.model_copy(update={"strategy": resolve_plugin(STRATEGIES, r.strategy, source,
-                                                         f"robots[{i}].strategy")})
+        r.model_copy(
+            update={"strategy": resolve_strategy(r.strategy, source, f"robots[{i}].strategy")}
+        )
         for i, r in enumerate(scenario.robots)
     ]
-    team = scenario.team.model_copy(
-        update={"strategy": resolve_plugin(STRATEGIES, scenario.team.strategy, source,
-                                           "team.strategy")}
-    )
-    comm = resolve_plugin(COMM_MODELS, scenario.communication, source, "communication")
+    comm = scenario.communication
+    params = resolve_params(COMM_MODELS, comm.model, comm.params, source, "communication.model")
+    comm = comm.model_copy(update={"params": params})
     return scenario.model_copy(update={"robots": robots, "team": team, "communication": comm})
 
 
-def resolve_plugin(
-    registry: Registry[Any], spec: PluginSpec, source: str, where: str
-) -> PluginSpec:
-    """``spec`` with its params validated (defaults filled) by the named plugin's model."""
+def resolve_strategy(spec: PluginSpec, source: str, where: str) -> PluginSpec:
+    """A strategy spec with its params validated and every default filled in."""
+    params = resolve_params(STRATEGIES, spec.name, spec.params, source, f"{where}.name")
+    return spec.model_copy(update={"params": params})
+
+
+def resolve_params(
+    registry: Registry[Any], name: str, params: dict[str, Any], source: str, where: str
+) -> dict[str, Any]:
+    """``params`` validated (defaults filled) by the ``Params`` model of plugin ``name``."""
     try:
-        cls = registry.get(spec.name)
+        cls = registry.get(name)
     except UnknownPluginError as exc:
-        raise ScenarioError(f"{source}: {where}.name: {exc}") from None
+        raise ScenarioError(f"{source}: {where}: {exc}") from None
     params_model: type[BaseModel] = cls.Params
+    prefix = where.rsplit(".", 1)[0] + ".params"
     try:
-        params = params_model.model_validate(spec.params)
+        return params_model.model_validate(params).model_dump()
     except ValidationError as exc:
-        raise ScenarioError(describe_errors(source, exc, prefix=f"{where}.params")) from None
-    return PluginSpec(name=spec.name, params=params.model_dump())
+        raise ScenarioError(describe_errors(source, exc, prefix=prefix)) from None
 
 
 def resolve_map_path(scenario: Scenario, folder: Path) -> Scenario:

@@ -4,7 +4,8 @@ While the robot has moved less than its speed this step it takes the next path
 point, replanning through its strategy when the path has run out or the replan
 interval has passed; the move is checked with a swept circle of the robot's
 radius against the true walls. A valid move is made and (by default) followed by
-a scan; an invalid one sets the robot's error flag, marks what it bumped into
+a scan (at the end of its path a robot turns in place to face what its
+strategy asked it to look at, then scans); an invalid one sets the robot's error flag, marks what it bumped into
 in its own map, and ends its motion for this step. The last partial move of a
 step is scaled down to the remaining budget, as in the original.
 """
@@ -65,7 +66,8 @@ def take_step(
             break
         budget -= used
         moved = True
-        if rules.scan_every_point:
+        if rules.scan_every_point or robot.reached_goal:
+            look_at_goal(robot)
             sense(robot)
     if moved and not rules.scan_every_point:
         sense(robot)
@@ -90,6 +92,15 @@ def move_towards(robot: Robot, world: World, rules: MoveRules, budget: float) ->
     if share >= 1.0:
         pop_point(robot)
     return share * gap
+
+
+def look_at_goal(robot: Robot) -> None:
+    """At the end of a path, turn in place to face the decision's ``look_at`` point."""
+    look = robot.decision.look_at if robot.decision is not None else None
+    if robot.reached_goal and look is not None:
+        dx, dy = look[0] - robot.position[0], look[1] - robot.position[1]
+        if math.hypot(dx, dy) > EPS:
+            robot.heading = math.atan2(dy, dx)
 
 
 def pop_point(robot: Robot) -> None:

@@ -67,6 +67,18 @@ class PluginSpec(Strict):
         return {"name": value} if isinstance(value, str) else value
 
 
+class CommSpec(Strict):
+    """The communication model chosen by registry name, with its params."""
+
+    model: str = Field("disk", description="Comm model name (or package.module:Class).")
+    params: dict[str, Any] = Field(default_factory=dict)
+
+    @model_validator(mode="before")
+    @classmethod
+    def _from_name(cls, value: Any) -> Any:
+        return {"model": value} if isinstance(value, str) else value
+
+
 class SensorSpec(Strict):
     """A planar laser scanner: ``rays`` rays evenly over ``fov_deg`` centred on the heading."""
 
@@ -148,7 +160,7 @@ class Scenario(Strict):
     base_station: BaseStationSpec
     team: RobotParams = Field(default_factory=RobotParams)
     robots: list[RobotSpec] = Field(min_length=1)
-    communication: PluginSpec = Field(default_factory=lambda: PluginSpec(name="disk"))
+    communication: CommSpec = Field(default_factory=CommSpec)
     simulation: SimulationSpec = Field(default_factory=SimulationSpec)
     events: list[FailEvent] = Field(default_factory=list)
 

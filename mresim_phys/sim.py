@@ -161,7 +161,7 @@ class Simulation:
         if links[0].any() or self.t == 0:
             known = np.count_nonzero((self.base.belief == FREE) & self.coverage.reachable)
             fraction = known / self.coverage.total if self.coverage.total else 1.0
-            self.known_at_base = max(self.known_at_base, min(fraction, 1.0))
+            self.known_at_base = float(max(self.known_at_base, min(fraction, 1.0)))
 
     def measure(self) -> StepRecord:
         """This step's row of metrics."""

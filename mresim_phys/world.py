@@ -34,6 +34,11 @@ ALL_BITS = 0xFFFFFFFF
 SHUFFLE_SEED = 0x5EED  # fixed: segment insertion order is part of the world, not of the run
 
 
+def is_wall_shape(shape: object) -> bool:
+    """Whether a Chipmunk shape pointer belongs to a wall (not a robot)."""
+    return bool(lib.cpShapeGetFilter(shape).categories & WALL_CATEGORY)
+
+
 @dataclass(frozen=True)
 class Hit:
     """First thing a query touched: where, the surface normal, and whether it is a wall."""
@@ -66,7 +71,6 @@ class World:
         self._add_walls(self.segments)
         self.bodies = [self._add_robot(i, r) for i, r in enumerate(robot_radii)]
         self._info = ffi.new("cpSegmentQueryInfo *")
-        self._cspace = self.space._space
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -110,12 +114,12 @@ class World:
         shape_filter: tuple[int, int, int],
     ) -> Hit | None:
         """The first shape a segment (swept by ``radius``) from ``start`` to ``end`` touches."""
-        info = self._info
-        if lib.cpSpaceSegmentQueryFirst(self._cspace, start, end, radius, shape_filter, info) == ffi.NULL:
+        info, space = self._info, self.space._space  # never keep the cdata beyond the Space
+        if lib.cpSpaceSegmentQueryFirst(space, start, end, radius, shape_filter, info) == ffi.NULL:
             return None
-        is_wall = lib.cpShapeGetFilter(info.shape).categories & WALL_CATEGORY != 0
         return Hit(
-            (info.point.x, info.point.y), (info.normal.x, info.normal.y), info.alpha, is_wall
+            (info.point.x, info.point.y), (info.normal.x, info.normal.y), info.alpha,
+            is_wall_shape(info.shape),
         )
 
     def cast_rays(
@@ -127,16 +131,22 @@ class World:
     ) -> Scan:
         """Cast one ray per angle from ``origin``; exact distance to the first hit."""
         ox, oy = origin
-        ends = np.column_stack((ox + max_range * np.cos(angles), oy + max_range * np.sin(angles)))
+        xs = (ox + max_range * np.cos(angles)).tolist()
+        ys = (oy + max_range * np.sin(angles)).tolist()
+        hits: list[tuple[int, float, float, float, bool]] = []
+        info, space, query, null = self._info, self.space._space, lib.cpSpaceSegmentQueryFirst, ffi.NULL
+        only_walls = shape_filter[2] == WALL_CATEGORY
+        for i, end in enumerate(zip(xs, ys)):
+            if query(space, origin, end, 0.0, shape_filter, info) != null:
+                is_wall = only_walls or is_wall_shape(info.shape)
+                hits.append((i, info.alpha, info.normal.x, info.normal.y, is_wall))
         alphas = np.ones(len(angles))
         normals = np.zeros((len(angles), 2))
         wall_hit = np.zeros(len(angles), dtype=bool)
-        info, space, query, null = self._info, self._cspace, lib.cpSpaceSegmentQueryFirst, ffi.NULL
-        for i, end in enumerate(ends.tolist()):
-            if query(space, origin, end, 0.0, shape_filter, info) != null:
-                alphas[i] = info.alpha
-                normals[i] = (info.normal.x, info.normal.y)
-                wall_hit[i] = lib.cpShapeGetFilter(info.shape).categories & WALL_CATEGORY != 0
+        if hits:
+            table = np.array(hits)
+            index = table[:, 0].astype(np.intp)
+            alphas[index], normals[index], wall_hit[index] = table[:, 1], table[:, 2:4], table[:, 4]
         return Scan(origin, angles, alphas * max_range, normals, wall_hit, max_range)
 
     def blocked(

@@ -12,7 +12,7 @@ field from the robot, computed once per decision.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import TYPE_CHECKING, Any, ClassVar, Protocol, runtime_checkable
@@ -64,6 +64,7 @@ class Decision:
     path: FloatArray = field(default_factory=lambda: np.zeros((0, 2)))
     goal: tuple[float, float] | None = None
     done: bool = False
+    look_at: tuple[float, float] | None = None  # turn to face this point when the path ends
     info: Mapping[str, Any] = field(default_factory=dict)
 
 
@@ -98,6 +99,20 @@ class PlanContext:
     def field(self) -> DistanceField:
         """Path costs from the robot to every passable cell it can reach."""
         return distance_field(self.passable, self.view.position)
+
+    def fields_growing(self, first_limit: float) -> Iterator[DistanceField]:
+        """Distance fields bounded by a cost horizon that doubles, ending unbounded.
+
+        A strategy that wants the nearest of something stops at the first field
+        that holds one; the late-exploration cost of a whole-map search is then
+        paid only when nothing is near.
+        """
+        limit = max(first_limit, 1.0)
+        extent = sum(self.view.belief.shape)
+        while limit < extent:
+            yield distance_field(self.passable, self.view.position, limit=limit)
+            limit *= 2
+        yield self.field
 
     def path_towards(self, x: float, y: float) -> FloatArray:
         """Path to the reachable cell nearest (straight-line) to world point (x, y)."""

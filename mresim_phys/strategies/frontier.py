@@ -10,8 +10,9 @@ the straight line from its last known position and is replaced by its exact path
 length on this robot's map before its bid can win (as the original does).
 With nothing reachable left to explore the robot returns to the base: ``done``.
 
-A frontier the robot reached without resolving it (unknown cells it cannot see
-into) is remembered and skipped, like the original's "bad frontiers".
+On arriving, the robot turns to face the frontier (its laser covers only 180
+degrees) and scans; a frontier it reached without resolving (unknown cells it
+cannot see into) is remembered and skipped, like the original's "bad frontiers".
 """
 
 from __future__ import annotations
@@ -43,6 +44,10 @@ class FrontierParams(StrategyParams):
     min_frontier_size: int = Field(3, ge=1, description="Smallest frontier cluster (cells).")
     max_frontiers: int = Field(6, ge=1, description="Best frontiers entered in the auction.")
     teammate_memory: int = Field(500, ge=0, description="Steps a teammate's report stays valid.")
+    horizon: float = Field(
+        1.0, gt=0, description="First search horizon, in sensor ranges; doubles until a "
+        "frontier is found.",
+    )
     reach: float | None = Field(
         None, gt=0, description="How far (cells) a target may be from its frontier; "
         "default: clearance + 2."
@@ -82,16 +87,22 @@ class FrontierExploration:
         context = plan_context(view)
         frontiers = self._frontiers(view)
         reach = self.params.reach or view.clearance + 2.0
-        targets, costs = frontier_targets(frontiers, context.field, context.passable, reach)
-        candidates = self._candidates(frontiers, costs)
-        if len(candidates) == 0:
+        for field in context.fields_growing(self.params.horizon * view.sensor_range):
+            targets, costs = frontier_targets(frontiers, field, context.passable, reach)
+            candidates = self._candidates(frontiers, costs)
+            if len(candidates):
+                break
+        else:
             self._chasing = None
             return return_to_base(view, context)
         chosen = self._auction(view, context, frontiers, targets, costs, candidates)
         self._chasing = frontiers.cells_rc[frontiers.cluster_of == chosen]
         row, col = (int(v) for v in targets[chosen])
         info = {"frontiers": frontiers, "target_cluster": chosen}
-        return Decision(path=context.field.path_to(row, col), goal=(col + 0.5, row + 0.5), info=info)
+        return Decision(
+            path=field.path_to(row, col), goal=(col + 0.5, row + 0.5),
+            look_at=nearest_cell_centre(self._chasing, row, col), info=info,
+        )
 
     def _frontiers(self, view: RobotView) -> Frontiers:
         if self._ignored is None:
@@ -125,12 +136,16 @@ class FrontierExploration:
     ) -> int:
         sizes = frontiers.sizes[candidates].astype(float)
         goals = targets[candidates]
-        bidders = [Bidder(view.name, costs[candidates], True, view.position)]
+        mine = costs[candidates]
+        bidders = [Bidder(view.name, mine, True, view.position)]
         bidders += [
             Bidder(t.name, straight_line(t.position, goals), False, t.position)
             for t in self._teammates(view)
         ]
-        won = greedy_auction(bidders, sizes, lambda b: exact_costs(context, b.position, goals))
+        limit = competitive_cost(sizes, mine)
+        won = greedy_auction(
+            bidders, sizes, lambda b: exact_costs(context, b.position, goals, limit)
+        )
         return int(candidates[won])
 
     def _teammates(self, view: RobotView) -> list:
@@ -145,18 +160,35 @@ class FrontierExploration:
         )
 
 
+def nearest_cell_centre(cells_rc: np.ndarray, row: int, col: int) -> tuple[float, float]:
+    """World centre of the cell of ``cells_rc`` nearest to cell (row, col)."""
+    nearest = cells_rc[np.argmin(np.hypot(cells_rc[:, 0] - row, cells_rc[:, 1] - col))]
+    return float(nearest[1]) + 0.5, float(nearest[0]) + 0.5
+
+
 def straight_line(position: tuple[float, float], goals_rc: np.ndarray) -> np.ndarray:
     """Straight-line distance from ``position`` to each goal cell centre."""
     return np.hypot(goals_rc[:, 1] + 0.5 - position[0], goals_rc[:, 0] + 0.5 - position[1])
 
 
+def competitive_cost(sizes: np.ndarray, mine: np.ndarray) -> float:
+    """Longest path with which a teammate could still outbid this robot on some frontier.
+
+    A teammate's bid matters only if it beats this robot's worst candidate
+    utility, so its path search can stop at that cost.
+    """
+    worst = utility(sizes, mine).min()
+    return float(np.max((sizes * UTILITY_SCALE / worst) ** 0.25)) + 1.0
+
+
 def exact_costs(
-    context: PlanContext, position: tuple[float, float], goals_rc: np.ndarray
+    context: PlanContext, position: tuple[float, float], goals_rc: np.ndarray, limit: float
 ) -> np.ndarray | None:
     """Path costs on this robot's map from a teammate's position (None if off the map)."""
-    field = distance_field(context.passable, position)
-    found = field.cost_at(goals_rc[:, 0], goals_rc[:, 1])
-    return found if np.isfinite(found).any() else None
+    field = distance_field(context.passable, position, limit=limit)
+    if field.start_rc is None:
+        return None
+    return field.cost_at(goals_rc[:, 0], goals_rc[:, 1])
 
 
 def greedy_auction(bidders: list[Bidder], sizes: np.ndarray, refine) -> int:  # type: ignore[no-untyped-def]
