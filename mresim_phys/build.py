@@ -86,9 +86,16 @@ def make_robot(spec: RobotSpec, index: int, seed: int, shape: tuple[int, int]) -
     belief, safe = empty_belief(shape)
     strategy: Strategy = make_plugin(STRATEGIES, spec.strategy.name, spec.strategy.params)
     return Robot(
-        name=spec.name, index=index, position=(float(spec.start[0]), float(spec.start[1])),
-        comm_range=spec.comm_range, belief=belief, safe=safe, role=spec.role, spec=spec,
-        strategy=strategy, heading=math.radians(spec.heading_deg),
+        name=spec.name,
+        index=index,
+        position=(float(spec.start[0]), float(spec.start[1])),
+        comm_range=spec.comm_range,
+        belief=belief,
+        safe=safe,
+        role=spec.role,
+        spec=spec,
+        strategy=strategy,
+        heading=math.radians(spec.heading_deg),
         rng=named_stream(seed, "strategy", index),
     )
 
@@ -103,8 +110,12 @@ def build_parts(scenario: Scenario) -> Parts:
     shape = truth.occupied.shape
     base_belief, base_safe = empty_belief(shape)
     base = Agent(
-        name=BASE_NAME, index=0, position=tuple(map(float, scenario.base_station.position)),
-        comm_range=scenario.base_station.comm_range, belief=base_belief, safe=base_safe,
+        name=BASE_NAME,
+        index=0,
+        position=tuple(map(float, scenario.base_station.position)),
+        comm_range=scenario.base_station.comm_range,
+        belief=base_belief,
+        safe=base_safe,
         role="base",
     )
     robots = [make_robot(s, i + 1, scenario.seed, shape) for i, s in enumerate(scenario.robots)]

@@ -69,15 +69,19 @@ def run_command(args: argparse.Namespace) -> int:
     out_dir = args.out or default_run_dir(scenario)
     started = time.perf_counter()
     reason = "interrupted"
-    with RunWriter(out_dir, scenario) as writer, tqdm(
-        total=scenario.steps, disable=args.quiet, unit="step", desc=scenario.name
-    ) as bar:
+    with (
+        RunWriter(out_dir, scenario) as writer,
+        tqdm(total=scenario.steps, disable=args.quiet, unit="step", desc=scenario.name) as bar,
+    ):
         try:
             for record in sim.iterate():
                 writer.on_step(record)
                 bar.update(0 if record.step == 0 else 1)
-                bar.set_postfix(explored=f"{record.explored:.3f}", base=f"{record.known_at_base:.3f}",
-                                refresh=False)
+                bar.set_postfix(
+                    explored=f"{record.explored:.3f}",
+                    base=f"{record.known_at_base:.3f}",
+                    refresh=False,
+                )
             reason = sim.stop_reason() or "steps"
         except KeyboardInterrupt:
             pass

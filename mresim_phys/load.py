@@ -85,7 +85,8 @@ def resolve_map_path(scenario: Scenario, folder: Path) -> Scenario:
 def describe_errors(source: str, exc: ValidationError, prefix: str = "") -> str:
     """One readable line per problem: ``file: field.path: what was wrong (got value)``."""
     lines = [
-        describe_error(error, prefix) for error in exc.errors(include_url=False)
+        describe_error(error, prefix)
+        for error in exc.errors(include_url=False)
         if not inherited_from_team(error, exc)
     ]
     count = len(lines)

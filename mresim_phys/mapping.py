@@ -49,9 +49,7 @@ def ray_ends(scan: Scan) -> tuple[FloatArray, FloatArray]:
     return dirs, np.asarray(scan.origin) + scan.ranges[:, None] * dirs
 
 
-def polygon_window(
-    points: FloatArray, shape: tuple[int, int]
-) -> tuple[int, int, int, int] | None:
+def polygon_window(points: FloatArray, shape: tuple[int, int]) -> tuple[int, int, int, int] | None:
     """Bounding window (row0, row1, col0, col1) of world points, clipped to the grid."""
     rows, cols = shape
     c0, r0 = np.floor(points.min(axis=0)).astype(int) - 1
@@ -85,7 +83,9 @@ def wall_cells(scan: Scan, shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarr
     hit = scan.wall_hit & (scan.ranges < scan.max_range)
     inside = np.floor(ends[hit] + 1e-3 * dirs[hit]).astype(int)
     keep = (
-        (inside[:, 0] >= 0) & (inside[:, 0] < shape[1]) & (inside[:, 1] >= 0)
+        (inside[:, 0] >= 0)
+        & (inside[:, 0] < shape[1])
+        & (inside[:, 1] >= 0)
         & (inside[:, 1] < shape[0])
     )
     return inside[keep, 1], inside[keep, 0]
@@ -134,7 +134,9 @@ def trim_beyond_rays(free: BoolGrid, row0: int, col0: int, scan: Scan) -> None:
     cell only if its centre is nearer the robot than both rays flanking its
     direction (a cell-centre rule on the outline, where the errors are).
     """
-    inner = cv2.erode(free.view(np.uint8), EDGE_KERNEL, borderType=cv2.BORDER_CONSTANT, borderValue=0)
+    inner = cv2.erode(
+        free.view(np.uint8), EDGE_KERNEL, borderType=cv2.BORDER_CONSTANT, borderValue=0
+    )
     edge = free & ~inner.view(bool)
     rows, cols = np.nonzero(edge)
     dx = cols + (col0 + 0.5 - scan.origin[0])

@@ -37,8 +37,14 @@ class StepRecord:
 
     def csv_row(self) -> list[str]:
         """Values in :func:`csv_header` order, floats as exact round-trip text."""
-        row = [str(self.step), repr(self.explored), repr(self.known_at_base),
-               repr(self.distance), str(self.alive), str(self.links)]
+        row = [
+            str(self.step),
+            repr(self.explored),
+            repr(self.known_at_base),
+            repr(self.distance),
+            str(self.alive),
+            str(self.links),
+        ]
         row += [repr(r.distance) for r in self.robots]
         row += [r.state for r in self.robots]
         return row
@@ -57,7 +63,9 @@ def csv_header(robot_names: list[str]) -> list[str]:
 class Milestones:
     """First step at which ``explored`` / ``known_at_base`` reached each threshold."""
 
-    explored: dict[str, int | None] = field(default_factory=lambda: dict.fromkeys(map(str, THRESHOLDS)))
+    explored: dict[str, int | None] = field(
+        default_factory=lambda: dict.fromkeys(map(str, THRESHOLDS))
+    )
     known_at_base: dict[str, int | None] = field(
         default_factory=lambda: dict.fromkeys(map(str, THRESHOLDS))
     )

@@ -5,8 +5,9 @@ point, replanning through its strategy when the path has run out or the replan
 interval has passed; the move is checked with a swept circle of the robot's
 radius against the true walls. A valid move is made and (by default) followed by
 a scan (at the end of its path a robot turns in place to face what its
-strategy asked it to look at, then scans); an invalid one sets the robot's error flag, marks what it bumped into
-in its own map, and ends its motion for this step. The last partial move of a
+strategy asked it to look at, then scans); an invalid one sets the robot's
+error flag, marks what it bumped into in its own map, and ends its motion for
+this step. The last partial move of a
 step is scaled down to the remaining budget, as in the original.
 """
 

@@ -66,7 +66,10 @@ class RunWriter:
 
 
 def summarise(
-    scenario: Scenario, last: StepRecord, milestones: Milestones, wall_time_s: float,
+    scenario: Scenario,
+    last: StepRecord,
+    milestones: Milestones,
+    wall_time_s: float,
     stop_reason: str,
 ) -> dict[str, Any]:
     """The run's headline numbers for ``summary.json``."""

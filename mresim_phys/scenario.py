@@ -134,9 +134,7 @@ class SimulationSpec(Strict):
     scan: Literal["point", "step"] = Field(
         "point", description="Scan after every path point (as the original) or once per step."
     )
-    robots_block: bool = Field(
-        False, description="Robots block each other's rays and motion."
-    )
+    robots_block: bool = Field(False, description="Robots block each other's rays and motion.")
     multi_hop: bool = Field(
         True, description="Information flows along chains of linked agents within a step."
     )

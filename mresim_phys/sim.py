@@ -124,8 +124,14 @@ class Simulation:
         """Scan at the robot's pose and fold the scan into its map and the team coverage."""
         assert robot.spec is not None
         sensor = robot.spec.sensor
-        result = scan(self.world, robot.position, robot.heading, sensor,
-                      self.robot_filter(robot), self._sensing_rngs[robot.index - 1])
+        result = scan(
+            self.world,
+            robot.position,
+            robot.heading,
+            sensor,
+            self.robot_filter(robot),
+            self._sensing_rngs[robot.index - 1],
+        )
         update = integrate_scan(robot.belief, robot.safe, result, sensor.safe_fraction)
         if update is not None:
             self.coverage.add(update)
@@ -141,12 +147,21 @@ class Simulation:
         belief = robot.belief.view()
         belief.flags.writeable = False
         return RobotView(
-            step=self.t, name=robot.name, position=robot.position, heading=robot.heading,
-            belief=belief, radius=robot.radius,
-            clearance=robot.radius + robot.spec.wall_margin, speed=robot.speed,
-            sensor_range=robot.spec.sensor.range, role=robot.role,
-            base_position=self.base.position, teammates=dict(robot.teammates), rng=robot.rng,
-            bumped=robot.status == "error", reached_goal=robot.reached_goal,
+            step=self.t,
+            name=robot.name,
+            position=robot.position,
+            heading=robot.heading,
+            belief=belief,
+            radius=robot.radius,
+            clearance=robot.radius + robot.spec.wall_margin,
+            speed=robot.speed,
+            sensor_range=robot.spec.sensor.range,
+            role=robot.role,
+            base_position=self.base.position,
+            teammates=dict(robot.teammates),
+            rng=robot.rng,
+            bumped=robot.status == "error",
+            reached_goal=robot.reached_goal,
         )
 
     def communicate(self) -> None:
@@ -167,9 +182,12 @@ class Simulation:
         """This step's row of metrics."""
         robots = tuple(RobotRecord(r.name, r.distance, r.state) for r in self.robots)
         record = StepRecord(
-            step=self.t, explored=min(self.coverage.fraction, 1.0),
-            known_at_base=self.known_at_base, distance=sum(r.distance for r in robots),
-            alive=sum(r.alive for r in self.robots), links=int(np.triu(self.links).sum()),
+            step=self.t,
+            explored=min(self.coverage.fraction, 1.0),
+            known_at_base=self.known_at_base,
+            distance=sum(r.distance for r in robots),
+            alive=sum(r.alive for r in self.robots),
+            links=int(np.triu(self.links).sum()),
             robots=robots,
         )
         self.milestones.update(record)

@@ -96,7 +96,7 @@ class World:
 
     def place_robots(self, positions: list[tuple[float, float]]) -> None:
         """Move every robot body to its position (the one per-step mutation of the Space)."""
-        for body, position in zip(self.bodies, positions):
+        for body, position in zip(self.bodies, positions, strict=True):
             body.position = position
             self.space.reindex_shapes_for_body(body)
 
@@ -118,7 +118,9 @@ class World:
         if lib.cpSpaceSegmentQueryFirst(space, start, end, radius, shape_filter, info) == ffi.NULL:
             return None
         return Hit(
-            (info.point.x, info.point.y), (info.normal.x, info.normal.y), info.alpha,
+            (info.point.x, info.point.y),
+            (info.normal.x, info.normal.y),
+            info.alpha,
             is_wall_shape(info.shape),
         )
 
@@ -134,9 +136,14 @@ class World:
         xs = (ox + max_range * np.cos(angles)).tolist()
         ys = (oy + max_range * np.sin(angles)).tolist()
         hits: list[tuple[int, float, float, float, bool]] = []
-        info, space, query, null = self._info, self.space._space, lib.cpSpaceSegmentQueryFirst, ffi.NULL
+        info, space, query, null = (
+            self._info,
+            self.space._space,
+            lib.cpSpaceSegmentQueryFirst,
+            ffi.NULL,
+        )
         only_walls = shape_filter[2] == WALL_CATEGORY
-        for i, end in enumerate(zip(xs, ys)):
+        for i, end in enumerate(zip(xs, ys, strict=True)):
             if query(space, origin, end, 0.0, shape_filter, info) != null:
                 is_wall = only_walls or is_wall_shape(info.shape)
                 hits.append((i, info.alpha, info.normal.x, info.normal.y, is_wall))

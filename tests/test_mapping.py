@@ -12,17 +12,23 @@ from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 from mresim_phys.world import World
 
 
-def scanned_belief(truth: np.ndarray, poses: list[tuple[float, float, float]], rng_range: float = 60):
+def scanned_belief(
+    truth: np.ndarray, poses: list[tuple[float, float, float]], rng_range: float = 60
+):
     world = World(truth, [])
     belief, safe = empty_belief(truth.shape)
     updates = []
     for x, y, heading in poses:
-        result = scan(world, (x, y), heading, SensorSpec(range=rng_range), world.query_filter(None, False))
+        result = scan(
+            world, (x, y), heading, SensorSpec(range=rng_range), world.query_filter(None, False)
+        )
         updates.append(integrate_scan(belief, safe, result, 0.1))
     return belief, safe, updates
 
 
-def test_hit_cells_are_true_walls_and_free_cells_are_almost_all_truly_free(rooms: np.ndarray) -> None:
+def test_hit_cells_are_true_walls_and_free_cells_are_almost_all_truly_free(
+    rooms: np.ndarray,
+) -> None:
     poses = [(10.5, 10.5, 0.0), (20.0, 30.0, 1.0), (30.0, 45.0, -2.0), (60.0, 30.0, 3.1)]
     belief, _, _ = scanned_belief(rooms, poses)
     assert np.all(rooms[belief == OCCUPIED])
@@ -32,7 +38,7 @@ def test_hit_cells_are_true_walls_and_free_cells_are_almost_all_truly_free(rooms
 
 
 def test_a_wall_seen_up_close_is_not_a_frontier(rooms: np.ndarray) -> None:
-    """A straight wall in view is marked along its face, so no unknown cell touches the free area there."""
+    """A straight wall in view is marked along its face: no unknown cell next to the free area."""
     belief, _, _ = scanned_belief(rooms, [(20.5, 30.5, 0.0)])
     face = belief[5:20, 40]  # the dividing wall above the door, seen from the left
     free_next = belief[5:20, 39]
@@ -42,7 +48,9 @@ def test_a_wall_seen_up_close_is_not_a_frontier(rooms: np.ndarray) -> None:
 
 def test_unseen_side_stays_unknown(rooms: np.ndarray) -> None:
     belief, _, _ = scanned_belief(rooms, [(10.5, 10.5, 0.0)])
-    assert np.all(belief[2:20, 43:] == UNKNOWN)  # beyond the dividing wall, out of view through the door
+    assert np.all(
+        belief[2:20, 43:] == UNKNOWN
+    )  # beyond the dividing wall, out of view through the door
     assert belief[10, 5] == UNKNOWN  # behind the robot (180 degree field of view)
 
 

@@ -47,8 +47,9 @@ def test_rays_match_exact_grid_traversal(rooms: np.ndarray, rng: np.random.Gener
     free = np.argwhere(~rooms)
     for row, col in free[rng.choice(len(free), 30, replace=False)]:
         origin = (col + rng.random(), row + rng.random())
-        result = scan(world, origin, rng.uniform(-np.pi, np.pi), SensorSpec(range=200),
-                      walls_only(world))
+        result = scan(
+            world, origin, rng.uniform(-np.pi, np.pi), SensorSpec(range=200), walls_only(world)
+        )
         dirs = np.column_stack((np.cos(result.angles), np.sin(result.angles)))
         inside = np.asarray(origin) + (result.ranges[:, None] + 1e-6) * dirs
         before = np.asarray(origin) + (result.ranges[:, None] - 1e-6) * dirs
@@ -70,7 +71,9 @@ def test_robots_block_rays_only_when_enabled(rooms: np.ndarray) -> None:
     world.place_robots([(10.5, 10.5), (20.5, 10.5)])
     open_filter = world.query_filter(0, robots_block=False)
     blocking = world.query_filter(0, robots_block=True)
-    assert scan(world, (10.5, 10.5), 0.0, SensorSpec(), open_filter).ranges[90] == pytest.approx(29.5)
+    assert scan(world, (10.5, 10.5), 0.0, SensorSpec(), open_filter).ranges[90] == pytest.approx(
+        29.5
+    )
     blocked = scan(world, (10.5, 10.5), 0.0, SensorSpec(), blocking)
     assert blocked.ranges[90] == pytest.approx(9.0)
     assert not blocked.wall_hit[90]

@@ -45,12 +45,14 @@ class FrontierParams(StrategyParams):
     max_frontiers: int = Field(6, ge=1, description="Best frontiers entered in the auction.")
     teammate_memory: int = Field(500, ge=0, description="Steps a teammate's report stays valid.")
     horizon: float = Field(
-        1.0, gt=0, description="First search horizon, in sensor ranges; doubles until a "
-        "frontier is found.",
+        1.0,
+        gt=0,
+        description="First search horizon, in sensor ranges; doubles until a frontier is found.",
     )
     reach: float | None = Field(
-        None, gt=0, description="How far (cells) a target may be from its frontier; "
-        "default: clearance + 2."
+        None,
+        gt=0,
+        description="How far (cells) a target may be from its frontier; default: clearance + 2.",
     )
 
 
@@ -100,8 +102,10 @@ class FrontierExploration:
         row, col = (int(v) for v in targets[chosen])
         info = {"frontiers": frontiers, "target_cluster": chosen}
         return Decision(
-            path=field.path_to(row, col), goal=(col + 0.5, row + 0.5),
-            look_at=nearest_cell_centre(self._chasing, row, col), info=info,
+            path=field.path_to(row, col),
+            goal=(col + 0.5, row + 0.5),
+            look_at=nearest_cell_centre(self._chasing, row, col),
+            info=info,
         )
 
     def _frontiers(self, view: RobotView) -> Frontiers:
@@ -116,7 +120,8 @@ class FrontierExploration:
         assert self._ignored is not None
         cells = frontiers.cells_rc
         ignored = np.bincount(
-            frontiers.cluster_of, weights=self._ignored[cells[:, 0], cells[:, 1]],
+            frontiers.cluster_of,
+            weights=self._ignored[cells[:, 0], cells[:, 1]],
             minlength=len(frontiers),
         )
         fresh = ignored * 2 < frontiers.sizes
@@ -152,9 +157,12 @@ class FrontierExploration:
         memory = self.params.teammate_memory
         return sorted(
             (
-                t for t in view.teammates.values()
-                if t.name != view.name and t.role == "explorer"
-                and t.state in ("active", "error") and view.step - t.step <= memory
+                t
+                for t in view.teammates.values()
+                if t.name != view.name
+                and t.role == "explorer"
+                and t.state in ("active", "error")
+                and view.step - t.step <= memory
             ),
             key=lambda t: t.name,
         )

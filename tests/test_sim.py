@@ -1,0 +1,158 @@
+"""The simulation cycle: determinism, simultaneity, motion limits, failures, metrics."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mresim_phys import Simulation
+from mresim_phys.load import load_scenario
+from mresim_phys.types import FREE, UNKNOWN
+
+ScenarioFile = Callable[..., Path]
+
+
+def rollout(path: Path, steps: int, **overrides: object) -> tuple[list[list[str]], Simulation]:
+    sim = Simulation.from_yaml(path, steps=steps, **overrides)
+    rows = [record.csv_row() for record in sim.iterate()]
+    return rows, sim
+
+
+def test_same_seed_same_run(scenario_file: ScenarioFile) -> None:
+    path = scenario_file(
+        team={
+            "speed": 2,
+            "radius": 1.0,
+            "sensor": {"range": 30, "noise_std": 0.3},
+            "comm_range": 20,
+            "strategy": "random_walk",
+        }
+    )
+    first, sim_a = rollout(path, 40)
+    second, sim_b = rollout(path, 40)
+    assert first == second
+    for a, b in zip(sim_a.robots, sim_b.robots, strict=True):
+        assert np.array_equal(a.belief, b.belief)
+
+
+def test_different_seed_changes_a_random_run(scenario_file: ScenarioFile) -> None:
+    path = scenario_file(
+        team={
+            "speed": 2,
+            "radius": 1.0,
+            "sensor": {"range": 30},
+            "comm_range": 20,
+            "strategy": "random_walk",
+        }
+    )
+    assert rollout(path, 30, seed=1)[0] != rollout(path, 30, seed=2)[0]
+
+
+def test_robot_order_never_changes_the_result(scenario_file: ScenarioFile) -> None:
+    """Robots act as if simultaneously: listing them in another order gives the same run."""
+    robots = [
+        {"name": "A", "start": [8, 20], "heading_deg": 0},
+        {"name": "B", "start": [8, 40], "heading_deg": 0, "speed": 3},
+        {"name": "C", "start": [20, 30], "heading_deg": 90},
+    ]
+    forward = rollout(scenario_file(robots=robots), 40)[1]
+    backward = rollout(scenario_file(robots=robots[::-1]), 40)[1]
+    for robot in forward.robots:
+        other = backward.robot(robot.name)
+        assert robot.position == other.position
+        assert robot.distance == other.distance
+        assert np.array_equal(robot.belief, other.belief)
+    assert forward.record.explored == backward.record.explored
+
+
+def test_robots_move_at_most_their_speed_and_never_into_walls(scenario_file: ScenarioFile) -> None:
+    sim = Simulation.from_yaml(scenario_file(), steps=60)
+    truth = sim.parts.truth.occupied
+    before = {r.name: r.position for r in sim.robots}
+    for _ in range(60):
+        sim.step()
+        for robot in sim.robots:
+            x, y = robot.position
+            moved = math.dist(before[robot.name], robot.position)
+            assert moved <= robot.speed + 1e-9
+            assert not sim.world.overlaps_wall(robot.position, robot.radius * 0.999)
+            assert not truth[int(y), int(x)]
+            before[robot.name] = robot.position
+
+
+def test_exploration_progresses_and_metrics_are_monotone_fractions(
+    scenario_file: ScenarioFile,
+) -> None:
+    rows, _ = rollout(scenario_file(steps=80), 80)
+    explored = [float(r[1]) for r in rows]
+    at_base = [float(r[2]) for r in rows]
+    assert explored == sorted(explored) and at_base == sorted(at_base)
+    assert all(0 <= v <= 1 for v in explored + at_base)
+    assert explored[-1] > 0.8
+    assert at_base[-1] <= explored[-1] + 1e-12
+
+
+def test_strategies_never_see_the_truth(scenario_file: ScenarioFile) -> None:
+    """A robot's grid holds only what it sensed or was told: unknown beyond its view at start."""
+    sim = Simulation.from_yaml(scenario_file(), steps=1)
+    for robot in sim.robots:
+        view = sim.view_of(robot)
+        assert not view.belief.flags.writeable
+        assert np.count_nonzero(view.belief == UNKNOWN) > 0.3 * view.belief.size
+        assert not hasattr(view, "truth") and not hasattr(view, "world")
+
+
+def test_a_failed_robot_stops_moving_sensing_and_sharing(scenario_file: ScenarioFile) -> None:
+    path = scenario_file(events=[{"step": 5, "fail": "B"}], steps=60)
+    sim = Simulation.from_yaml(path)
+    for _ in range(5):
+        sim.step()
+    failed = sim.robot("B")
+    frozen_at, frozen_map = failed.position, failed.belief.copy()
+    heard = {name: info.step for name, info in sim.robot("A").teammates.items()}
+    for _ in range(40):
+        sim.step()
+    assert failed.state == "failed" and failed.position == frozen_at
+    assert np.array_equal(failed.belief, frozen_map)
+    assert sim.robot("A").teammates["B"].step == heard["B"] <= 5
+    assert sim.record.alive == 1
+    assert not sim.links[failed.index].any()
+
+
+def test_base_knows_only_what_reached_it(scenario_file: ScenarioFile) -> None:
+    """With a zero comm range nothing reaches the base, however much is explored."""
+    path = scenario_file(
+        base_station={"position": [8, 30], "comm_range": 0},
+        team={"speed": 2, "radius": 1.0, "sensor": {"range": 30}, "comm_range": 0},
+    )
+    rows, sim = rollout(path, 30)
+    assert float(rows[-1][1]) > 0.2
+    assert float(rows[-1][2]) == 0.0
+    assert not (sim.base.belief == FREE).any()
+
+
+def test_one_scan_per_step_mode_scans_less_but_still_explores(scenario_file: ScenarioFile) -> None:
+    path = scenario_file(simulation={"scan": "step"}, steps=40)
+    sim = Simulation.from_yaml(path)
+    sim.run()
+    assert sim.record.explored > 0.3
+
+
+def test_stop_rule_ends_the_run_early(scenario_file: ScenarioFile) -> None:
+    sim = Simulation.from_yaml(scenario_file(stop={"explored": 0.3}, steps=500))
+    last = sim.run()
+    assert last.explored >= 0.3 and last.step < 500
+    assert sim.stop_reason() == "explored"
+
+
+def test_scenario_and_seed_override(scenario_file: ScenarioFile) -> None:
+    scenario = load_scenario(scenario_file(), seed=9, steps=4)
+    assert (scenario.seed, scenario.steps) == (9, 4)
+    with pytest.raises(StopIteration):
+        iterator = Simulation(scenario).iterate()
+        for _ in range(10):
+            next(iterator)

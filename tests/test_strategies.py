@@ -1,0 +1,132 @@
+"""Strategies: the plugin registry, the greedy frontier auction, returning when done."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mresim_phys import STRATEGIES, Simulation, UnknownPluginError
+from mresim_phys.agents import TeammateInfo
+from mresim_phys.strategies import BUILT_IN, RobotView
+from mresim_phys.strategies.base import Strategy
+from mresim_phys.strategies.frontier import (
+    Bidder,
+    FrontierExploration,
+    FrontierParams,
+    greedy_auction,
+)
+from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
+
+
+def test_registry_holds_the_built_ins() -> None:
+    assert set(BUILT_IN) <= set(STRATEGIES.names())
+    for name in BUILT_IN:
+        cls = STRATEGIES.get(name)
+        assert isinstance(cls(cls.Params()), Strategy)
+
+
+def test_unknown_strategy_lists_close_matches() -> None:
+    with pytest.raises(UnknownPluginError, match="'frontier'"):
+        STRATEGIES.get("fronteir")
+
+
+def test_module_reference_resolves_a_user_class() -> None:
+    assert STRATEGIES.get("mresim_phys.strategies.random_walk:RandomWalk").name == "random_walk"
+
+
+def corridor_view(teammates: dict[str, TeammateInfo], position: tuple[float, float]) -> RobotView:
+    """A 20x100 known corridor, unknown at both ends: one frontier left, one right."""
+    belief = np.full((20, 100), OCCUPIED, dtype=np.uint8)
+    belief[5:15, :] = UNKNOWN
+    belief[5:15, 20:80] = FREE
+    return RobotView(
+        step=10,
+        name="A",
+        position=position,
+        heading=0.0,
+        belief=belief,
+        radius=1.0,
+        clearance=2.0,
+        speed=2.0,
+        sensor_range=30.0,
+        role="explorer",
+        base_position=(50.5, 10.5),
+        teammates=teammates,
+        rng=np.random.default_rng(0),
+    )
+
+
+def test_frontier_goes_to_the_nearer_frontier_alone() -> None:
+    decision = FrontierExploration(FrontierParams()).decide(corridor_view({}, (45.5, 10.5)))
+    assert decision.goal is not None and decision.goal[0] < 50
+    assert not decision.done and len(decision.path) > 0
+
+
+def test_two_robots_in_contact_do_not_chase_the_same_frontier() -> None:
+    """A teammate nearer the left frontier wins it; this robot takes the right one."""
+    teammate = TeammateInfo("B", (30.5, 10.5), None, "active", "explorer", step=9)
+    decision = FrontierExploration(FrontierParams()).decide(
+        corridor_view({"B": teammate}, (45.5, 10.5))
+    )
+    assert decision.goal is not None and decision.goal[0] > 50
+
+
+def test_stale_or_failed_teammates_take_no_part() -> None:
+    params = FrontierParams(teammate_memory=5)
+    stale = TeammateInfo("B", (30.5, 10.5), None, "active", "explorer", step=1)
+    failed = TeammateInfo("C", (30.5, 10.5), None, "failed", "explorer", step=9)
+    for mate in (stale, failed):
+        decision = FrontierExploration(params).decide(
+            corridor_view({mate.name: mate}, (45.5, 10.5))
+        )
+        assert decision.goal is not None and decision.goal[0] < 50
+
+
+def test_nothing_left_to_explore_means_done_and_home() -> None:
+    view = corridor_view({}, (45.5, 10.5))
+    belief = view.belief.copy()
+    belief[belief == UNKNOWN] = OCCUPIED
+    closed = RobotView(**{**view.__dict__, "belief": belief, "position": (70.5, 10.5)})
+    decision = FrontierExploration(FrontierParams()).decide(closed)
+    assert decision.done
+    assert decision.path[-1] == pytest.approx([50.5, 10.5])
+
+
+def test_auction_refines_estimates_before_a_teammate_wins() -> None:
+    """A teammate that looks close in a straight line but is far by path does not win."""
+    sizes = np.array([10.0, 10.0])
+    me = Bidder("A", np.array([10.0, 30.0]), True, (0.0, 0.0))
+    mate = Bidder("B", np.array([5.0, 50.0]), False, (0.0, 0.0))
+    won = greedy_auction([me, mate], sizes, lambda b: np.array([100.0, 100.0]))
+    assert won == 0 and mate.exact
+
+
+def test_robots_finish_and_return_to_base(scenario_file: Callable[..., Path]) -> None:
+    sim = Simulation.from_yaml(scenario_file(steps=400, stop={"all_done": True}))
+    sim.run()
+    assert sim.stop_reason() == "all_done"
+    assert all(r.state == "done" for r in sim.robots)
+    base = np.array(sim.base.position)
+    assert all(np.hypot(*(np.array(r.position) - base)) < 6 for r in sim.robots)
+    assert sim.record.explored > 0.9
+
+
+def test_random_walk_stays_within_its_leg_length(scenario_file: Callable[..., Path]) -> None:
+    sim = Simulation.from_yaml(
+        scenario_file(
+            team={
+                "speed": 2,
+                "radius": 1.0,
+                "sensor": {"range": 30},
+                "comm_range": 20,
+                "strategy": {"name": "random_walk", "params": {"distance": 10}},
+            }
+        )
+    )
+    for _ in range(20):
+        sim.step()
+        for robot in sim.robots:
+            assert robot.goal is None or len(robot.decision.path) <= 12
