@@ -16,7 +16,6 @@ from pathlib import Path
 from tqdm import tqdm
 
 from .errors import MresimError
-from .load import load_scenario
 from .recorders import RunWriter, default_run_dir, summarise
 from .sim import Simulation
 
@@ -64,8 +63,8 @@ def make_parser() -> argparse.ArgumentParser:
 
 def run_command(args: argparse.Namespace) -> int:
     """``mresim run``: simulate, streaming metrics to the run folder."""
-    scenario = load_scenario(args.scenario, seed=args.seed, steps=args.steps)
-    sim = Simulation(scenario)
+    sim = Simulation.from_yaml(args.scenario, seed=args.seed, steps=args.steps)
+    scenario = sim.scenario
     out_dir = args.out or default_run_dir(scenario)
     started = time.perf_counter()
     reason = "interrupted"
@@ -99,8 +98,7 @@ def run_command(args: argparse.Namespace) -> int:
 
 def validate_command(args: argparse.Namespace) -> int:
     """``mresim validate``: schema, plugins, map and robot starts, without running."""
-    scenario = load_scenario(args.scenario)
-    Simulation(scenario)
+    scenario = Simulation.from_yaml(args.scenario).scenario
     print(f"{args.scenario}: ok ({len(scenario.robots)} robots, map {scenario.map.source[1]})")
     return 0
 

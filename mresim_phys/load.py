@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import difflib
 from pathlib import Path
-from typing import Any
+from typing import Any, get_args
 
 from pydantic import BaseModel, ValidationError
 
@@ -38,6 +38,7 @@ def validate_scenario(data: dict[str, Any], source: str = "<scenario>") -> Scena
         scenario = Scenario.model_validate(data)
     except ValidationError as exc:
         raise ScenarioError(describe_errors(source, exc)) from None
+    check_event_robots(scenario, source)
     team = scenario.team.model_copy(
         update={"strategy": resolve_strategy(scenario.team.strategy, source, "team.strategy")}
     )
@@ -51,6 +52,19 @@ def validate_scenario(data: dict[str, Any], source: str = "<scenario>") -> Scena
     params = resolve_params(COMM_MODELS, comm.model, comm.params, source, "communication.model")
     comm = comm.model_copy(update={"params": params})
     return scenario.model_copy(update={"robots": robots, "team": team, "communication": comm})
+
+
+def check_event_robots(scenario: Scenario, source: str) -> None:
+    """Every event must name a robot of the team."""
+    names = [r.name for r in scenario.robots]
+    for i, event in enumerate(scenario.events):
+        if event.fail not in names:
+            close = difflib.get_close_matches(event.fail, names, n=1)
+            hint = f" Did you mean {close[0]!r}?" if close else ""
+            raise ScenarioError(
+                f"{source}: events[{i}].fail: no robot is called {event.fail!r}.{hint}"
+                f" The robots are {names}."
+            )
 
 
 def resolve_strategy(spec: PluginSpec, source: str, where: str) -> PluginSpec:
@@ -67,12 +81,20 @@ def resolve_params(
         cls = registry.get(name)
     except UnknownPluginError as exc:
         raise ScenarioError(f"{source}: {where}: {exc}") from None
-    params_model: type[BaseModel] = cls.Params
+    params_model = getattr(cls, "Params", None)
+    if not (isinstance(params_model, type) and issubclass(params_model, BaseModel)):
+        raise ScenarioError(
+            f"{source}: {where}: {name!r} is not a usable {registry.kind}: its class needs a"
+            " 'Params' attribute that is a pydantic model of its parameters (subclass"
+            " StrategyParams or CommParams); see docs/writing-a-strategy.md."
+        )
     prefix = where.rsplit(".", 1)[0] + ".params"
     try:
         return params_model.model_validate(params).model_dump()
     except ValidationError as exc:
-        raise ScenarioError(describe_errors(source, exc, prefix=prefix)) from None
+        raise ScenarioError(
+            describe_errors(source, exc, prefix=prefix, keys=list(params_model.model_fields))
+        ) from None
 
 
 def resolve_map_path(scenario: Scenario, folder: Path) -> Scenario:
@@ -82,10 +104,17 @@ def resolve_map_path(scenario: Scenario, folder: Path) -> Scenario:
     return scenario.model_copy(update={"map": scenario.map.model_copy(update={kind: absolute})})
 
 
-def describe_errors(source: str, exc: ValidationError, prefix: str = "") -> str:
-    """One readable line per problem: ``file: field.path: what was wrong (got value)``."""
+def describe_errors(
+    source: str, exc: ValidationError, prefix: str = "", keys: list[str] | None = None
+) -> str:
+    """One readable line per problem: ``file: field.path: what was wrong (got value)``.
+
+    ``keys`` are the valid keys for 'did you mean' hints when the errors come from
+    one flat model (a plugin's params); otherwise hints come from the schema model
+    at the error's location.
+    """
     lines = [
-        describe_error(error, prefix)
+        describe_error(error, prefix, keys)
         for error in exc.errors(include_url=False)
         if not inherited_from_team(error, exc)
     ]
@@ -94,17 +123,19 @@ def describe_errors(source: str, exc: ValidationError, prefix: str = "") -> str:
     return "\n".join([head, *(f"  - {line}" for line in lines)])
 
 
-def describe_error(error: Any, prefix: str) -> str:
+def describe_error(error: Any, prefix: str, keys: list[str] | None = None) -> str:
     """One validation error as ``field.path: message``, with a hint for unknown keys."""
     path = field_path((*([prefix] if prefix else []), *error["loc"]))
     if error["type"] == "extra_forbidden":
         key = str(error["loc"][-1])
-        close = difflib.get_close_matches(key, known_keys(), n=1)
+        valid = keys if keys is not None else keys_at(Scenario, error["loc"][:-1])
+        close = difflib.get_close_matches(key, valid, n=1)
         hint = f"; did you mean {close[0]!r}?" if close else "; remove it or check the spelling"
         return f"{path}: unknown key {key!r}{hint}"
     message = str(error["msg"]).removeprefix("Value error, ")
-    got = "" if error["type"] == "missing" else f" (got {error.get('input')!r})"
-    return f"{path}: {message}{got}"
+    value = error.get("input")
+    shown = error["type"] != "missing" and not isinstance(value, (dict, list))
+    return f"{path}: {message}" + (f" (got {value!r})" if shown else "")
 
 
 def field_path(loc: tuple[Any, ...]) -> str:
@@ -119,19 +150,29 @@ def field_path(loc: tuple[Any, ...]) -> str:
 
 
 def inherited_from_team(error: Any, exc: ValidationError) -> bool:
-    """A robot error that only repeats a ``team`` error (robots inherit team fields)."""
+    """A robot error that only repeats a ``team`` error (same field, same inherited value)."""
     loc = error["loc"]
     if len(loc) < 3 or loc[0] != "robots":
         return False
-    return any(e["loc"] == ("team", *loc[2:]) for e in exc.errors(include_url=False))
+    return any(
+        e["loc"] == ("team", *loc[2:]) and e.get("input") == error.get("input")
+        for e in exc.errors(include_url=False)
+    )
 
 
-def known_keys() -> list[str]:
-    """Every key any scenario model accepts, for 'did you mean' hints."""
-    from . import scenario as schema
-
-    keys: set[str] = set()
-    for obj in vars(schema).values():
-        if isinstance(obj, type) and issubclass(obj, BaseModel):
-            keys.update(obj.model_fields)
-    return sorted(keys)
+def keys_at(model: type[BaseModel], loc: tuple[Any, ...]) -> list[str]:
+    """The keys the schema model found by walking ``loc`` from ``model`` accepts."""
+    current: type[BaseModel] = model
+    for part in loc:
+        if isinstance(part, int):
+            continue
+        field = current.model_fields.get(str(part))
+        nested = field and next(
+            (t for t in (field.annotation, *get_args(field.annotation))
+             if isinstance(t, type) and issubclass(t, BaseModel)),
+            None,
+        )
+        if nested is None:
+            return []
+        current = nested
+    return list(current.model_fields)

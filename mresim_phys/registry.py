@@ -58,7 +58,7 @@ class Registry(Generic[T]):
         close = difflib.get_close_matches(name, self.names(), n=3, cutoff=0.5)
         hint = f" Did you mean {' or '.join(repr(c) for c in close)}?" if close else ""
         return (
-            f"unknown {self.kind} {name!r}.{hint} Known {self.kind}s: {', '.join(self.names())}."
+            f"unknown {self.kind} {name!r}.{hint} Known: {', '.join(self.names())}."
             f" A class of your own can be given as 'package.module:ClassName'."
         )
 

@@ -178,20 +178,11 @@ class Scenario(Strict):
     def _unique_names(cls, robots: list[RobotSpec]) -> list[RobotSpec]:
         names = [r.name for r in robots]
         dupes = sorted({n for n in names if names.count(n) > 1})
-        if dupes or "base" in names:
-            raise ValueError(f"robot names must be unique and not 'base' (repeated: {dupes})")
+        if dupes:
+            raise ValueError(f"robot names must be unique; repeated: {dupes}")
+        if "base" in names:
+            raise ValueError("'base' is the base station's name; give the robot another name")
         return robots
-
-    @model_validator(mode="after")
-    def _events_name_robots(self) -> Scenario:
-        names = {r.name for r in self.robots}
-        for event in self.events:
-            if event.fail not in names:
-                raise ValueError(
-                    f"event at step {event.step} fails unknown robot {event.fail!r};"
-                    f" robots are {sorted(names)}"
-                )
-        return self
 
 
 def _inherit(team: dict[str, Any], robot: dict[str, Any]) -> dict[str, Any]:

@@ -21,6 +21,7 @@ import numpy as np
 from .agents import Agent, Robot
 from .build import Parts, build_parts
 from .comms.exchange import exchange
+from .errors import ScenarioError
 from .load import load_scenario
 from .mapping import integrate_scan
 from .metrics import Milestones, RobotRecord, StepRecord
@@ -54,7 +55,11 @@ class Simulation:
     @classmethod
     def from_yaml(cls, path: str | Path, **overrides: Any) -> Simulation:
         """Load, validate and build the scenario at ``path`` (``seed=``, ``steps=`` override)."""
-        return cls(load_scenario(path, **overrides))
+        scenario = load_scenario(path, **overrides)
+        try:
+            return cls(scenario)
+        except ScenarioError as exc:
+            raise ScenarioError(f"{path}: {exc}") from None
 
     @property
     def agents(self) -> list[Agent]:

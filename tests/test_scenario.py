@@ -153,7 +153,7 @@ def test_load_overrides_replace_top_level_keys(scenario_file: MakeScenario) -> N
         ),
         pytest.param(
             {"events": [{"step": 3, "fail": "Z"}]},
-            ["unknown robot 'Z'", "'A'", "'B'"],
+            ["no robot is called 'Z'", "'A'", "'B'"],
             id="event-unknown-robot",
         ),
         pytest.param(
@@ -214,22 +214,12 @@ def test_missing_scenario_file_is_a_scenario_error(tmp_path: Path) -> None:
     assert "does not exist" in message
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="bug: the unknown-event-robot error is reported at '<top level>' (not events[0].fail)"
-    " and echoes the whole scenario mapping as '(got {...})'",
-)
 def test_unknown_event_robot_error_names_the_event_field(scenario_file: MakeScenario) -> None:
     message = load_error(scenario_file(events=[{"step": 3, "fail": "Z"}]))
     assert "events[0]" in message
     assert "base_station" not in message
 
 
-@pytest.mark.xfail(
-    strict=True,
-    reason="bug: 'did you mean' hints come from every scenario model's keys, never from the"
-    " plugin's Params, so they can suggest a key that is invalid where the typo is",
-)
 @pytest.mark.parametrize(
     ("changes", "good", "bad"),
     [
@@ -359,11 +349,6 @@ def test_user_strategy_missing_class_is_reported(
     assert plugin_module in message
 
 
-@pytest.mark.xfail(
-    strict=True,
-    raises=AttributeError,
-    reason="bug: a module:Class strategy without a Params attribute escapes as AttributeError",
-)
 def test_user_strategy_class_without_params_is_a_scenario_error(
     scenario_file: MakeScenario, plugin_module: str
 ) -> None:

@@ -98,10 +98,25 @@ def test_nothing_left_to_explore_means_done_and_home() -> None:
 def test_auction_refines_estimates_before_a_teammate_wins() -> None:
     """A teammate that looks close in a straight line but is far by path does not win."""
     sizes = np.array([10.0, 10.0])
-    me = Bidder("A", np.array([10.0, 30.0]), True, (0.0, 0.0))
-    mate = Bidder("B", np.array([5.0, 50.0]), False, (0.0, 0.0))
-    won = greedy_auction([me, mate], sizes, lambda b: np.array([100.0, 100.0]))
-    assert won == 0 and mate.exact
+    me = Bidder("A", np.array([10.0, 30.0]), np.ones(2, dtype=bool), (0.0, 0.0))
+    mate = Bidder("B", np.array([5.0, 50.0]), np.zeros(2, dtype=bool), (0.0, 0.0))
+    searched: list[float] = []
+
+    def search(bidder: Bidder, limit: float) -> np.ndarray:
+        searched.append(limit)
+        return np.where(np.array([100.0, 100.0]) <= limit, 100.0, np.inf)
+
+    assert greedy_auction([me, mate], sizes, search) == 0
+    assert mate.costs[0] >= 55.0  # its bound rose past the straight-line estimate
+    assert searched and searched[0] < 100.0  # the first search was bounded
+
+
+def test_auction_lets_a_teammate_nearer_by_path_win() -> None:
+    sizes = np.array([10.0, 10.0])
+    me = Bidder("A", np.array([10.0, 30.0]), np.ones(2, dtype=bool), (0.0, 0.0))
+    mate = Bidder("B", np.array([4.0, 50.0]), np.zeros(2, dtype=bool), (0.0, 0.0))
+    won = greedy_auction([me, mate], sizes, lambda b, limit: np.array([5.0, 60.0]))
+    assert won == 1 and mate.exact.all()
 
 
 def test_robots_finish_and_return_to_base(scenario_file: Callable[..., Path]) -> None:

@@ -17,6 +17,7 @@ cannot see into) is remembered and skipped, like the original's "bad frontiers".
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,6 +36,10 @@ from .base import (
 )
 
 UTILITY_SCALE = 1e8  # original: U = area * 10^8 / d^4
+MIN_SEARCH = 50.0  # cells: smallest extra horizon when refining a teammate's bid
+MAX_BOUNDED_SEARCH = 2000.0  # cells: beyond this a teammate's search is unbounded
+
+PathSearch = Callable[["Bidder", float], "np.ndarray | None"]
 
 
 class FrontierParams(StrategyParams):
@@ -58,12 +63,27 @@ class FrontierParams(StrategyParams):
 
 @dataclass
 class Bidder:
-    """One robot in the auction: its path costs to every candidate frontier."""
+    """One robot in the auction: lower bounds on its path costs, and which are exact."""
 
     name: str
     costs: np.ndarray
-    exact: bool
+    exact: np.ndarray
     position: tuple[float, float]
+
+    @classmethod
+    def estimated(cls, name: str, position: tuple[float, float], goals_rc: np.ndarray) -> Bidder:
+        """A teammate bidding with straight-line distances (lower bounds on path costs)."""
+        costs = straight_line(position, goals_rc)
+        return cls(name, costs, np.zeros(len(costs), dtype=bool), position)
+
+    def refine(self, found: np.ndarray | None, limit: float) -> None:
+        """Take path costs searched up to ``limit``; beyond it the bound rises to ``limit``."""
+        if found is None:  # the teammate stands where this robot knows nothing: keep estimates
+            self.exact[:] = True
+            return
+        known = np.isfinite(found) | (limit == np.inf)
+        self.costs = np.where(known, found, np.maximum(self.costs, limit))
+        self.exact = known
 
 
 def utility(sizes: np.ndarray, costs: np.ndarray) -> np.ndarray:
@@ -142,14 +162,10 @@ class FrontierExploration:
         sizes = frontiers.sizes[candidates].astype(float)
         goals = targets[candidates]
         mine = costs[candidates]
-        bidders = [Bidder(view.name, mine, True, view.position)]
-        bidders += [
-            Bidder(t.name, straight_line(t.position, goals), False, t.position)
-            for t in self._teammates(view)
-        ]
-        limit = competitive_cost(sizes, mine)
+        bidders = [Bidder(view.name, mine, np.ones(len(mine), dtype=bool), view.position)]
+        bidders += [Bidder.estimated(t.name, t.position, goals) for t in self._teammates(view)]
         won = greedy_auction(
-            bidders, sizes, lambda b: exact_costs(context, b.position, goals, limit)
+            bidders, sizes, lambda b, limit: exact_costs(context, b.position, goals, limit)
         )
         return int(candidates[won])
 
@@ -179,16 +195,6 @@ def straight_line(position: tuple[float, float], goals_rc: np.ndarray) -> np.nda
     return np.hypot(goals_rc[:, 1] + 0.5 - position[0], goals_rc[:, 0] + 0.5 - position[1])
 
 
-def competitive_cost(sizes: np.ndarray, mine: np.ndarray) -> float:
-    """Longest path with which a teammate could still outbid this robot on some frontier.
-
-    A teammate's bid matters only if it beats this robot's worst candidate
-    utility, so its path search can stop at that cost.
-    """
-    worst = utility(sizes, mine).min()
-    return float(np.max((sizes * UTILITY_SCALE / worst) ** 0.25)) + 1.0
-
-
 def exact_costs(
     context: PlanContext, position: tuple[float, float], goals_rc: np.ndarray, limit: float
 ) -> np.ndarray | None:
@@ -199,8 +205,13 @@ def exact_costs(
     return field.cost_at(goals_rc[:, 0], goals_rc[:, 1])
 
 
-def greedy_auction(bidders: list[Bidder], sizes: np.ndarray, refine) -> int:  # type: ignore[no-untyped-def]
-    """Index of the frontier bidder 0 wins; estimates are refined before they can win."""
+def greedy_auction(bidders: list[Bidder], sizes: np.ndarray, search: PathSearch) -> int:
+    """Index of the frontier bidder 0 wins in the greedy auction.
+
+    A pair whose cost is only a lower bound is refined before it can win: the
+    teammate's path search runs to twice the bound (at least ``MIN_SEARCH`` cells
+    more), so a teammate far away by path is ruled out by a small bounded search.
+    """
     assigned: set[int] = set()
     taken = np.zeros(len(sizes), dtype=bool)
     while len(assigned) < len(bidders) and not taken.all():
@@ -208,10 +219,11 @@ def greedy_auction(bidders: list[Bidder], sizes: np.ndarray, refine) -> int:  # 
         if who < 0:
             break
         bidder = bidders[who]
-        if not bidder.exact:
-            refined = refine(bidder)
-            bidder.costs = bidder.costs if refined is None else refined
-            bidder.exact = True
+        if not bidder.exact[which]:
+            bound = float(bidder.costs[which])
+            limit = max(2.0 * bound, bound + MIN_SEARCH)
+            limit = np.inf if limit > MAX_BOUNDED_SEARCH else limit
+            bidder.refine(search(bidder, limit), limit)
             continue
         if who == 0:
             return which
