@@ -69,14 +69,20 @@ def bench_kernels(repeats: int) -> None:
             for result in scans:
                 integrate_scan(belief, safe, result, 0.1)
             t_map.append((time.perf_counter() - t0) / len(poses))
-        print(f"  scan, 181 rays, range {rng:>5.0f}            {statistics.median(t_scan)*1e6:8.0f} us")
-        print(f"  map update from it, range {rng:>5.0f}        {statistics.median(t_map)*1e6:8.0f} us")
+        print(
+            f"  scan, 181 rays, range {rng:>5.0f}            {statistics.median(t_scan) * 1e6:8.0f} us"
+        )
+        print(
+            f"  map update from it, range {rng:>5.0f}        {statistics.median(t_map) * 1e6:8.0f} us"
+        )
 
 
 def team_scenario(robots: int, speed: float) -> dict:
     starts = [(40 + 10 * (i % 4), 290 + 10 * (i // 4)) for i in range(robots)]
     return {
-        "name": "bench", "seed": 1, "steps": 250,
+        "name": "bench",
+        "seed": 1,
+        "steps": 250,
         "map": {"image": str(OFFICE)},
         "base_station": {"position": [25, 300], "comm_range": 150},
         "team": {"speed": speed, "radius": 2, "sensor": {"range": 100}, "comm_range": 150},
@@ -97,8 +103,10 @@ def bench_steps(warmup: int, measured: int) -> None:
             sim.step()
             times.append(time.perf_counter() - t0)
         p90 = float(np.percentile(times, 90))
-        print(f"  {robots} robots, speed {speed}                 {statistics.median(times)*1e3:6.1f} ms"
-              f"  {p90*1e3:6.1f} ms   {sim.record.explored:.3f}")
+        print(
+            f"  {robots} robots, speed {speed}                 {statistics.median(times) * 1e3:6.1f} ms"
+            f"  {p90 * 1e3:6.1f} ms   {sim.record.explored:.3f}"
+        )
 
 
 def main() -> None:

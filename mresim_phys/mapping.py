@@ -43,12 +43,6 @@ class Update:
     free: BoolGrid
 
 
-def ray_ends(scan: Scan) -> tuple[FloatArray, FloatArray]:
-    """Unit directions (n, 2) and end points (n, 2) of every ray of a scan."""
-    dirs = np.column_stack((np.cos(scan.angles), np.sin(scan.angles)))
-    return dirs, np.asarray(scan.origin) + scan.ranges[:, None] * dirs
-
-
 def polygon_window(points: FloatArray, shape: tuple[int, int]) -> tuple[int, int, int, int] | None:
     """Bounding window (row0, row1, col0, col1) of world points, clipped to the grid."""
     rows, cols = shape
@@ -71,17 +65,16 @@ def fill_polygon(points: FloatArray, window: tuple[int, int, int, int]) -> BoolG
 
 def free_polygon(scan: Scan, limit: float | None = None) -> FloatArray:
     """The robot position followed by the ray ends, optionally clipped to ``limit``."""
-    dirs, ends = ray_ends(scan)
+    ends = scan.ends
     if limit is not None:
-        ends = np.asarray(scan.origin) + np.minimum(scan.ranges, limit)[:, None] * dirs
+        ends = np.asarray(scan.origin) + np.minimum(scan.ranges, limit)[:, None] * scan.dirs
     return np.vstack((np.asarray(scan.origin)[None, :], ends))
 
 
 def wall_cells(scan: Scan, shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarray]:
     """(rows, cols) of the wall cells the rays stopped on, inside the grid."""
-    dirs, ends = ray_ends(scan)
-    hit = scan.wall_hit & (scan.ranges < scan.max_range)
-    inside = np.floor(ends[hit] + 1e-3 * dirs[hit]).astype(int)
+    hit = scan.on_wall
+    inside = np.floor(scan.ends[hit] + 1e-3 * scan.dirs[hit]).astype(int)
     keep = (
         (inside[:, 0] >= 0)
         & (inside[:, 0] < shape[1])
@@ -93,15 +86,14 @@ def wall_cells(scan: Scan, shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarr
 
 def face_links(scan: Scan) -> FloatArray:
     """Segments (k, 2, 2) joining consecutive hits on one straight wall face, inside the wall."""
-    _, ends = ray_ends(scan)
-    hit = scan.wall_hit & (scan.ranges < scan.max_range)
-    n = scan.normals
+    ends, hit, n = scan.ends, scan.on_wall, scan.normals
     pair = hit[:-1] & hit[1:]
     same_dir = np.einsum("ij,ij->i", n[:-1], n[1:]) > NEAR_PARALLEL
     gap = ends[1:] - ends[:-1]
     on_face = np.abs(np.einsum("ij,ij->i", n[:-1], gap)) < 1e-6
     close = np.hypot(gap[:, 0], gap[:, 1]) < WALL_GAP
-    k = np.flatnonzero(pair & same_dir & on_face & close)
+    axis_aligned = np.abs(n[:-1]).max(axis=1) > NEAR_PARALLEL  # faces are cell edges
+    k = np.flatnonzero(pair & same_dir & on_face & close & axis_aligned)
     inward = -0.5 * n[k]
     return np.stack((ends[k] + inward, ends[k + 1] + inward), axis=1)
 
@@ -119,12 +111,19 @@ def integrate_scan(
     trim_beyond_rays(free, r0, c0, scan)
     roi = belief[r0:r1, c0:c1]
     np.maximum(roi, free.view(np.uint8), out=roi)
-    mark_faces(roi, face_links(scan), r0, c0)
+    mark_faces(belief, face_links(scan))
     rows, cols = wall_cells(scan, belief.shape)
     belief[rows, cols] = OCCUPIED
-    safe_polygon = free_polygon(scan, limit=safe_fraction * scan.max_range)
-    safe[r0:r1, c0:c1] |= fill_polygon(safe_polygon, window) & (roi == FREE)
+    mark_safe(belief, safe, free_polygon(scan, limit=safe_fraction * scan.max_range))
     return Update(r0, c0, free)
+
+
+def mark_safe(belief: BeliefGrid, safe: BoolGrid, polygon: FloatArray) -> None:
+    """Mark the free cells inside the (small) safe-space polygon as safe."""
+    window = polygon_window(polygon, belief.shape)
+    if window is not None:
+        r0, r1, c0, c1 = window
+        safe[r0:r1, c0:c1] |= fill_polygon(polygon, window) & (belief[r0:r1, c0:c1] == FREE)
 
 
 def trim_beyond_rays(free: BoolGrid, row0: int, col0: int, scan: Scan) -> None:
@@ -151,15 +150,30 @@ def trim_beyond_rays(free: BoolGrid, row0: int, col0: int, scan: Scan) -> None:
     free[rows[beyond], cols[beyond]] = False
 
 
-def mark_faces(roi: BeliefGrid, links: FloatArray, row0: int, col0: int) -> None:
-    """Mark the cells along joined wall faces OCCUPIED where they are still UNKNOWN."""
+def mark_faces(belief: BeliefGrid, links: FloatArray) -> None:
+    """Mark the cells along joined wall faces OCCUPIED where they are still UNKNOWN.
+
+    Wall segments are cell edges, so every link is horizontal or vertical and lies
+    half a cell inside the wall: its cells are one run along a row or a column.
+    """
     if len(links) == 0:
         return
-    lines = np.zeros(roi.shape, dtype=np.uint8)
-    pixel = (links - (col0 + 0.5, row0 + 0.5)) * (1 << SUBPIXEL_BITS)
-    segments = list(np.round(pixel).astype(np.int32))
-    cv2.polylines(lines, segments, False, 1, thickness=1, lineType=cv2.LINE_8, shift=SUBPIXEL_BITS)
-    roi[(lines == 1) & (roi == UNKNOWN)] = OCCUPIED
+    cells = np.floor(links).astype(np.intp)  # (k, 2 ends, (col, row))
+    horizontal = cells[:, 0, 1] == cells[:, 1, 1]
+    fixed = np.where(horizontal, cells[:, 0, 1], cells[:, 0, 0])
+    axis = np.where(horizontal, 0, 1)
+    low = np.minimum(cells[np.arange(len(cells)), 0, axis], cells[np.arange(len(cells)), 1, axis])
+    high = np.maximum(cells[np.arange(len(cells)), 0, axis], cells[np.arange(len(cells)), 1, axis])
+    counts = high - low + 1
+    run = np.repeat(np.arange(len(cells)), counts)
+    along = low[run] + np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+    rows = np.where(horizontal[run], fixed[run], along)
+    cols = np.where(horizontal[run], along, fixed[run])
+    height, width = belief.shape
+    keep = (rows >= 0) & (rows < height) & (cols >= 0) & (cols < width)
+    rows, cols = rows[keep], cols[keep]
+    unknown = belief[rows, cols] == UNKNOWN
+    belief[rows[unknown], cols[unknown]] = OCCUPIED
 
 
 def mark_bump(belief: BeliefGrid, point: tuple[float, float], direction: FloatArray) -> None:

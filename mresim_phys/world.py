@@ -20,6 +20,7 @@ tests/test_sensing.py keeps that case).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import pymunk
@@ -59,6 +60,21 @@ class Scan:
     normals: FloatArray  # (n, 2) surface normal at the hit, zeros where nothing was hit
     wall_hit: np.ndarray  # bool (n,): the ray ended on a wall below max range
     max_range: float
+
+    @cached_property
+    def dirs(self) -> FloatArray:
+        """Unit direction (n, 2) of every ray."""
+        return np.column_stack((np.cos(self.angles), np.sin(self.angles)))
+
+    @cached_property
+    def ends(self) -> FloatArray:
+        """End point (n, 2) of every ray: the hit, or the point at max range."""
+        return np.asarray(self.origin) + self.ranges[:, None] * self.dirs
+
+    @cached_property
+    def on_wall(self) -> np.ndarray:
+        """Rays (bool, n) that ended on a wall below max range."""
+        return self.wall_hit & (self.ranges < self.max_range)
 
 
 class World:
