@@ -190,10 +190,12 @@ def merge_into(target: BeliefGrid, source: BeliefGrid) -> None:
 
 
 class Coverage:
-    """Truth-free cells ever marked FREE by anyone: the numerator of ``explored``.
+    """Reachable truth-free cells that some robot's map held as FREE at the end of a step.
 
-    Kept incrementally from each scan's :class:`Update`, so the metric never
-    needs a full-grid pass per step and can never decrease.
+    The numerator of ``explored``. Scans report the windows they touched
+    (:meth:`touch`); at the end of the step only those windows are examined
+    (:meth:`settle`), so the metric never needs a full-grid pass and never
+    decreases. A run log's map deltas give exactly the same count on replay.
     """
 
     def __init__(self, reachable: BoolGrid) -> None:
@@ -201,13 +203,24 @@ class Coverage:
         self.total = int(reachable.sum())
         self.known = np.zeros_like(reachable)
         self.count = 0
+        self._pending: list[tuple[BeliefGrid, int, int, int, int]] = []
 
-    def add(self, update: Update) -> None:
-        """Count the reachable cells of ``update`` not seen before."""
+    def touch(self, belief: BeliefGrid, update: Update) -> None:
+        """Remember that ``update``'s window of ``belief`` changed this step."""
         h, w = update.free.shape
-        seen = self.known[update.row0 : update.row0 + h, update.col0 : update.col0 + w]
-        reach = self.reachable[update.row0 : update.row0 + h, update.col0 : update.col0 + w]
-        new = update.free & reach & ~seen
+        self._pending.append((belief, update.row0, update.row0 + h, update.col0, update.col0 + w))
+
+    def settle(self) -> None:
+        """Count the reachable cells now FREE in the touched windows, not counted before."""
+        for belief, r0, r1, c0, c1 in self._pending:
+            self.add_cells(belief[r0:r1, c0:c1] == FREE, r0, c0)
+        self._pending.clear()
+
+    def add_cells(self, free: BoolGrid, row0: int, col0: int) -> None:
+        """Count the reachable cells of ``free`` (a window at row0, col0) not seen before."""
+        h, w = free.shape
+        seen = self.known[row0 : row0 + h, col0 : col0 + w]
+        new = free & self.reachable[row0 : row0 + h, col0 : col0 + w] & ~seen
         self.count += int(np.count_nonzero(new))
         seen |= new
 

@@ -29,6 +29,7 @@ from .motion import MoveRules, take_step
 from .rng import named_stream
 from .scenario import Scenario
 from .sensing import scan
+from .snapshot import AgentSnapshot, Snapshot, read_only
 from .strategies import RobotView
 from .types import FREE
 
@@ -42,6 +43,7 @@ class Simulation:
         self.world, self.base, self.robots = self.parts.world, self.parts.base, self.parts.robots
         self.coverage = self.parts.coverage
         self.t = 0
+        self.events_now: list[str] = []
         self.links = np.zeros((len(self.agents), len(self.agents)), dtype=bool)
         self.known_at_base = 0.0
         self.milestones = Milestones()
@@ -116,10 +118,12 @@ class Simulation:
 
     def apply_events(self) -> None:
         """Events scheduled for this step (robot failures)."""
+        self.events_now = []
         for event in self.scenario.events:
             if event.step == self.t:
                 failed = self.robot(event.fail)
                 failed.status, failed.path = "failed", failed.path[:0]
+                self.events_now.append(f"fail {event.fail}")
 
     def robot_filter(self, robot: Robot) -> tuple[int, int, int]:
         """What ``robot``'s rays and motion collide with."""
@@ -139,7 +143,7 @@ class Simulation:
         )
         update = integrate_scan(robot.belief, robot.safe, result, sensor.safe_fraction)
         if update is not None:
-            self.coverage.add(update)
+            self.coverage.touch(robot.belief, update)
 
     def replan(self, robot: Robot) -> None:
         """Ask the robot's strategy for a new path from what the robot knows."""
@@ -183,8 +187,24 @@ class Simulation:
             fraction = known / self.coverage.total if self.coverage.total else 1.0
             self.known_at_base = float(max(self.known_at_base, min(fraction, 1.0)))
 
+    def snapshot(self) -> Snapshot:
+        """The run at the end of the current step (views of the live grids, not copies)."""
+        agents = [agent_snapshot(self.base)] + [agent_snapshot(r) for r in self.robots]
+        return Snapshot(
+            step=self.t,
+            explored=self.record.explored,
+            known_at_base=self.record.known_at_base,
+            alive=self.record.alive,
+            truth=self.parts.truth.occupied,
+            agents=tuple(agents),
+            links=self.links.copy(),
+            events=tuple(self.events_now),
+            resolution=self.scenario.map.resolution or self.parts.truth.resolution,
+        )
+
     def measure(self) -> StepRecord:
         """This step's row of metrics."""
+        self.coverage.settle()
         robots = tuple(RobotRecord(r.name, r.distance, r.state) for r in self.robots)
         record = StepRecord(
             step=self.t,
@@ -197,3 +217,23 @@ class Simulation:
         )
         self.milestones.update(record)
         return record
+
+
+def agent_snapshot(agent: Agent) -> AgentSnapshot:
+    """One agent as a snapshot (grids as read-only views)."""
+    robot = agent if isinstance(agent, Robot) else None
+    return AgentSnapshot(
+        name=agent.name,
+        kind="robot" if robot else "base",
+        position=agent.position,
+        heading=robot.heading if robot else 0.0,
+        radius=robot.radius if robot else 0.0,
+        state=agent.state if robot else "base",
+        role=agent.role,
+        comm_range=agent.comm_range,
+        belief=read_only(agent.belief),
+        safe=read_only(agent.safe),
+        path=robot.path.copy() if robot else np.zeros((0, 2)),
+        goal=robot.goal if robot else None,
+        distance=robot.distance if robot else 0.0,
+    )

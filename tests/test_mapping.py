@@ -75,7 +75,8 @@ def test_coverage_counts_each_reachable_cell_once_and_never_decreases(rooms: np.
     coverage = Coverage(~rooms)
     fractions = []
     for update in updates:
-        coverage.add(update)
+        coverage.touch(belief, update)
+        coverage.settle()
         fractions.append(coverage.fraction)
     assert fractions == sorted(fractions) and fractions[0] == fractions[1]
     assert coverage.count == np.count_nonzero(coverage.known)

@@ -1,0 +1,68 @@
+"""Snapshots (phase 8 input): the state of a run at the end of a step, as views see it.
+
+A :class:`Snapshot` is everything the renderer, the video recorder and the run
+log need, and nothing they must not touch: positions, headings, states, paths,
+goals, links and every agent's belief grid (read-only views, not copies).
+``Simulation.snapshot()`` builds one from a live run; ``runlog`` rebuilds the
+same snapshots from a log, so a replayed frame equals the live one.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .types import BeliefGrid, BoolGrid, FloatArray
+
+
+def read_only(array: np.ndarray) -> np.ndarray:
+    """A read-only view of ``array``."""
+    view = array.view()
+    view.flags.writeable = False
+    return view
+
+
+@dataclass(frozen=True)
+class AgentSnapshot:
+    """One agent (base station or robot) at the end of a step."""
+
+    name: str
+    kind: str  # "base" or "robot"
+    position: tuple[float, float]
+    heading: float
+    radius: float
+    state: str  # active / error / done / failed (the base: "base")
+    role: str
+    comm_range: float
+    belief: BeliefGrid
+    safe: BoolGrid
+    path: FloatArray = field(default_factory=lambda: np.zeros((0, 2)))
+    goal: tuple[float, float] | None = None
+    distance: float = 0.0
+    parent: str | None = None
+
+
+@dataclass(frozen=True)
+class Snapshot:
+    """A whole run at the end of step ``step``; ``agents[0]`` is the base station."""
+
+    step: int
+    explored: float
+    known_at_base: float
+    alive: int
+    truth: BoolGrid
+    agents: tuple[AgentSnapshot, ...]
+    links: np.ndarray  # (n, n) bool, same order as agents
+    events: tuple[str, ...] = ()
+    resolution: float | None = None
+
+    @property
+    def base(self) -> AgentSnapshot:
+        """The base station."""
+        return self.agents[0]
+
+    @property
+    def robots(self) -> tuple[AgentSnapshot, ...]:
+        """The robots, in scenario order."""
+        return self.agents[1:]
