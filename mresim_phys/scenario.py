@@ -58,8 +58,10 @@ class MapSpec(Strict):
 class PluginSpec(Strict):
     """A plugin chosen by registry name (or ``package.module:Class``) with its params."""
 
-    name: str
-    params: dict[str, Any] = Field(default_factory=dict)
+    name: str = Field(description="Registry name, or package.module:Class.")
+    params: dict[str, Any] = Field(
+        default_factory=dict, description="The plugin's own parameters (see below)."
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -71,7 +73,9 @@ class CommSpec(Strict):
     """The communication model chosen by registry name, with its params."""
 
     model: str = Field("disk", description="Comm model name (or package.module:Class).")
-    params: dict[str, Any] = Field(default_factory=dict)
+    params: dict[str, Any] = Field(
+        default_factory=dict, description="The model's own parameters (see below)."
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -98,8 +102,11 @@ class RobotParams(Strict):
     radius: float = Field(2.0, gt=0, description="Body radius in cells.")
     sensor: SensorSpec = Field(default_factory=SensorSpec)
     comm_range: float = Field(150.0, ge=0, description="Communication range in cells.")
-    role: Literal["explorer", "relay"] = "explorer"
-    strategy: PluginSpec = Field(default_factory=lambda: PluginSpec(name="frontier"))
+    role: Literal["explorer", "relay"] = Field("explorer", description="Team role.")
+    strategy: PluginSpec = Field(
+        default_factory=lambda: PluginSpec(name="frontier"),
+        description="Exploration strategy: a name or {name, params}.",
+    )
     wall_margin: float = Field(
         1.0, ge=0, description="Extra clearance (cells) the planner keeps from known walls."
     )
@@ -109,15 +116,15 @@ class RobotSpec(RobotParams):
     """One robot: its name, start pose and any overridden team fields."""
 
     name: str = Field(pattern=r"^[A-Za-z0-9_.-]+$", description="Unique robot name.")
-    start: Point
-    heading_deg: float = 0.0
+    start: Point = Field(description="Start position [x, y] in cells (x = column, y = row).")
+    heading_deg: float = Field(0.0, description="Start heading; 0 = +x, 90 = +y (down).")
 
 
 class BaseStationSpec(Strict):
     """The static base station collecting what reaches it."""
 
-    position: Point
-    comm_range: float = Field(150.0, ge=0)
+    position: Point = Field(description="[x, y] in cells.")
+    comm_range: float = Field(150.0, ge=0, description="Communication range in cells.")
 
 
 class StopSpec(Strict):
@@ -143,24 +150,30 @@ class SimulationSpec(Strict):
 class FailEvent(Strict):
     """At ``step``, robot ``fail`` stops for good: no motion, sensing or communication."""
 
-    step: int = Field(ge=0)
-    fail: str
+    step: int = Field(ge=0, description="Step at which the event happens.")
+    fail: str = Field(description="Name of the robot that fails for good.")
 
 
 class Scenario(Strict):
     """A whole run: map, base station, team, communication and events."""
 
     name: str = Field(pattern=r"^[A-Za-z0-9_.-]+$", description="Names the output folder.")
-    seed: int = Field(0, ge=0)
+    seed: int = Field(0, ge=0, description="Seeds every random stream of the run.")
     steps: int = Field(3000, ge=1, description="Hard cap on the number of steps.")
-    stop: StopSpec = Field(default_factory=StopSpec)
-    map: MapSpec
-    base_station: BaseStationSpec
-    team: RobotParams = Field(default_factory=RobotParams)
-    robots: list[RobotSpec] = Field(min_length=1)
-    communication: CommSpec = Field(default_factory=CommSpec)
-    simulation: SimulationSpec = Field(default_factory=SimulationSpec)
-    events: list[FailEvent] = Field(default_factory=list)
+    stop: StopSpec = Field(default_factory=StopSpec, description="Early stop rules.")
+    map: MapSpec = Field(description="The ground-truth map.")
+    base_station: BaseStationSpec = Field(description="Where the base station stands.")
+    team: RobotParams = Field(default_factory=RobotParams, description="Defaults for every robot.")
+    robots: list[RobotSpec] = Field(min_length=1, description="The team, at least one robot.")
+    communication: CommSpec = Field(
+        default_factory=CommSpec, description="Communication model and its params."
+    )
+    simulation: SimulationSpec = Field(
+        default_factory=SimulationSpec, description="How the cycle runs."
+    )
+    events: list[FailEvent] = Field(
+        default_factory=list, description="Scheduled events (robot failures)."
+    )
 
     @model_validator(mode="before")
     @classmethod

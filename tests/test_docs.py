@@ -1,0 +1,51 @@
+"""Documentation stays true: the strategy example runs, the generated reference is current."""
+
+from __future__ import annotations
+
+import importlib.util
+import re
+import sys
+from collections.abc import Callable
+from pathlib import Path
+
+import pytest
+
+from mresim_phys import Simulation
+
+ROOT = Path(__file__).parent.parent
+
+
+def python_blocks(path: Path) -> list[str]:
+    return re.findall(r"```python\n(.*?)```", path.read_text(encoding="utf-8"), re.S)
+
+
+def test_strategy_example_runs(
+    tmp_path: Path, scenario_file: Callable[..., Path], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    (tmp_path / "my_strategies.py").write_text(
+        python_blocks(ROOT / "docs/writing-a-strategy.md")[0]
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.delitem(sys.modules, "my_strategies", raising=False)
+    strategy = {"name": "my_strategies:NearestFrontier", "params": {"min_size": 5}}
+    team = {"speed": 2, "radius": 1.0, "sensor": {"range": 30}, "comm_range": 20}
+    sim = Simulation.from_yaml(scenario_file(team={**team, "strategy": strategy}, steps=40))
+    last = sim.run()
+    assert last.explored > 0.5
+
+
+def test_scenario_reference_is_current() -> None:
+    spec = importlib.util.spec_from_file_location("ref", ROOT / "tools/make_scenario_reference.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    committed = (ROOT / "docs/scenario-reference.md").read_text(encoding="utf-8")
+    assert committed == module.render(), "run: python tools/make_scenario_reference.py"
+
+
+def test_readme_commands_are_the_ones_ci_runs() -> None:
+    readme = (ROOT / "README.md").read_text(encoding="utf-8")
+    assert 'pip install -e ".[test]" && pytest' in readme
+    assert "pip install -e . && mresim run scenarios/01_quickstart.yaml" in readme
+    assert (ROOT / "scenarios/01_quickstart.yaml").exists()
+    assert 'pip install -e ".[test]" && pytest' in (ROOT / ".ci/run").read_text()
