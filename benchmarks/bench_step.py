@@ -70,10 +70,12 @@ def bench_kernels(repeats: int) -> None:
                 integrate_scan(belief, safe, result, 0.1)
             t_map.append((time.perf_counter() - t0) / len(poses))
         print(
-            f"  scan, 181 rays, range {rng:>5.0f}            {statistics.median(t_scan) * 1e6:8.0f} us"
+            f"  scan, 181 rays, range {rng:>5.0f}"
+            f"            {statistics.median(t_scan) * 1e6:8.0f} us"
         )
         print(
-            f"  map update from it, range {rng:>5.0f}        {statistics.median(t_map) * 1e6:8.0f} us"
+            f"  map update from it, range {rng:>5.0f}"
+            f"        {statistics.median(t_map) * 1e6:8.0f} us"
         )
 
 
@@ -104,7 +106,8 @@ def bench_steps(warmup: int, measured: int) -> None:
             times.append(time.perf_counter() - t0)
         p90 = float(np.percentile(times, 90))
         print(
-            f"  {robots} robots, speed {speed}                 {statistics.median(times) * 1e3:6.1f} ms"
+            f"  {robots} robots, speed {speed}"
+            f"                 {statistics.median(times) * 1e3:6.1f} ms"
             f"  {p90 * 1e3:6.1f} ms   {sim.record.explored:.3f}"
         )
 
