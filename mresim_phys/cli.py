@@ -15,6 +15,7 @@ from pathlib import Path
 
 from tqdm import tqdm
 
+from .bench import run_bench
 from .errors import MresimError
 from .recorders import RunWriter, default_run_dir, summarise
 from .sim import Simulation
@@ -58,7 +59,24 @@ def make_parser() -> argparse.ArgumentParser:
     run.add_argument("--quiet", action="store_true", help="no progress bar or summary line")
     validate = commands.add_parser("validate", help="check a scenario without running it")
     validate.add_argument("scenario", type=Path, help="scenario YAML file")
+    bench = commands.add_parser("bench", help="median ms per step for 4, 8, 16 robots")
+    bench.add_argument("--robots", type=robot_counts, default=(4, 8, 16),
+                       help="comma-separated team sizes (default 4,8,16)")
+    bench.add_argument("--warmup", type=non_negative_int, default=50, help="untimed steps")
+    bench.add_argument("--steps", type=positive_int, default=200, help="timed steps")
+    bench.add_argument("--map", type=Path, help="an 800x600 floor plan (default maps/office.png)")
     return parser
+
+
+def robot_counts(text: str) -> tuple[int, ...]:
+    """argparse type: comma-separated positive team sizes."""
+    return tuple(positive_int(part) for part in text.split(",") if part.strip())
+
+
+def bench_command(args: argparse.Namespace) -> int:
+    """``mresim bench``: time full steps and print the cost split."""
+    print(run_bench(args.robots, args.map, args.warmup, args.steps))
+    return 0
 
 
 def run_command(args: argparse.Namespace) -> int:
@@ -106,7 +124,9 @@ def validate_command(args: argparse.Namespace) -> int:
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``mresim`` console script."""
     args = make_parser().parse_args(argv)
-    handler = {"run": run_command, "validate": validate_command}[args.command]
+    handler = {"run": run_command, "validate": validate_command, "bench": bench_command}[
+        args.command
+    ]
     try:
         return handler(args)
     except MresimError as exc:

@@ -114,16 +114,31 @@ def integrate_scan(
     mark_faces(belief, face_links(scan))
     rows, cols = wall_cells(scan, belief.shape)
     belief[rows, cols] = OCCUPIED
-    mark_safe(belief, safe, free_polygon(scan, limit=safe_fraction * scan.max_range))
+    mark_safe(belief, safe, Update(r0, c0, free), scan.origin, safe_fraction * scan.max_range)
     return Update(r0, c0, free)
 
 
-def mark_safe(belief: BeliefGrid, safe: BoolGrid, polygon: FloatArray) -> None:
-    """Mark the free cells inside the (small) safe-space polygon as safe."""
-    window = polygon_window(polygon, belief.shape)
-    if window is not None:
-        r0, r1, c0, c1 = window
-        safe[r0:r1, c0:c1] |= fill_polygon(polygon, window) & (belief[r0:r1, c0:c1] == FREE)
+def mark_safe(
+    belief: BeliefGrid, safe: BoolGrid, update: Update, origin: tuple[float, float], radius: float
+) -> None:
+    """Mark as safe the cells of this scan's free polygon within ``radius`` of the robot.
+
+    The polygon of rays clipped to ``radius`` (the original's safe polygon) is the
+    free polygon cut by the disk of that radius, so the disk is applied to the
+    already-filled free window instead of filling a second polygon.
+    """
+    h, w = update.free.shape
+    ox, oy = origin
+    r0, r1 = max(int(oy - radius), update.row0), min(int(oy + radius) + 1, update.row0 + h)
+    c0, c1 = max(int(ox - radius), update.col0), min(int(ox + radius) + 1, update.col0 + w)
+    if r0 >= r1 or c0 >= c1:
+        return
+    dy = np.arange(r0, r1)[:, None] + 0.5 - oy
+    dx = np.arange(c0, c1)[None, :] + 0.5 - ox
+    inside = update.free[r0 - update.row0 : r1 - update.row0, c0 - update.col0 : c1 - update.col0]
+    safe[r0:r1, c0:c1] |= (
+        inside & (dx * dx + dy * dy <= radius * radius) & (belief[r0:r1, c0:c1] == FREE)
+    )
 
 
 def trim_beyond_rays(free: BoolGrid, row0: int, col0: int, scan: Scan) -> None:

@@ -13,6 +13,7 @@ order in which robots are processed never changes the result.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
+from time import perf_counter
 from pathlib import Path
 from typing import Any
 
@@ -34,8 +35,15 @@ from .strategies import RobotView
 from .types import FREE
 
 
+PHASES = ("sensing", "mapping", "planning", "communication", "metrics")
+
+
 class Simulation:
-    """A running scenario: the world, the agents and the per-step records."""
+    """A running scenario: the world, the agents and the per-step records.
+
+    ``phase_times`` accumulates the wall time spent in each phase (seconds): what
+    ``mresim bench`` reports as the cost split; it never enters the metrics.
+    """
 
     def __init__(self, scenario: Scenario, parts: Parts | None = None) -> None:
         self.scenario = scenario
@@ -43,6 +51,7 @@ class Simulation:
         self.world, self.base, self.robots = self.parts.world, self.parts.base, self.parts.robots
         self.coverage = self.parts.coverage
         self.t = 0
+        self.phase_times: dict[str, float] = dict.fromkeys(PHASES, 0.0)
         self.events_now: list[str] = []
         self.links = np.zeros((len(self.agents), len(self.agents)), dtype=bool)
         self.known_at_base = 0.0
@@ -133,6 +142,7 @@ class Simulation:
         """Scan at the robot's pose and fold the scan into its map and the team coverage."""
         assert robot.spec is not None
         sensor = robot.spec.sensor
+        started = perf_counter()
         result = scan(
             self.world,
             robot.position,
@@ -141,14 +151,19 @@ class Simulation:
             self.robot_filter(robot),
             self._sensing_rngs[robot.index - 1],
         )
+        scanned = perf_counter()
         update = integrate_scan(robot.belief, robot.safe, result, sensor.safe_fraction)
+        self.phase_times["sensing"] += scanned - started
+        self.phase_times["mapping"] += perf_counter() - scanned
         if update is not None:
             self.coverage.touch(robot.belief, update)
 
     def replan(self, robot: Robot) -> None:
         """Ask the robot's strategy for a new path from what the robot knows."""
         assert robot.strategy is not None and robot.spec is not None
+        started = perf_counter()
         robot.adopt(robot.strategy.decide(self.view_of(robot)), self.t)
+        self.phase_times["planning"] += perf_counter() - started
 
     def view_of(self, robot: Robot) -> RobotView:
         """The robot's knowledge, read-only, as its strategy may see it."""
@@ -175,6 +190,7 @@ class Simulation:
 
     def communicate(self) -> None:
         """Find links among alive agents and exchange knowledge along them."""
+        started = perf_counter()
         agents = self.agents
         positions = np.array([a.position for a in agents], dtype=float)
         ranges = np.array([a.comm_range for a in agents], dtype=float)
@@ -186,6 +202,7 @@ class Simulation:
             known = np.count_nonzero((self.base.belief == FREE) & self.coverage.reachable)
             fraction = known / self.coverage.total if self.coverage.total else 1.0
             self.known_at_base = float(max(self.known_at_base, min(fraction, 1.0)))
+        self.phase_times["communication"] += perf_counter() - started
 
     def snapshot(self) -> Snapshot:
         """The run at the end of the current step (views of the live grids, not copies)."""
@@ -204,6 +221,7 @@ class Simulation:
 
     def measure(self) -> StepRecord:
         """This step's row of metrics."""
+        started = perf_counter()
         self.coverage.settle()
         robots = tuple(RobotRecord(r.name, r.distance, r.state) for r in self.robots)
         record = StepRecord(
@@ -216,6 +234,7 @@ class Simulation:
             robots=robots,
         )
         self.milestones.update(record)
+        self.phase_times["metrics"] += perf_counter() - started
         return record
 
 

@@ -151,6 +151,11 @@ class World:
         ox, oy = origin
         xs = (ox + max_range * np.cos(angles)).tolist()
         ys = (oy + max_range * np.sin(angles)).tolist()
+        # cdata structs built once per scan: converting Python tuples on every call
+        # costs as much as Chipmunk's query itself
+        ends = ffi.new("cpVect[]", list(zip(xs, ys, strict=True)))
+        start = ffi.new("cpVect *", origin)[0]
+        query_filter = ffi.new("cpShapeFilter *", shape_filter)[0]
         hits: list[tuple[int, float, float, float, bool]] = []
         info, space, query, null = (
             self._info,
@@ -159,8 +164,8 @@ class World:
             ffi.NULL,
         )
         only_walls = shape_filter[2] == WALL_CATEGORY
-        for i, end in enumerate(zip(xs, ys, strict=True)):
-            if query(space, origin, end, 0.0, shape_filter, info) != null:
+        for i in range(len(xs)):
+            if query(space, start, ends[i], 0.0, query_filter, info) != null:
                 is_wall = only_walls or is_wall_shape(info.shape)
                 hits.append((i, info.alpha, info.normal.x, info.normal.y, is_wall))
         alphas = np.ones(len(angles))
