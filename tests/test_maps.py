@@ -15,6 +15,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from numpy.typing import NDArray
+from scipy import ndimage
 
 from mresim_phys.errors import MapError
 from mresim_phys.io import load_map
@@ -276,7 +277,14 @@ def generated_truth(make_maps: ModuleType, name: str) -> Grid:
     return picture != (make_maps.ROS_FREE if name == "warehouse" else make_maps.FREE)
 
 
-@pytest.mark.parametrize("name", ["office", "small_rooms", "cave", "warehouse"])
+SHIPPED = ["office", "small_rooms", "cave", "warehouse", "maze", "rubble"]
+
+
+def test_every_generated_map_is_tested(make_maps: ModuleType) -> None:
+    assert list(make_maps.MAPS) == SHIPPED and list(make_maps.BUILDERS) == SHIPPED
+
+
+@pytest.mark.parametrize("name", SHIPPED)
 def test_shipped_maps_are_up_to_date_and_their_starts_are_usable(
     make_maps: ModuleType, name: str
 ) -> None:
@@ -292,6 +300,52 @@ def test_shipped_map_metadata() -> None:
     assert load_map(REPO / "maps" / "small_rooms.png").occupied.shape == (120, 160)
     warehouse = load_map(REPO / "maps" / "warehouse.yaml")
     assert warehouse.resolution == 0.05 and warehouse.origin == (-7.5, -5.0, 0.0)
+    maze = load_map(REPO / "maps" / "maze.png").occupied
+    assert maze.shape == (450, 600) and 0.8 < 1 - maze.mean() < 0.95
+    rubble = load_map(REPO / "maps" / "rubble.png").occupied
+    assert rubble.shape == (400, 500) and 0.85 < 1 - rubble.mean() < 0.97
+
+
+def free_runs(line: NDArray[np.bool_]) -> list[tuple[int, int]]:
+    """(start, length) of each run of False in a 1-D occupancy line."""
+    edges = np.diff(np.concatenate(([1], line.astype(np.int8), [1])))
+    starts, ends = np.flatnonzero(edges == -1), np.flatnonzero(edges == 1)
+    return [(int(a), int(b - a)) for a, b in zip(starts, ends, strict=True)]
+
+
+def test_maze_openings_let_a_radius_2_robot_with_a_margin_through(make_maps: ModuleType) -> None:
+    occupied = load_map(REPO / "maps" / "maze.png").occupied
+    pitch = make_maps.MAZE_PITCH
+    fits = make_maps.clearance(occupied) >= 3.0  # centre of a radius-2 robot, 1 cell to spare
+    widths = []
+    for grid, room in ((occupied, fits), (occupied.T, fits.T)):  # vertical, then horizontal walls
+        for at in range(pitch, grid.shape[1], pitch):  # a wall covers [at - 1, at + 1)
+            assert grid[:, at - 1].sum() == grid[:, at].sum()  # doors cut the whole thickness
+            for start, length in free_runs(grid[:, at]):
+                widths.append(length)
+                assert room[start + length // 2, at], f"robot does not fit at {at}, {start}"
+    lobby = [w for w in widths if w >= pitch]
+    assert len(lobby) == 2  # the lobby's two open walls
+    assert all(10 <= w <= 14 for w in widths if w < pitch)
+    rooms_x, rooms_y = occupied.shape[1] // pitch, occupied.shape[0] // pitch
+    doors = len(widths) + 2  # the lobby's 2 runs open 4 walls
+    assert doors > 1.1 * (rooms_x * rooms_y - 1)  # loops: well over a spanning tree's doors
+    labels, _ = ndimage.label(fits)
+    x, y = make_maps.MAPS["maze"].base
+    centres = np.arange(rooms_x) * pitch + pitch // 2, np.arange(rooms_y) * pitch + pitch // 2
+    assert (labels[np.ix_(centres[1], centres[0])] == labels[y, x]).all()
+
+
+def test_rubble_is_scattered_and_open_to_a_robot(make_maps: ModuleType) -> None:
+    occupied = load_map(REPO / "maps" / "rubble.png").occupied
+    inner = occupied.copy()
+    inner[:3], inner[-3:], inner[:, :3], inner[:, -3:] = False, False, False, False
+    _, pieces = ndimage.label(inner, structure=np.ones((3, 3)))
+    assert 90 <= pieces <= 140  # ~120 pieces (some overlap) and the wall remnants
+    fits = make_maps.clearance(occupied) >= 3.0
+    labels, _ = ndimage.label(fits)
+    x, y = make_maps.MAPS["rubble"].base
+    assert (labels == labels[y, x]).sum() > 0.99 * fits.sum()
 
 
 def test_rays_on_the_office_map_match_the_dda() -> None:

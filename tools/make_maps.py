@@ -1,10 +1,11 @@
 """Phase 0 data generator: write the shipped maps in ``maps/`` deterministically.
 
 Run ``python tools/make_maps.py`` from the repository root to (re)write ``maps/office.png``,
-``maps/small_rooms.png``, ``maps/cave.txt``, ``maps/warehouse.yaml`` + ``warehouse.pgm``
-and ``maps/README.md``, then load each file back with :mod:`mresim_phys.io` and check that
-the suggested start positions are free, at least 4 cells from any wall, and in one big
-connected free region. All geometry is fixed; nothing is random.
+``maps/small_rooms.png``, ``maps/cave.txt``, ``maps/warehouse.yaml`` + ``warehouse.pgm``,
+``maps/maze.png``, ``maps/rubble.png`` and ``maps/README.md``, then load each file back
+with :mod:`mresim_phys.io` and check that the suggested start positions are free, at least
+4 cells from any wall, and in one big connected free region. Geometry is fixed; the maze
+and the rubble use NumPy generators with fixed seeds, so every run writes the same bytes.
 """
 
 from __future__ import annotations
@@ -69,6 +70,20 @@ MAPS = {
         "office; unknown (205) outside the outer wall",
         ((245, 60), (255, 60), (265, 60), (275, 60)),
         (260, 100),
+    ),
+    "maze": MapInfo(
+        "maze.png",
+        "maze-like building: 20 x 15 rooms on a 30-cell pitch, 2-cell walls, 10-14 cell "
+        "doors, loops (15% extra doors), open 2 x 2 lobby at the top left",
+        ((15, 15), (30, 15), (45, 15), (15, 45), (45, 45)),
+        (30, 30),
+    ),
+    "rubble": MapInfo(
+        "rubble.png",
+        "collapsed site: open area with broken wall remnants and 120 rubble pieces "
+        "(discs, rotated slabs, polygons); enclosed pockets filled",
+        ((20, 380), (32, 380), (44, 380), (56, 380), (20, 366)),
+        (40, 360),
     ),
 }
 
@@ -198,6 +213,130 @@ def warehouse() -> Image8:
     return img
 
 
+MAZE_PITCH = 30  # cells from one maze wall centre line to the next
+MAZE_WALL = 2  # interior wall thickness (the outer wall is 3)
+MAZE_DOOR = (10, 14)  # door widths, inclusive
+MAZE_LOOPS = 0.15  # share of the spanning tree's closed walls that get a door as well
+MAZE_SEED = 20240607
+Wall = tuple[str, int, int]  # ("v", i, j): x = i * pitch, row j; ("h", i, j): y = j * pitch
+
+
+def _maze_tree(cols: int, rows: int, rng: np.random.Generator) -> list[Wall]:
+    """Walls opened by a depth-first (recursive backtracker) spanning tree of the rooms."""
+    seen = np.zeros((rows, cols), dtype=bool)
+    seen[0, 0] = True
+    stack, opened = [(0, 0)], []
+    while stack:
+        c, r = stack[-1]
+        options = [
+            (c + dc, r + dr)
+            for dc, dr in ((1, 0), (-1, 0), (0, 1), (0, -1))
+            if 0 <= c + dc < cols and 0 <= r + dr < rows and not seen[r + dr, c + dc]
+        ]
+        if not options:
+            stack.pop()
+            continue
+        nc, nr = options[int(rng.integers(len(options)))]
+        seen[nr, nc] = True
+        opened.append(("v", max(c, nc), r) if nr == r else ("h", c, max(r, nr)))
+        stack.append((nc, nr))
+    return opened
+
+
+def _maze_doors(cols: int, rows: int, rng: np.random.Generator) -> list[Wall]:
+    """The tree's walls plus ``MAZE_LOOPS`` of the others (so the maze has loops)."""
+    tree = _maze_tree(cols, rows, rng)
+    walls = [("v", i, j) for i in range(1, cols) for j in range(rows)]
+    walls += [("h", i, j) for j in range(1, rows) for i in range(cols)]
+    opened = set(tree)
+    closed = [w for w in walls if w not in opened]
+    extra = rng.choice(len(closed), size=round(MAZE_LOOPS * len(closed)), replace=False)
+    return tree + [closed[k] for k in sorted(extra.tolist())]
+
+
+def maze() -> Image8:
+    """600 x 450 maze-like building: every room reachable, some loops."""
+    height, width, p, half = 450, 600, MAZE_PITCH, MAZE_WALL // 2
+    cols, rows = width // p, height // p
+    img = np.full((height, width), FREE, dtype=np.uint8)
+    ring(img, 0, 0, width, height, 3)
+    for i in range(1, cols):
+        box(img, i * p - half, 0, i * p + half, height)
+    for j in range(1, rows):
+        box(img, 0, j * p - half, width, j * p + half)
+    rng = np.random.default_rng(MAZE_SEED)
+    for kind, i, j in _maze_doors(cols, rows, rng):
+        k, rooms = (j, rows) if kind == "v" else (i, cols)  # the room index along the wall
+        lo = k * p + half if k > 0 else 3  # the wall's free span between its corners
+        hi = (k + 1) * p - half if k + 1 < rooms else (k + 1) * p - 3
+        door = int(rng.integers(MAZE_DOOR[0], MAZE_DOOR[1] + 1))
+        start = lo + 2 + int(rng.integers(0, hi - lo - 4 - door + 1))  # 2 cells from corners
+        at = (i if kind == "v" else j) * p
+        if kind == "v":
+            box(img, at - half, start, at + half, start + door, FREE)
+        else:
+            box(img, start, at - half, start + door, at + half, FREE)
+    box(img, 3, 3, 2 * p - half, 2 * p - half, FREE)  # the lobby: rooms (0..1, 0..1) merged
+    return img
+
+
+RUBBLE_PIECES = 120
+RUBBLE_SEED = 20240608
+RUBBLE_CLEAR = (3, 330, 90, 397)  # x0, y0, x1, y1: the start area, kept free of rubble
+RUBBLE_WALLS = (  # broken wall remnants: (x0, y0, x1, y1, thickness) per standing piece
+    (40, 110, 130, 112, 4),
+    (148, 113, 215, 117, 4),
+    (236, 118, 300, 121, 3),
+    (340, 30, 342, 105, 4),
+    (343, 125, 346, 200, 4),
+    (347, 222, 350, 268, 3),
+    (150, 200, 150, 280, 4),
+    (150, 280, 210, 282, 4),
+    (232, 283, 265, 284, 3),
+    (395, 330, 440, 290, 4),
+    (455, 276, 485, 250, 4),
+)
+
+
+def _rubble_piece(img: Image8, rng: np.random.Generator, cx: int, cy: int) -> None:
+    """Draw one piece of rubble at (cx, cy): a disc, a rotated slab or a small polygon."""
+    kind = int(rng.integers(3))
+    if kind == 0:
+        cv2.circle(img, (cx, cy), int(rng.integers(2, 7)), WALL, thickness=-1)
+        return
+    if kind == 1:
+        size = (float(rng.integers(4, 15)), float(rng.integers(3, 8)))
+        corners = cv2.boxPoints(((float(cx), float(cy)), size, float(rng.integers(0, 180))))
+    else:
+        n = int(rng.integers(3, 7))  # corners at jittered, evenly spread angles: no slivers
+        theta = (np.arange(n) + rng.uniform(-0.25, 0.25, n)) * (2 * np.pi / n) + rng.uniform(0, 7)
+        radius = rng.uniform(3, 7, n)
+        corners = np.column_stack((cx + radius * np.cos(theta), cy + radius * np.sin(theta)))
+    cv2.fillPoly(img, [np.round(corners).astype(np.int32)], WALL)
+
+
+def rubble() -> Image8:
+    """500 x 400 collapsed site; free pockets cut off from the starts are filled."""
+    height, width = 400, 500
+    img = np.full((height, width), FREE, dtype=np.uint8)
+    ring(img, 0, 0, width, height, 3)
+    for x0, y0, x1, y1, thick in RUBBLE_WALLS:
+        cv2.line(img, (x0, y0), (x1, y1), WALL, thickness=thick)
+    rng = np.random.default_rng(RUBBLE_SEED)
+    x0, y0, x1, y1 = RUBBLE_CLEAR
+    placed = 0
+    while placed < RUBBLE_PIECES:
+        cx, cy = int(rng.integers(6, width - 6)), int(rng.integers(6, height - 6))
+        if x0 - 8 <= cx < x1 + 8 and y0 - 8 <= cy < y1 + 8:
+            continue  # keep the start area clear
+        _rubble_piece(img, rng, cx, cy)
+        placed += 1
+    labels, _ = ndimage.label(img == FREE)  # default structure: 4-connected
+    x, y = MAPS["rubble"].base
+    img[(labels != labels[y, x]) & (img == FREE)] = WALL
+    return img
+
+
 ROS_YAML = """image: warehouse.pgm
 resolution: 0.05
 origin: [-7.5, -5.0, 0.0]
@@ -218,6 +357,8 @@ def write_all(out: Path) -> None:
     (out / "cave.txt").write_text(f"{rock.shape[0]}\n{rock.shape[1]}\n{rows}\n")
     Image.fromarray(warehouse()).save(out / "warehouse.pgm")
     (out / "warehouse.yaml").write_text(ROS_YAML)
+    Image.fromarray(maze()).save(out / "maze.png", optimize=True)
+    Image.fromarray(rubble()).save(out / "rubble.png", optimize=True)
 
 
 def clearance(occupied: NDArray[np.bool_]) -> NDArray[np.float64]:
@@ -280,9 +421,10 @@ def readme(stats: dict[str, MapStats]) -> str:
 
 README_TEMPLATE = """# Shipped maps
 
-Generated by `python tools/make_maps.py` (fixed geometry, no randomness); do not edit the
-files by hand, change the generator and rerun it. The script also loads each map back and
-checks the start positions below.
+Generated by `python tools/make_maps.py` (fixed geometry; the maze and the rubble come from
+fixed random seeds, so the files are the same on every run); do not edit the files by
+hand, change the generator and rerun it. The script also loads each map back and checks
+the start positions below.
 
 | file | cols x rows | free cells | reachable | what it is | robot starts (x, y) | base (x, y) |
 |---|---|---|---|---|---|---|
@@ -305,7 +447,8 @@ as obstacle, so every map is closed.
 - **Images** (`.png`, `.bmp`, `.gif`, `.jpg`; any size): a pixel is an obstacle iff its
   luminance is below `threshold * 255` (default threshold 0.5, i.e. dark = obstacle);
   `negate` makes bright pixels obstacles. Transparent pixels count as white. Image row r is
-  grid row r. `office.png` and `small_rooms.png` are black (0) on white (255).
+  grid row r. `office.png`, `small_rooms.png`, `maze.png` and `rubble.png` are black (0)
+  on white (255).
 - **MRESim text** (`.txt`): line 1 = number of rows, line 2 = number of columns, then one
   line per row of `0` (free) / `1` (obstacle) characters; LF or CRLF. `cave.txt` is 90 rows
   of 120 columns.
@@ -323,6 +466,8 @@ BUILDERS: dict[str, Callable[[], object]] = {
     "small_rooms": small_rooms,
     "cave": cave,
     "warehouse": warehouse,
+    "maze": maze,
+    "rubble": rubble,
 }
 
 
