@@ -1,0 +1,310 @@
+"""Views (phase 8): snapshots rendered to frames, layer selection and parsing."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from mresim_phys import Simulation
+from mresim_phys.render import (
+    DEFAULT_GLOBAL,
+    DEFAULT_ROBOT,
+    GLOBAL_LAYERS,
+    LAYERS,
+    ROBOT_LAYERS,
+    LayerSpec,
+    Renderer,
+    Style,
+    parse_layers,
+)
+from mresim_phys.snapshot import AgentSnapshot, Snapshot, read_only
+from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
+
+ROOT = Path(__file__).resolve().parent.parent
+STYLE = Style()
+MAP_ONLY = "walls,unexplored,team_known,known_at_base"
+ROWS, COLS = 30, 40
+# Cells with a known meaning in the hand-built snapshot (row, col).
+WALL, UNSEEN, AT_BASE, ROBOT_ONLY = (0, 5), (25, 35), (5, 5), (5, 15)
+ONLY_A, ONLY_B = (20, 6), (20, 32)
+
+
+def agent(name: str, belief: np.ndarray, **kw: object) -> AgentSnapshot:
+    fields: dict = {"kind": "robot", "heading": 0.0, "radius": 1.0, "state": "active"}
+    fields.update(role="explorer", position=(20.5, 15.5), comm_range=10.0)
+    fields["safe"] = np.zeros(belief.shape, bool)
+    fields.update(kw)
+    return AgentSnapshot(name=name, belief=belief, **fields)
+
+
+def snapshot(rows: int = ROWS, cols: int = COLS, **robot_a: object) -> Snapshot:
+    """Walls on the border; base knows the top-left block; A and B know more of the left
+    half; A alone knows (20, 6), B alone (20, 32); (25, 35) is unknown to everyone."""
+    truth = np.zeros((rows, cols), bool)
+    truth[0, :] = truth[-1, :] = truth[:, 0] = truth[:, -1] = True
+    base = np.zeros((rows, cols), np.uint8)
+    base[1:10, 1:10] = FREE
+    shared = np.zeros((rows, cols), np.uint8)
+    shared[1:12, 1:20] = FREE
+    shared[0, :20] = OCCUPIED
+    a, b = shared.copy(), shared.copy()
+    a[18:23, 4:9] = FREE
+    b[18:23, 30:35] = FREE
+    agents = (
+        agent("base", base, kind="base", state="base", role="base", position=(3.5, 3.5)),
+        agent("A", a, **robot_a),
+        agent("B", b, position=(32.5, 20.5), heading=np.pi),
+    )
+    links = np.ones((3, 3), bool) & ~np.eye(3, dtype=bool)
+    return Snapshot(7, 0.3, 0.1, 2, truth, agents, links)
+
+
+def render(snap: Snapshot, layers: str = MAP_ONLY, scale: float = 1.0) -> np.ndarray:
+    return Renderer(snap.truth.shape, parse_layers(layers), scale).render(snap)
+
+
+def pixel(frame: np.ndarray, rc: tuple[int, int]) -> tuple[int, ...]:
+    return tuple(int(v) for v in frame[rc])
+
+
+@pytest.mark.parametrize("scale", [1.0, 2.0, 0.5, 0.37])
+@pytest.mark.parametrize("shape", [(30, 40), (21, 33), (7, 5)])
+def test_frame_is_even_bgr_uint8(shape: tuple[int, int], scale: float) -> None:
+    snap = snapshot(*shape)
+    renderer = Renderer(shape, LayerSpec.all(), scale)
+    frame = renderer.render(snap)
+    height, width = (max(round(n * scale), 1) for n in shape)
+    assert frame.shape == (height + height % 2, width + width % 2, 3)
+    assert frame.dtype == np.uint8 and frame.flags.c_contiguous
+    assert renderer.size == frame.shape[1::-1]
+
+
+def test_map_classes_have_the_paper_colours() -> None:
+    frame = render(snapshot())
+    assert pixel(frame, WALL) == (0, 0, 0)
+    assert pixel(frame, UNSEEN) == STYLE.unexplored
+    assert pixel(frame, AT_BASE) == STYLE.known_at_base
+    assert pixel(frame, ROBOT_ONLY) == STYLE.team_known == (255, 255, 255)
+    assert pixel(frame, ONLY_A) == pixel(frame, ONLY_B) == STYLE.team_known
+
+
+def test_scaled_cells_keep_their_colour() -> None:
+    frame = render(snapshot(), scale=3.0)
+    r, c = AT_BASE
+    assert (frame[3 * r : 3 * r + 3, 3 * c : 3 * c + 3] == STYLE.known_at_base).all()
+
+
+def test_known_at_base_off_falls_back_to_team_known_or_unexplored() -> None:
+    snap = snapshot()
+    base = np.zeros_like(snap.base.belief)
+    base[5, 5] = base[25, 35] = FREE  # (25, 35) is known at base but by no robot
+    snap = replace(snap, agents=(replace(snap.base, belief=base), *snap.robots))
+    assert pixel(render(snap), UNSEEN) == STYLE.known_at_base
+    frame = render(snap, "walls,unexplored,team_known")
+    assert pixel(frame, AT_BASE) == STYLE.team_known
+    assert pixel(frame, UNSEEN) == STYLE.unexplored
+
+
+def test_layers_off_show_the_background() -> None:
+    frame = render(snapshot(), "known_at_base")
+    assert pixel(frame, WALL) == STYLE.background
+    assert pixel(frame, UNSEEN) == STYLE.background
+    assert pixel(frame, AT_BASE) == STYLE.known_at_base
+
+
+def test_robot_is_drawn_in_its_colour_at_its_centre() -> None:
+    frame = render(snapshot(), MAP_ONLY + ",location")
+    assert pixel(frame, (15, 20)) == STYLE.robot_colour(0)
+    assert pixel(frame, (20, 32)) == STYLE.robot_colour(1)
+    assert STYLE.robot_colour(0) != STYLE.robot_colour(1)
+
+
+def near(frame: np.ndarray, rc: tuple[int, int], colour: tuple[int, ...], tol: int = 40) -> bool:
+    r, c = rc
+    patch = frame[r - 6 : r + 7, c - 6 : c + 7].astype(int)
+    return bool((np.abs(patch - colour).max(axis=2) <= tol).any())
+
+
+def test_failed_robot_is_grey_with_a_red_x() -> None:
+    frame = render(snapshot(state="failed"), MAP_ONLY + ",location")
+    b, g, r = pixel(frame, (15, 20))
+    assert r > 180 and g < 80 and b < 80
+    assert near(frame, (15, 20), STYLE.failed, tol=10)
+    assert not near(frame, (15, 20), STYLE.robot_colour(0), tol=10)
+
+
+def test_error_robot_is_outlined_red_and_done_robot_is_hollow() -> None:
+    frame = render(snapshot(state="error"), MAP_ONLY + ",location")
+    assert pixel(frame, (15, 20)) == STYLE.robot_colour(0)
+    assert near(frame, (15, 20), STYLE.error, tol=30)
+    frame = render(snapshot(state="done"), MAP_ONLY + ",location")
+    assert pixel(frame, (15, 20)) == STYLE.unexplored
+    assert near(frame, (15, 20), STYLE.robot_colour(0), tol=10)
+
+
+def test_free_space_for_one_robot_tints_only_its_cells() -> None:
+    snap = snapshot()
+    frame = render(snap, MAP_ONLY + ",B:free_space")
+    assert pixel(frame, ONLY_A) == STYLE.team_known
+    tinted = np.array(pixel(frame, ONLY_B))
+    assert tinted.tolist() != list(STYLE.team_known)
+    towards = np.array(STYLE.robot_colour(1)) - STYLE.team_known
+    assert np.dot(tinted - STYLE.team_known, towards) > 0  # moved towards B's colour
+    assert pixel(frame, UNSEEN) == STYLE.unexplored
+    assert pixel(render(snap), ONLY_B) == STYLE.team_known
+
+
+def test_safe_space_tints_in_the_robot_colour() -> None:
+    safe = np.zeros((ROWS, COLS), bool)
+    safe[2:4, 12:14] = True
+    frame = render(snapshot(safe=safe), MAP_ONLY + ",A:safe_space")
+    assert pixel(frame, (3, 13)) not in (STYLE.team_known, STYLE.known_at_base)
+    assert pixel(frame, (6, 13)) == STYLE.team_known
+
+
+def test_frontiers_are_magenta() -> None:
+    frame = render(snapshot(), MAP_ONLY + ",frontiers")
+    assert pixel(frame, (11, 15)) == STYLE.frontier  # FREE, next to unknown row 12
+    assert pixel(frame, (5, 15)) == STYLE.team_known
+
+
+def test_overlays_change_pixels_only_when_on() -> None:
+    snap = snapshot(path=np.array([[25.5, 15.5], [25.5, 5.5]]), goal=(25.5, 5.5))
+    plain = render(snap)
+    for layer in ("path", "goal", "comm_range", "links", "header", "legend"):
+        assert (render(snap, f"{MAP_ONLY},{layer}") != plain).any(), layer
+
+
+def test_header_and_legend_bands() -> None:
+    frame = render(snapshot(), "default", scale=8.0)
+    assert pixel(frame, (0, frame.shape[1] - 1)) == STYLE.header_bg
+    assert pixel(frame, (frame.shape[0] - 1, frame.shape[1] - 1)) == STYLE.legend_bg
+
+
+@dataclass(frozen=True)
+class PlannerAgent(AgentSnapshot):
+    """An agent snapshot with the optional data of the skeleton and rendezvous layers."""
+
+    skeleton: np.ndarray | None = None
+    rendezvous: np.ndarray | None = None
+
+
+def test_skeleton_and_rendezvous_drawn_when_present() -> None:
+    snap = snapshot()
+    skeleton = np.zeros((ROWS, COLS), bool)
+    skeleton[5, 12:18] = True
+    a = PlannerAgent(**vars(snap.robots[0]), skeleton=skeleton, rendezvous=np.array([[30, 8]]))
+    rich = replace(snap, agents=(snap.base, a, snap.robots[1]))
+    frame = render(rich, MAP_ONLY + ",skeleton,rendezvous")
+    assert pixel(frame, (5, 14)) == STYLE.skeleton
+    assert near(frame, (7, 29), STYLE.robot_colour(0), tol=10)
+    assert (render(snap, MAP_ONLY + ",skeleton,rendezvous") == render(snap)).all()
+
+
+def test_rendering_leaves_the_snapshot_unchanged() -> None:
+    snap = snapshot(safe=np.ones((ROWS, COLS), bool))
+    frozen = replace(
+        snap,
+        truth=read_only(snap.truth),
+        agents=tuple(
+            replace(a, belief=read_only(a.belief), safe=read_only(a.safe)) for a in snap.agents
+        ),
+    )
+    before = [(a.belief.copy(), a.safe.copy()) for a in frozen.agents]
+    truth = frozen.truth.copy()
+    for scale in (0.5, 1.0, 2.0):
+        Renderer(frozen.truth.shape, LayerSpec.all(), scale).render(frozen)
+    assert (frozen.truth == truth).all()
+    for a, (belief, safe) in zip(frozen.agents, before, strict=True):
+        assert (a.belief == belief).all() and (a.safe == safe).all()
+
+
+def test_wrong_map_shape_is_refused() -> None:
+    with pytest.raises(ValueError, match="snapshot map"):
+        Renderer((10, 10), LayerSpec()).render(snapshot())
+
+
+def test_live_simulation_snapshot() -> None:
+    sim = Simulation.from_yaml(ROOT / "scenarios" / "01_quickstart.yaml")
+    for _ in range(5):
+        sim.step()
+    snap = sim.snapshot()
+    beliefs = [a.belief.copy() for a in snap.agents]
+    rows, cols = snap.truth.shape
+    for scale in (1.0, 2.0):
+        frame = Renderer(snap.truth.shape, LayerSpec.all(), scale).render(snap)
+        assert frame.shape == (round(rows * scale), round(cols * scale), 3)
+    frame = render(snap, MAP_ONLY + ",location")
+    x, y = snap.robots[0].position
+    assert pixel(frame, (int(y), int(x))) == STYLE.robot_colour(0)
+    wall = np.argwhere(snap.truth)[0]
+    assert pixel(frame, tuple(wall)) == STYLE.wall
+    at_base = np.argwhere(snap.base.belief == FREE)
+    assert any(pixel(frame, tuple(rc)) == STYLE.known_at_base for rc in at_base[:50])
+    assert (np.asarray(snap.robots[0].belief) != UNKNOWN).any()
+    assert all((a.belief == b).all() for a, b in zip(snap.agents, beliefs, strict=True))
+
+
+# --- layer selection ---------------------------------------------------------------------
+
+
+def test_layer_names() -> None:
+    assert set(LAYERS) == set(GLOBAL_LAYERS) | set(ROBOT_LAYERS)
+    assert {"free_space", "safe_space"}.isdisjoint(DEFAULT_ROBOT)
+    assert set(GLOBAL_LAYERS) == DEFAULT_GLOBAL
+    assert {"location", "path", "frontiers", "comm_range", "goal"} <= DEFAULT_ROBOT
+
+
+@pytest.mark.parametrize("text", ["", "default", " default , ", "default,-links,links"])
+def test_parse_defaults(text: str) -> None:
+    assert parse_layers(text) == LayerSpec()
+
+
+def test_parse_names_removals_and_robot_overrides() -> None:
+    assert parse_layers("all") == LayerSpec.all()
+    spec = parse_layers("walls, location")
+    assert spec.global_layers == {"walls"} and spec.robot_layers == {"location"}
+    spec = parse_layers("-links,-path")
+    assert "links" not in spec.global_layers and "path" not in spec.robot_layers
+    assert "walls" in spec.global_layers
+    spec = parse_layers("default, B:free_space+path-goal, C : -location")
+    assert spec.for_agent("B") == (DEFAULT_ROBOT | {"free_space"}) - {"goal"}
+    assert spec.for_agent("C") == DEFAULT_ROBOT - {"location"}
+    assert spec.for_agent("A") == DEFAULT_ROBOT
+    assert parse_layers("B:free_space").global_layers == DEFAULT_GLOBAL
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("fronteirs", "did you mean frontiers"),
+        ("default,commrange", "comm_range"),
+        ("B:walls", "global"),
+        ("B:", "should look like"),
+        ("B:free_space+", "should look like"),
+        (":path", "should look like"),
+        ("B:pth", "did you mean path"),
+    ],
+)
+def test_parse_errors(text: str, message: str) -> None:
+    with pytest.raises(ValueError, match=message):
+        parse_layers(text)
+
+
+def test_layer_spec_checks_names() -> None:
+    with pytest.raises(ValueError, match="walls"):
+        LayerSpec(robot_layers=frozenset({"walls"}))
+    spec = parse_layers("default,Bob:free_space")
+    spec.check_agents(["base", "Bob"])
+    with pytest.raises(ValueError, match="did you mean Bob"):
+        spec.check_agents(["base", "Bobb"])
+    assert hash(spec) == hash(parse_layers("default,Bob:free_space"))
+
+
+def test_style_palette_limits() -> None:
+    with pytest.raises(ValueError, match="palette"):
+        Renderer((4, 4), LayerSpec(), style=Style(palette=()))
+    assert Style().robot_colour(len(STYLE.palette)) == STYLE.robot_colour(0)
