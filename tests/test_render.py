@@ -172,9 +172,9 @@ def test_frontiers_are_magenta() -> None:
 
 
 def test_overlays_change_pixels_only_when_on() -> None:
-    snap = snapshot(path=np.array([[25.5, 15.5], [25.5, 5.5]]), goal=(25.5, 5.5))
+    snap = snapshot(path=np.array([[25.5, 15.5], [25.5, 5.5]]), goal=(25.5, 5.5), parent="B")
     plain = render(snap)
-    for layer in ("path", "goal", "comm_range", "links", "header", "legend"):
+    for layer in ("path", "goal", "comm_range", "links", "hierarchy", "header", "legend"):
         assert (render(snap, f"{MAP_ONLY},{layer}") != plain).any(), layer
 
 
@@ -220,6 +220,18 @@ def test_rendering_leaves_the_snapshot_unchanged() -> None:
     assert (frozen.truth == truth).all()
     for a, (belief, safe) in zip(frozen.agents, before, strict=True):
         assert (a.belief == belief).all() and (a.safe == safe).all()
+
+
+@pytest.mark.parametrize("scale", [0.5, 1.0, 2.0])
+def test_each_frame_is_a_new_array(scale: float) -> None:
+    snap = snapshot()
+    renderer = Renderer(snap.truth.shape, LayerSpec.all(), scale)
+    first = renderer.render(snap)
+    kept = first.copy()
+    second = renderer.render(snap)
+    assert not np.shares_memory(first, second)
+    first[:] = 0
+    assert (renderer.render(snap) == kept).all() and (second == kept).all()
 
 
 def test_wrong_map_shape_is_refused() -> None:
