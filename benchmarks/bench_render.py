@@ -5,10 +5,12 @@ steps and repeats). Builds an 8-robot frontier run on ``maps/office.png`` (the t
 ``bench_step.py``), runs it for 150 steps so beliefs, paths and frontiers are realistic,
 then prints medians (not means: the machine is shared) of
 
-* render with every layer on (free and safe space tints, frontier masks of all robots);
-* render with the default layers;
-* mp4v encode of one frame (``VideoRecorder`` into a temporary folder);
-* render (all layers) + encode.
+* render with every layer on (free and safe space tints, frontier masks of all robots),
+  the same snapshot rendered ``repeats`` times;
+* render with the default layers, likewise;
+* over the next ``repeats`` steps of the run (a new snapshot each time, so the encoder sees
+  real motion): render (all layers), mp4v encode of that frame (``VideoRecorder`` into a
+  temporary folder), and the two together.
 
 A script, not a test: timings are reported in the issue notes and docs/performance.md.
 """
@@ -35,16 +37,16 @@ from mresim_phys.render import LayerSpec, Renderer  # noqa: E402
 from mresim_phys.video import VideoRecorder  # noqa: E402
 
 
-def median_ms(action: Callable[[], object], repeats: int) -> tuple[float, float]:
-    """Median and p90 wall time of ``action`` in milliseconds (after one warm-up call)."""
-    action()
-    times = []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        action()
-        times.append((time.perf_counter() - t0) * 1e3)
-    times.sort()
+def summary(times_ms: list[float]) -> tuple[float, float]:
+    """Median and p90 of a list of times."""
+    times = sorted(times_ms)
     return statistics.median(times), times[int(0.9 * (len(times) - 1))]
+
+
+def timed_ms(action: Callable[[], object]) -> float:
+    t0 = time.perf_counter()
+    action()
+    return (time.perf_counter() - t0) * 1e3
 
 
 def main() -> None:
@@ -59,23 +61,37 @@ def main() -> None:
     snap = sim.snapshot()
     every = Renderer(snap.truth.shape, LayerSpec.all(), args.scale)
     default = Renderer(snap.truth.shape, LayerSpec(), args.scale)
-    frame = every.render(snap)
-    height, width = frame.shape[:2]
+    width, height = every.size
     print(
         f"office {snap.truth.shape[1]}x{snap.truth.shape[0]}, 8 robots, step {snap.step}, "
         f"explored {snap.explored:.1%}; frame {width}x{height}, {repeats} repeats"
     )
+    rows = {name: [] for name in ("all", "default", "live", "encode", "both")}
+    for renderer, key in ((every, "all"), (default, "default")):
+        renderer.render(snap)  # warm-up
+        rows[key] = [timed_ms(lambda r=renderer: r.render(snap)) for _ in range(repeats)]
+    with (
+        tempfile.TemporaryDirectory() as folder,
+        VideoRecorder(Path(folder) / "bench.mp4", 10, (width, height)) as video,
+    ):
+        video.write(every.render(snap))
+        for _ in range(repeats):
+            sim.step()
+            t0 = time.perf_counter()
+            frame = every.render(sim.snapshot())
+            t1 = time.perf_counter()
+            video.write(frame)
+            t2 = time.perf_counter()
+            rows["live"].append((t1 - t0) * 1e3)
+            rows["encode"].append((t2 - t1) * 1e3)
+            rows["both"].append((t2 - t0) * 1e3)
+    names = {"all": "render, all layers", "default": "render, default layers"}
+    names |= {"live": "render all, new step each time", "encode": "mp4v encode, one frame"}
+    names["both"] = "render all + encode"
     print(f"  {'item':<34}{'median':>10}{'p90':>10}")
-    rows = [("render, all layers", lambda: every.render(snap))]
-    rows.append(("render, default layers", lambda: default.render(snap)))
-    with tempfile.TemporaryDirectory() as folder:
-        video = VideoRecorder(Path(folder) / "bench.mp4", 10, (width, height))
-        rows.append(("mp4v encode (one frame)", lambda: video.write(frame)))
-        rows.append(("render all + encode", lambda: video.write(every.render(snap))))
-        for name, action in rows:
-            median, p90 = median_ms(action, repeats)
-            print(f"  {name:<34}{median:>8.2f} ms{p90:>7.2f} ms")
-        video.close()
+    for key, name in names.items():
+        median, p90 = summary(rows[key])
+        print(f"  {name:<34}{median:>8.2f} ms{p90:>7.2f} ms")
 
 
 if __name__ == "__main__":
