@@ -73,8 +73,11 @@ def time_team(robots: int, map_path: Path, warmup: int, measured: int) -> BenchR
             phases[name].append(seconds)
         phases["motion"].append(max(total - sum(spent.values()), 0.0))
     return BenchResult(
-        robots, 1e3 * statistics.median(totals), 1e3 * float(np.percentile(totals, 90)),
-        {name: 1e3 * statistics.median(v) for name, v in phases.items()}, sim.record.explored,
+        robots,
+        1e3 * statistics.median(totals),
+        1e3 * float(np.percentile(totals, 90)),
+        {name: 1e3 * statistics.median(v) for name, v in phases.items()},
+        sim.record.explored,
     )
 
 

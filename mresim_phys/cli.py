@@ -1,4 +1,4 @@
-"""Command line (output edge): ``mresim run | validate``.
+"""Command line (output edge): ``mresim run | validate | replay | plot | bench``.
 
 Argument parsing only; the work is delegated to ``load``, ``sim`` and
 ``recorders``. Every user mistake ends in a one-paragraph message on stderr and
@@ -9,15 +9,19 @@ from __future__ import annotations
 
 import argparse
 import sys
-import time
 from collections.abc import Sequence
 from pathlib import Path
+from typing import Any
 
 from tqdm import tqdm
 
 from .bench import run_bench
 from .errors import MresimError
-from .recorders import RunWriter, default_run_dir, summarise
+from .metrics import StepRecord
+from .plots import plot_runs, plotting_available
+from .recorders import default_run_dir
+from .replay import replay_run
+from .session import run_session
 from .sim import Simulation
 
 EXIT_USER_ERROR = 2
@@ -57,15 +61,86 @@ def make_parser() -> argparse.ArgumentParser:
     run.add_argument("--seed", type=non_negative_int, help="override the scenario seed")
     run.add_argument("--out", type=Path, help="output folder (default runs/<name>/seed-<seed>)")
     run.add_argument("--quiet", action="store_true", help="no progress bar or summary line")
+    add_render_flags(run)
+    run.add_argument("--no-log", action="store_true", help="do not write the run log")
+    run.add_argument("--no-plots", action="store_true", help="do not draw plots at the end")
     validate = commands.add_parser("validate", help="check a scenario without running it")
     validate.add_argument("scenario", type=Path, help="scenario YAML file")
+    replay = commands.add_parser("replay", help="re-render a run (and its metrics) from its log")
+    replay.add_argument("run_dir", type=Path, help="a run folder written by 'mresim run'")
+    add_render_flags(replay)
+    replay.add_argument(
+        "--metrics", action="store_true", help="recompute metrics.csv from the log and compare"
+    )
+    plot = commands.add_parser("plot", help="plot one or more runs' metrics")
+    plot.add_argument("run_dirs", type=Path, nargs="+", help="run folders")
+    plot.add_argument("--out", type=Path, help="folder for the PNGs (default: the run's plots/)")
     bench = commands.add_parser("bench", help="median ms per step for 4, 8, 16 robots")
-    bench.add_argument("--robots", type=robot_counts, default=(4, 8, 16),
-                       help="comma-separated team sizes (default 4,8,16)")
+    bench.add_argument(
+        "--robots",
+        type=robot_counts,
+        default=(4, 8, 16),
+        help="comma-separated team sizes (default 4,8,16)",
+    )
     bench.add_argument("--warmup", type=non_negative_int, default=50, help="untimed steps")
     bench.add_argument("--steps", type=positive_int, default=200, help="timed steps")
     bench.add_argument("--map", type=Path, help="an 800x600 floor plan (default maps/office.png)")
     return parser
+
+
+def add_render_flags(parser: argparse.ArgumentParser) -> None:
+    """Flags that override the scenario's ``render`` block."""
+    parser.add_argument(
+        "--video",
+        nargs="?",
+        const=True,
+        default=None,
+        metavar="PATH",
+        help="write a video (default videos/<name>-seed<seed>.mp4; .webm too)",
+    )
+    parser.add_argument("--fps", type=positive_float, help="video frames per second")
+    parser.add_argument("--every", type=positive_int, help="one frame every N steps")
+    parser.add_argument("--layers", help="layers, e.g. 'default', 'all', 'default,B:free_space'")
+    parser.add_argument("--scale", type=positive_float, help="frame scale (2 = twice the map)")
+    parser.add_argument(
+        "--snapshot",
+        type=step_list,
+        metavar="STEPS",
+        help="write PNG frames at these steps, e.g. 100,500",
+    )
+
+
+def render_overrides(args: argparse.Namespace) -> dict[str, Any]:
+    """The render-block fields given on the command line."""
+    given = {
+        "video": args.video,
+        "fps": args.fps,
+        "every": args.every,
+        "layers": args.layers,
+        "scale": args.scale,
+        "snapshots": args.snapshot,
+    }
+    if getattr(args, "no_log", False):
+        given["log"] = False
+    if getattr(args, "no_plots", False):
+        given["plots"] = False
+    return {k: v for k, v in given.items() if v is not None}
+
+
+def positive_float(text: str) -> float:
+    """argparse type: a number > 0."""
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
+    if not value > 0:
+        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text}")
+    return value
+
+
+def step_list(text: str) -> list[int]:
+    """argparse type: comma-separated step numbers."""
+    return [non_negative_int(part) for part in text.split(",") if part.strip()]
 
 
 def robot_counts(text: str) -> tuple[int, ...]:
@@ -80,38 +155,44 @@ def bench_command(args: argparse.Namespace) -> int:
 
 
 def run_command(args: argparse.Namespace) -> int:
-    """``mresim run``: simulate, streaming metrics to the run folder."""
-    sim = Simulation.from_yaml(args.scenario, seed=args.seed, steps=args.steps)
+    """``mresim run``: simulate, streaming metrics (and log, video, PNGs) to the run folder."""
+    sim = Simulation.from_yaml(
+        args.scenario, seed=args.seed, steps=args.steps, render=render_overrides(args)
+    )
     scenario = sim.scenario
     out_dir = args.out or default_run_dir(scenario)
-    started = time.perf_counter()
-    reason = "interrupted"
-    with (
-        RunWriter(out_dir, scenario) as writer,
-        tqdm(total=scenario.steps, disable=args.quiet, unit="step", desc=scenario.name) as bar,
-    ):
-        try:
-            for record in sim.iterate():
-                writer.on_step(record)
-                bar.update(0 if record.step == 0 else 1)
-                bar.set_postfix(
-                    explored=f"{record.explored:.3f}",
-                    base=f"{record.known_at_base:.3f}",
-                    refresh=False,
-                )
-            reason = sim.stop_reason() or "steps"
-        except KeyboardInterrupt:
-            pass
-        elapsed = time.perf_counter() - started
-        summary = summarise(scenario, sim.record, sim.milestones, elapsed, reason)
-        path = writer.write_summary(summary)
+    with tqdm(total=scenario.steps, disable=args.quiet, unit="step", desc=scenario.name) as bar:
+
+        def progress(record: StepRecord) -> None:
+            bar.update(0 if record.step == 0 else 1)
+            bar.set_postfix(
+                explored=f"{record.explored:.3f}", base=f"{record.known_at_base:.3f}", refresh=False
+            )
+
+        outcome = run_session(sim, out_dir, progress)
+    plotted = draw_plots(scenario.render.plots, [out_dir], out_dir / "plots", args.quiet)
     if not args.quiet:
+        summary = outcome.summary
         print(
-            f"{scenario.name} seed {scenario.seed}: {summary['steps']} steps ({reason}),"
+            f"{scenario.name} seed {scenario.seed}: {summary['steps']} steps ({outcome.reason}),"
             f" explored {summary['final_explored']:.3f}, at base"
-            f" {summary['final_known_at_base']:.3f}, {elapsed:.1f} s -> {path.parent}"
+            f" {summary['final_known_at_base']:.3f}, {summary['wall_time_s']:.1f} s -> {out_dir}"
+            + (f"; video {outcome.video}" if outcome.video else "")
+            + (f"; plots in {out_dir / 'plots'}" if plotted else "")
         )
-    return 130 if reason == "interrupted" else 0
+    return 130 if outcome.reason == "interrupted" else 0
+
+
+def draw_plots(wanted: bool, run_dirs: list[Path], out_dir: Path, quiet: bool) -> bool:
+    """Plots at the end of a run when asked for and matplotlib is installed."""
+    if not wanted:
+        return False
+    if not plotting_available():
+        if not quiet:
+            print("(plots skipped: pip install -e '.[plot]' for matplotlib and pandas)")
+        return False
+    plot_runs(run_dirs, out_dir)
+    return True
 
 
 def validate_command(args: argparse.Namespace) -> int:
@@ -121,15 +202,38 @@ def validate_command(args: argparse.Namespace) -> int:
     return 0
 
 
+def replay_command(args: argparse.Namespace) -> int:
+    """``mresim replay``: frames (and metrics) from a run's log, without re-simulating."""
+    result = replay_run(args.run_dir, render_overrides(args), args.metrics)
+    for line in result.lines:
+        print(line)
+    return 0 if result.ok else 1
+
+
+def plot_command(args: argparse.Namespace) -> int:
+    """``mresim plot``: exploration, distance and link figures for the given runs."""
+    out_dir = args.out or (args.run_dirs[0] / "plots" if len(args.run_dirs) == 1 else Path("plots"))
+    for path in plot_runs(list(args.run_dirs), out_dir):
+        print(path)
+    return 0
+
+
+COMMANDS = {
+    "run": run_command,
+    "validate": validate_command,
+    "replay": replay_command,
+    "plot": plot_command,
+    "bench": bench_command,
+}
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     """Entry point of the ``mresim`` console script."""
     args = make_parser().parse_args(argv)
-    handler = {"run": run_command, "validate": validate_command, "bench": bench_command}[
-        args.command
-    ]
+    handler = COMMANDS[args.command]
     try:
         return handler(args)
-    except MresimError as exc:
+    except (MresimError, OSError) as exc:
         print(f"mresim: error: {exc}", file=sys.stderr)
         return EXIT_USER_ERROR
 

@@ -27,7 +27,11 @@ def load_scenario(path: str | Path, **overrides: Any) -> Scenario:
     """Read, validate and resolve the scenario at ``path``; ``overrides`` replace top keys."""
     source = Path(path)
     data = read_yaml_mapping(source)
-    data.update({k: v for k, v in overrides.items() if v is not None})
+    for key, value in overrides.items():
+        if isinstance(value, dict) and isinstance(data.get(key), dict):
+            data[key] = {**data[key], **value}
+        elif value is not None:
+            data[key] = value
     scenario = validate_scenario(data, str(source))
     return resolve_map_path(scenario, source.resolve().parent)
 
@@ -168,8 +172,11 @@ def keys_at(model: type[BaseModel], loc: tuple[Any, ...]) -> list[str]:
             continue
         field = current.model_fields.get(str(part))
         nested = field and next(
-            (t for t in (field.annotation, *get_args(field.annotation))
-             if isinstance(t, type) and issubclass(t, BaseModel)),
+            (
+                t
+                for t in (field.annotation, *get_args(field.annotation))
+                if isinstance(t, type) and issubclass(t, BaseModel)
+            ),
             None,
         )
         if nested is None:

@@ -86,16 +86,20 @@ def wall_cells(scan: Scan, shape: tuple[int, int]) -> tuple[np.ndarray, np.ndarr
 
 def face_links(scan: Scan) -> FloatArray:
     """Segments (k, 2, 2) joining consecutive hits on one straight wall face, inside the wall."""
-    ends, hit, n = scan.ends, scan.on_wall, scan.normals
-    pair = hit[:-1] & hit[1:]
-    same_dir = np.einsum("ij,ij->i", n[:-1], n[1:]) > NEAR_PARALLEL
-    gap = ends[1:] - ends[:-1]
-    on_face = np.abs(np.einsum("ij,ij->i", n[:-1], gap)) < 1e-6
-    close = np.hypot(gap[:, 0], gap[:, 1]) < WALL_GAP
-    axis_aligned = np.abs(n[:-1]).max(axis=1) > NEAR_PARALLEL  # faces are cell edges
-    k = np.flatnonzero(pair & same_dir & on_face & close & axis_aligned)
-    inward = -0.5 * n[k]
-    return np.stack((ends[k] + inward, ends[k + 1] + inward), axis=1)
+    hit = scan.on_wall
+    k = np.flatnonzero(hit[:-1] & hit[1:])
+    if len(k) == 0:
+        return np.zeros((0, 2, 2))
+    n, a, b = scan.normals[k], scan.ends[k], scan.ends[k + 1]
+    gap = b - a
+    keep = (
+        ((n * scan.normals[k + 1]).sum(axis=1) > NEAR_PARALLEL)  # same face direction
+        & (np.abs((n * gap).sum(axis=1)) < 1e-6)  # on the same line
+        & ((gap * gap).sum(axis=1) < WALL_GAP * WALL_GAP)
+        & (np.abs(n).max(axis=1) > NEAR_PARALLEL)  # faces are cell edges
+    )
+    inward = -0.5 * n[keep]
+    return np.stack((a[keep] + inward, b[keep] + inward), axis=1)
 
 
 def integrate_scan(
@@ -159,7 +163,7 @@ def trim_beyond_rays(free: BoolGrid, row0: int, col0: int, scan: Scan) -> None:
     n = len(scan.angles)
     spacing = (scan.angles[-1] - scan.angles[0]) / (n - 1)
     k = np.mod(np.arctan2(dy, dx) - scan.angles[0], 2 * np.pi) / spacing
-    lower = np.clip(np.floor(k).astype(int), 0, n - 1)
+    lower = np.minimum(k.astype(np.intp), n - 1)  # k >= 0, so truncation is floor
     bound = np.minimum(scan.ranges[lower], scan.ranges[np.minimum(lower + 1, n - 1)])
     beyond = ((dist > bound) | (k > n - 1 + 1e-9)) & (dist > NEAR_ROBOT)
     free[rows[beyond], cols[beyond]] = False
@@ -174,14 +178,14 @@ def mark_faces(belief: BeliefGrid, links: FloatArray) -> None:
     if len(links) == 0:
         return
     cells = np.floor(links).astype(np.intp)  # (k, 2 ends, (col, row))
-    horizontal = cells[:, 0, 1] == cells[:, 1, 1]
-    fixed = np.where(horizontal, cells[:, 0, 1], cells[:, 0, 0])
-    axis = np.where(horizontal, 0, 1)
-    low = np.minimum(cells[np.arange(len(cells)), 0, axis], cells[np.arange(len(cells)), 1, axis])
-    high = np.maximum(cells[np.arange(len(cells)), 0, axis], cells[np.arange(len(cells)), 1, axis])
-    counts = high - low + 1
+    start, end = cells[:, 0, :], cells[:, 1, :]
+    horizontal = start[:, 1] == end[:, 1]
+    fixed = np.where(horizontal, start[:, 1], start[:, 0])
+    first = np.where(horizontal, start[:, 0], start[:, 1])
+    last = np.where(horizontal, end[:, 0], end[:, 1])
+    low, counts = np.minimum(first, last), np.abs(last - first) + 1
     run = np.repeat(np.arange(len(cells)), counts)
-    along = low[run] + np.arange(counts.sum()) - np.repeat(np.cumsum(counts) - counts, counts)
+    along = np.arange(len(run)) + np.repeat(low - (np.cumsum(counts) - counts), counts)
     rows = np.where(horizontal[run], fixed[run], along)
     cols = np.where(horizontal[run], along, fixed[run])
     height, width = belief.shape

@@ -147,6 +147,26 @@ class SimulationSpec(Strict):
     )
 
 
+class RenderSpec(Strict):
+    """What a run leaves besides its metrics: video, pictures, run log, plots."""
+
+    video: bool | str = Field(
+        False, description="Write a video: true = videos/<name>-seed<seed>.mp4, or a path."
+    )
+    fps: float = Field(20.0, gt=0, le=240, description="Video frames per second.")
+    every: int = Field(1, ge=1, description="One video frame every this many steps.")
+    layers: str = Field(
+        "default", description="Layers to draw, e.g. 'default', 'all', 'default,B:free_space'."
+    )
+    scale: float = Field(1.0, gt=0, le=8, description="Frame scale (2 = twice the map size).")
+    snapshots: list[int] = Field(
+        default_factory=list, description="Steps at which to write PNG frames."
+    )
+    final_png: bool = Field(True, description="Write final.png of the last step.")
+    log: bool = Field(True, description="Write the run log (for replay without re-running).")
+    plots: bool = Field(True, description="Write plots at the end (needs the plot extra).")
+
+
 class FailEvent(Strict):
     """At ``step``, robot ``fail`` stops for good: no motion, sensing or communication."""
 
@@ -170,6 +190,9 @@ class Scenario(Strict):
     )
     simulation: SimulationSpec = Field(
         default_factory=SimulationSpec, description="How the cycle runs."
+    )
+    render: RenderSpec = Field(
+        default_factory=RenderSpec, description="Video, pictures, run log and plots."
     )
     events: list[FailEvent] = Field(
         default_factory=list, description="Scheduled events (robot failures)."

@@ -13,8 +13,8 @@ order in which robots are processed never changes the result.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator
-from time import perf_counter
 from pathlib import Path
+from time import perf_counter
 from typing import Any
 
 import numpy as np
@@ -33,7 +33,6 @@ from .sensing import scan
 from .snapshot import AgentSnapshot, Snapshot, read_only
 from .strategies import RobotView
 from .types import FREE
-
 
 PHASES = ("sensing", "mapping", "planning", "communication", "metrics")
 

@@ -30,6 +30,7 @@ SECTIONS: list[tuple[str, type[BaseModel]]] = [
     ("strategy", schema.PluginSpec),
     ("stop", schema.StopSpec),
     ("simulation", schema.SimulationSpec),
+    ("render", schema.RenderSpec),
     ("events[i]", schema.FailEvent),
 ]
 
