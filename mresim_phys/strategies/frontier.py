@@ -7,7 +7,8 @@ and runs a greedy auction with the teammates it heard from within
 and that frontier leave the auction, until the best pair is this robot's. So two
 robots in contact do not chase the same frontier. A teammate's distance starts as
 the straight line from its last known position and is replaced by its exact path
-length on this robot's map before its bid can win (as the original does).
+length on this robot's map before its bid can win (as the original does), with a
+path search bounded to 1.5 times the straight-line estimate, widened only if needed.
 With nothing reachable left to explore the robot returns to the base: ``done``.
 
 On arriving, the robot turns to face the frontier (its laser covers only 180
@@ -36,7 +37,8 @@ from .base import (
 )
 
 UTILITY_SCALE = 1e8  # original: U = area * 10^8 / d^4
-MIN_SEARCH = 50.0  # cells: smallest extra horizon when refining a teammate's bid
+MIN_SEARCH = 10.0  # cells: smallest extra horizon when refining a teammate's bid
+SEARCH_GROWTH = 1.5  # a refinement searches to this multiple of the current lower bound
 MAX_BOUNDED_SEARCH = 2000.0  # cells: beyond this a teammate's search is unbounded
 
 PathSearch = Callable[["Bidder", float], "np.ndarray | None"]
@@ -209,8 +211,8 @@ def greedy_auction(bidders: list[Bidder], sizes: np.ndarray, search: PathSearch)
     """Index of the frontier bidder 0 wins in the greedy auction.
 
     A pair whose cost is only a lower bound is refined before it can win: the
-    teammate's path search runs to twice the bound (at least ``MIN_SEARCH`` cells
-    more), so a teammate far away by path is ruled out by a small bounded search.
+    teammate's path search runs to 1.5 times the bound (at least ``MIN_SEARCH``
+    cells more), so a teammate far away by path is ruled out by a small search.
     """
     assigned: set[int] = set()
     taken = np.zeros(len(sizes), dtype=bool)
@@ -221,7 +223,7 @@ def greedy_auction(bidders: list[Bidder], sizes: np.ndarray, search: PathSearch)
         bidder = bidders[who]
         if not bidder.exact[which]:
             bound = float(bidder.costs[which])
-            limit = max(2.0 * bound, bound + MIN_SEARCH)
+            limit = max(SEARCH_GROWTH * bound, bound + MIN_SEARCH)
             limit = np.inf if limit > MAX_BOUNDED_SEARCH else limit
             bidder.refine(search(bidder, limit), limit)
             continue
