@@ -251,7 +251,7 @@ class Renderer:
             if "frontiers" in mine:
                 frontier = frontier_mask(belief).view(np.uint8) * np.uint8(_FRONTIER)
                 np.maximum(lab, frontier, out=lab)
-            skeleton = getattr(robot, "skeleton", None)  # no such field yet: drawn once there is
+            skeleton = robot.skeleton
             if "skeleton" in mine and skeleton is not None:
                 skeleton = np.asarray(skeleton, dtype=bool).view(np.uint8) * np.uint8(_SKELETON)
                 np.maximum(label, skeleton, out=label)
@@ -320,7 +320,7 @@ class Renderer:
             cv2.polylines(image, [pts], False, colour, 1, _AA, _SHIFT)
         if "goal" in mine and robot.goal is not None:
             draw_cross(image, self.px(robot.goal), 4, colour)
-        points = getattr(robot, "rendezvous", None)  # no such field yet: drawn once there is
+        points = robot.rendezvous
         if "rendezvous" in mine and points is not None and len(points):
             for p in self.px(np.reshape(points, (-1, 2))) >> _SHIFT:
                 cv2.drawMarker(image, p, colour, cv2.MARKER_DIAMOND, 8, 2)

@@ -238,8 +238,13 @@ class Simulation:
 
 
 def agent_snapshot(agent: Agent) -> AgentSnapshot:
-    """One agent as a snapshot (grids as read-only views)."""
+    """One agent as a snapshot (grids as read-only views).
+
+    A strategy exposes extra views through its decision's ``info``: ``skeleton``
+    (a bool grid) and ``rendezvous`` ((k, 2) points) are passed on to renderers.
+    """
     robot = agent if isinstance(agent, Robot) else None
+    info = robot.decision.info if robot is not None and robot.decision is not None else {}
     return AgentSnapshot(
         name=agent.name,
         kind="robot" if robot else "base",
@@ -254,4 +259,6 @@ def agent_snapshot(agent: Agent) -> AgentSnapshot:
         path=robot.path.copy() if robot else np.zeros((0, 2)),
         goal=robot.goal if robot else None,
         distance=robot.distance if robot else 0.0,
+        skeleton=info.get("skeleton"),
+        rendezvous=info.get("rendezvous"),
     )

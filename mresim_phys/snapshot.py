@@ -41,6 +41,8 @@ class AgentSnapshot:
     goal: tuple[float, float] | None = None
     distance: float = 0.0
     parent: str | None = None
+    skeleton: BoolGrid | None = None  # from a strategy's Decision.info["skeleton"], if any
+    rendezvous: FloatArray | None = None  # (k, 2) points from Decision.info["rendezvous"]
 
 
 @dataclass(frozen=True)

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -184,19 +184,11 @@ def test_header_and_legend_bands() -> None:
     assert pixel(frame, (frame.shape[0] - 1, frame.shape[1] - 1)) == STYLE.legend_bg
 
 
-@dataclass(frozen=True)
-class PlannerAgent(AgentSnapshot):
-    """An agent snapshot with the optional data of the skeleton and rendezvous layers."""
-
-    skeleton: np.ndarray | None = None
-    rendezvous: np.ndarray | None = None
-
-
 def test_skeleton_and_rendezvous_drawn_when_present() -> None:
     snap = snapshot()
     skeleton = np.zeros((ROWS, COLS), bool)
     skeleton[5, 12:18] = True
-    a = PlannerAgent(**vars(snap.robots[0]), skeleton=skeleton, rendezvous=np.array([[30, 8]]))
+    a = replace(snap.robots[0], skeleton=skeleton, rendezvous=np.array([[30, 8]]))
     rich = replace(snap, agents=(snap.base, a, snap.robots[1]))
     frame = render(rich, MAP_ONLY + ",skeleton,rendezvous")
     assert pixel(frame, (5, 14)) == STYLE.skeleton

@@ -130,8 +130,19 @@ def plan_context(view: RobotView) -> PlanContext:
     return PlanContext(view)
 
 
-def return_to_base(view: RobotView, context: PlanContext) -> Decision:
-    """Nothing left to explore: head for the base station (as near as it can get) and stay."""
+HOME_TOLERANCE = 1.5  # cells: a done robot this close to its home point stays put
+
+
+def return_to_base(
+    view: RobotView, context: PlanContext, home: tuple[float, float] | None = None
+) -> Decision:
+    """Nothing left to explore: head for the base station (as near as it can get) and stay.
+
+    ``home`` is where an earlier call found the robot could get; a robot already
+    there stays idle without searching the map again.
+    """
+    if home is not None and np.hypot(*np.subtract(view.position, home)) <= HOME_TOLERANCE:
+        return Decision(goal=home, done=True)
     path = context.path_towards(*view.base_position)
-    goal = tuple(path[-1]) if len(path) else view.position
-    return Decision(path=path, goal=goal, done=True)  # type: ignore[arg-type]
+    goal = (float(path[-1, 0]), float(path[-1, 1])) if len(path) else view.position
+    return Decision(path=path, goal=goal, done=True)

@@ -105,20 +105,25 @@ class FrontierExploration:
         self.params = params
         self._ignored: np.ndarray | None = None
         self._chasing: np.ndarray | None = None
+        self._home: tuple[float, float] | None = None
 
     def decide(self, view: RobotView) -> Decision:
         """Pick the frontier this robot wins in the auction and plan a path to it."""
         context = plan_context(view)
         frontiers = self._frontiers(view)
         reach = self.params.reach or view.clearance + 2.0
-        for field in context.fields_growing(self.params.horizon * view.sensor_range):
+        fields = context.fields_growing(self.params.horizon * view.sensor_range)
+        for field in fields if len(frontiers) else ():
             targets, costs = frontier_targets(frontiers, field, context.passable, reach)
             candidates = self._candidates(frontiers, costs)
             if len(candidates):
                 break
         else:
             self._chasing = None
-            return return_to_base(view, context)
+            decision = return_to_base(view, context, self._home)
+            self._home = decision.goal
+            return decision
+        self._home = None
         chosen = self._auction(view, context, frontiers, targets, costs, candidates)
         self._chasing = frontiers.cells_rc[frontiers.cluster_of == chosen]
         row, col = (int(v) for v in targets[chosen])
