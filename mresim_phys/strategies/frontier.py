@@ -112,10 +112,11 @@ class FrontierExploration:
         context = plan_context(view)
         frontiers = self._frontiers(view)
         reach = self.params.reach or view.clearance + 2.0
+        fresh = self._fresh(frontiers)
         fields = context.fields_growing(self.params.horizon * view.sensor_range)
-        for field in fields if len(frontiers) else ():
+        for field in fields if fresh.any() else ():
             targets, costs = frontier_targets(frontiers, field, context.passable, reach)
-            candidates = self._candidates(frontiers, costs)
+            candidates = self._candidates(frontiers, fresh, costs)
             if len(candidates):
                 break
         else:
@@ -142,8 +143,8 @@ class FrontierExploration:
             self._ignored[self._chasing[:, 0], self._chasing[:, 1]] = True
         return find_frontiers(view.belief, self.params.min_frontier_size)
 
-    def _candidates(self, frontiers: Frontiers, costs: np.ndarray) -> np.ndarray:
-        """Indices of the best reachable, not-given-up frontiers, best first."""
+    def _fresh(self, frontiers: Frontiers) -> np.ndarray:
+        """Clusters this robot has not given up on (at most half their cells given up)."""
         assert self._ignored is not None
         cells = frontiers.cells_rc
         ignored = np.bincount(
@@ -151,7 +152,12 @@ class FrontierExploration:
             weights=self._ignored[cells[:, 0], cells[:, 1]],
             minlength=len(frontiers),
         )
-        fresh = ignored * 2 < frontiers.sizes
+        return ignored * 2 < frontiers.sizes
+
+    def _candidates(
+        self, frontiers: Frontiers, fresh: np.ndarray, costs: np.ndarray
+    ) -> np.ndarray:
+        """Indices of the best reachable, not-given-up frontiers, best first."""
         u = utility(frontiers.sizes.astype(float), costs)
         order = np.argsort(-u, kind="stable")
         keep = order[np.isfinite(u[order]) & fresh[order]]
