@@ -2,26 +2,32 @@
 
 from __future__ import annotations
 
+from collections.abc import Iterator
+
 import numpy as np
+import shapely
+from scipy import ndimage
 
 from mresim_phys.agents import empty_belief
-from mresim_phys.mapping import Coverage, integrate_scan, merge_into
+from mresim_phys.mapping import NEAR_ROBOT, Coverage, integrate_scan, merge_into
 from mresim_phys.scenario import SensorSpec
 from mresim_phys.sensing import scan
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
-from mresim_phys.world import World
+from mresim_phys.world import Scan, World
 
 
 def scanned_belief(
-    truth: np.ndarray, poses: list[tuple[float, float, float]], rng_range: float = 60
+    truth: np.ndarray,
+    poses: list[tuple[float, float, float]],
+    rng_range: float = 60,
+    fov_deg: float = 180.0,
 ):
     world = World(truth, [])
     belief, safe = empty_belief(truth.shape)
     updates = []
+    sensor = SensorSpec(range=rng_range, fov_deg=fov_deg, rays=360 if fov_deg == 360 else 181)
     for x, y, heading in poses:
-        result = scan(
-            world, (x, y), heading, SensorSpec(range=rng_range), world.query_filter(None, False)
-        )
+        result = scan(world, (x, y), heading, sensor, world.query_filter(None, False))
         updates.append(integrate_scan(belief, safe, result, 0.1))
     return belief, safe, updates
 
@@ -81,3 +87,100 @@ def test_coverage_counts_each_reachable_cell_once_and_never_decreases(rooms: np.
     assert fractions == sorted(fractions) and fractions[0] == fractions[1]
     assert coverage.count == np.count_nonzero(coverage.known)
     assert coverage.count <= np.count_nonzero(belief != UNKNOWN)
+
+
+def random_scans(truth: np.ndarray, count: int, seed: int) -> Iterator[Scan]:
+    """Noise-free scans from random free poses (3x3 free around the robot), 1 degree apart."""
+    world = World(truth, [])
+    rng = np.random.default_rng(seed)
+    rows, cols = np.nonzero(~truth)
+    while count > 0:
+        i = rng.integers(len(rows))
+        x, y = cols[i] + rng.random(), rows[i] + rng.random()
+        if truth[max(int(y) - 1, 0) : int(y) + 2, max(int(x) - 1, 0) : int(x) + 2].any():
+            continue
+        fov = float(rng.choice([60.0, 180.0, 270.0, 360.0]))
+        rays = 360 if fov == 360.0 else int(fov) + 1
+        sensor = SensorSpec(range=float(rng.uniform(8, 90)), fov_deg=fov, rays=rays)
+        heading = float(rng.uniform(-np.pi, np.pi))
+        yield scan(world, (x, y), heading, sensor, world.query_filter(None, False))
+        count -= 1
+
+
+def test_free_cells_are_the_cell_centres_inside_the_scan_polygon(rooms: np.ndarray) -> None:
+    """The kernel's fill against shapely: it differs only on the polygon boundary.
+
+    Cells near the robot are always free; cells on a chord between two ray ends
+    farther than the nearer end are left out (the boundary rule). Everything else
+    agrees with ``shapely.contains_xy`` on the cell centres.
+    """
+    agree = cells = 0
+    for result in random_scans(rooms, 150, seed=7):
+        belief, safe = empty_belief(rooms.shape)
+        update = integrate_scan(belief, safe, result, 0.1)
+        assert update is not None
+        assert update.free.view(np.uint8).max() <= 1
+        h, w = update.free.shape
+        xs, ys = np.meshgrid(np.arange(w) + update.col0 + 0.5, np.arange(h) + update.row0 + 0.5)
+        full_circle = len(result.angles) == 360  # no origin vertex: the fan closes
+        origin = np.asarray(result.origin)[None, :]
+        polygon = shapely.Polygon(result.ends if full_circle else np.vstack((origin, result.ends)))
+        inside = shapely.contains_xy(polygon, xs, ys)
+        near_robot = np.hypot(xs - result.origin[0], ys - result.origin[1]) <= NEAR_ROBOT
+        extra = update.free & ~inside
+        assert np.all(near_robot[extra])
+        left_out = inside & ~update.free
+        boundary = shapely.distance(polygon.exterior, shapely.points(xs[left_out], ys[left_out]))
+        assert np.all(boundary <= 0.5 + 1e-9)
+        assert np.count_nonzero(inside != update.free) <= 0.02 * h * w + 4
+        agree += np.count_nonzero(inside == update.free)
+        cells += h * w
+        window = belief[update.row0 : update.row0 + h, update.col0 : update.col0 + w]
+        assert np.all(window[update.free] != UNKNOWN)  # FREE, or OCCUPIED by a hit
+    assert agree / cells >= 0.995
+
+
+def test_noise_free_scans_mark_only_true_walls_occupied(rooms: np.ndarray) -> None:
+    reachable = ndimage.label(~rooms)[0] == ndimage.label(~rooms)[0][30, 20]
+    belief, safe = empty_belief(rooms.shape)
+    for result in random_scans(rooms, 150, seed=11):
+        integrate_scan(belief, safe, result, 0.1)
+        hit = result.on_wall
+        cells = np.floor(result.ends[hit] + 1e-3 * result.dirs[hit]).astype(int)
+        assert np.all(rooms[cells[:, 1], cells[:, 0]])  # every hit cell is a true wall cell
+        assert np.all(belief[cells[:, 1], cells[:, 0]] == OCCUPIED)
+    assert np.all(rooms[belief == OCCUPIED])
+    assert not np.any(reachable & (belief == OCCUPIED))
+    assert np.count_nonzero(rooms & (belief == FREE)) < 0.005 * np.count_nonzero(belief == FREE)
+    assert np.all(belief[safe] == FREE)
+
+
+def test_a_full_circle_scan_leaves_no_gap_behind_the_robot() -> None:
+    box = np.zeros((60, 60), dtype=bool)
+    box[:2, :] = box[-2:, :] = box[:, :2] = box[:, -2:] = True
+    belief, _, _ = scanned_belief(box, [(30.5, 30.5, 0.3)], rng_range=20.0, fov_deg=360.0)
+    rows, cols = np.mgrid[:60, :60]
+    within = np.hypot(cols + 0.5 - 30.5, rows + 0.5 - 30.5) <= 19.0
+    assert np.all(belief[within] == FREE)
+
+
+def test_known_obstacles_stay_occupied_and_are_never_safe(rooms: np.ndarray) -> None:
+    belief, safe = empty_belief(rooms.shape)
+    belief[28:33, 22:24] = OCCUPIED  # a stale obstacle right in front of the robot
+    world = World(rooms, [])
+    result = scan(world, (20.5, 30.5), 0.0, SensorSpec(range=60), world.query_filter(None, False))
+    update = integrate_scan(belief, safe, result, 0.1)
+    assert update is not None and update.free[28 - update.row0, 22 - update.col0]
+    assert np.all(belief[28:33, 22:24] == OCCUPIED)
+    assert not safe[28:33, 22:24].any() and safe.any()
+
+
+def test_degenerate_scans_do_not_break_the_update() -> None:
+    angles = np.linspace(-np.pi / 2, np.pi / 2, 181)
+    belief, safe = empty_belief((40, 40))
+    zero = Scan((20.5, 20.5), angles, np.zeros(181), np.zeros((181, 2)), np.zeros(181, bool), 30.0)
+    update = integrate_scan(belief, safe, zero, 0.1)
+    assert update is not None and belief[20, 20] == FREE  # the robot's own cell
+    assert np.count_nonzero(belief == FREE) <= 5
+    off_grid = Scan((-50.0, -50.0), angles, np.full(181, 5.0), zero.normals, zero.wall_hit, 5.0)
+    assert integrate_scan(belief, safe, off_grid, 0.1) is None
