@@ -8,7 +8,9 @@ Prints the median of 7 runs (``time.perf_counter``, wall clock) for each kernel 
 
 Fully known maps are used for C-space, distance fields and paths (the worst case). For
 frontiers, a 35%-known belief keeps the cells nearest to 10 seed points. For comparison it
-also times ``skimage.graph.MCP_Geometric``, the engine the design notes measured.
+also times ``skimage.graph.MCP_Geometric``, the engine the design notes measured. The first
+line gives the cost of the first search in a process: the numba JIT compile, or loading the
+compiled kernel from the on-disk cache when a previous process compiled it.
 
 Run from the repository root: ``PYTHONPATH=. python benchmarks/bench_planning.py [--skip-big]``
 (or without ``PYTHONPATH`` once the package is installed).
@@ -163,11 +165,19 @@ def bench_map(name: str, occ: BoolGrid, *, mcp: bool) -> None:
         print(f"  {label:<52} {median_ms(fn):9.2f} ms")
 
 
+def first_search_ms() -> float:
+    """Wall time of this process's first ``distance_field`` call (JIT compile or cache load)."""
+    t0 = time.perf_counter()
+    distance_field(np.ones((3, 3), dtype=bool), (1.5, 1.5))
+    return 1e3 * (time.perf_counter() - t0)
+
+
 def main() -> None:
     """Run the benchmark on every map."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--skip-big", action="store_true", help="skip the 2000x2000 maze")
     args = parser.parse_args()
+    print(f"first search in this process (numba compile or cache load): {first_search_ms():.0f} ms")
     print(f"median of {REPEATS} runs, clearance {CLEARANCE}, cv2 threads {cv2.getNumThreads()}")
     bench_map("maze800", make_maze(800, 600, pitch=25, wall=3), mcp=True)
     bench_map("open800", make_open(800, 600), mcp=True)
