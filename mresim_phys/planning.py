@@ -20,12 +20,13 @@ flat int32 predecessors straight into the ``DistanceField`` arrays. Searches are
 the bounding box of passable cells, and with ``limit`` to a window of that radius. Against
 the ``scipy.sparse.csgraph`` engine it replaced (a CSR graph built for every window, then
 ``csgraph.dijkstra``), medians on a shared 2-core machine: 6.4 vs 8.8 ms per search (1.4x)
-in the 8-robot ``mresim bench`` run (windows of ~40k cells), 3.9 vs 17.6 ms on a 35%-known
-800x600 maze (4.5x), 64 vs 81 ms on the fully known one and no gain on a fully known open
-map (~75 ms; ``skimage.graph.MCP_Geometric`` takes 110-150 ms and cuts corners). That
-factor is what numba (~210 MB with llvmlite) is installed for. The first search in a process
-compiles the kernel (~1.4 s), or loads it from the on-disk cache (~0.2 s). Transient memory
-is ~13 bytes per window cell plus the heap. The kernel releases the GIL; csgraph held it.
+in the 8-robot ``mresim bench`` run (windows of ~40k cells; planning 27 vs 37 ms per step),
+4.0 vs 18 ms on a 35%-known 800x600 maze (4.5x), 60 vs 83 ms on the fully known one, and no
+gain on a fully known open map (~77 ms; ``skimage.graph.MCP_Geometric`` takes 110-150 ms
+and cuts corners). That factor is what numba (~210 MB with llvmlite) is installed for. The
+first search in a process compiles the kernel (~1.4 s), or loads it from the on-disk cache
+(~0.2 s). Transient memory is ~13 bytes per window cell plus the heap. The kernel releases
+the GIL; csgraph held it.
 """
 
 from __future__ import annotations
