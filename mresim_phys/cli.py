@@ -232,8 +232,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     handler = COMMANDS[args.command]
     try:
         return handler(args)
-    except (MresimError, OSError) as exc:
+    except MresimError as exc:
         print(f"mresim: error: {exc}", file=sys.stderr)
+        return EXIT_USER_ERROR
+    except OSError as exc:
+        print(
+            f"mresim: error: cannot use {exc.filename or 'a file'}: {exc.strerror or exc}."
+            " Check that the folder exists or can be created and that you may write there.",
+            file=sys.stderr,
+        )
         return EXIT_USER_ERROR
 
 
