@@ -15,6 +15,11 @@ from pydantic import BaseModel, ConfigDict, Field, field_validator, model_valida
 Point = tuple[float, float]
 
 
+def shorthand(key: str, value: Any) -> Any:
+    """A bare string ``x`` stands for ``{key: x}`` (``strategy: frontier``, ``model: disk``)."""
+    return {key: value} if isinstance(value, str) else value
+
+
 class Strict(BaseModel):
     """Base for every scenario model: unknown keys are errors, values are immutable."""
 
@@ -66,7 +71,7 @@ class PluginSpec(Strict):
     @model_validator(mode="before")
     @classmethod
     def _from_name(cls, value: Any) -> Any:
-        return {"name": value} if isinstance(value, str) else value
+        return shorthand("name", value)
 
 
 class CommSpec(Strict):
@@ -80,7 +85,7 @@ class CommSpec(Strict):
     @model_validator(mode="before")
     @classmethod
     def _from_name(cls, value: Any) -> Any:
-        return {"model": value} if isinstance(value, str) else value
+        return shorthand("model", value)
 
 
 class SensorSpec(Strict):

@@ -25,21 +25,3 @@ BoolGrid = NDArray[np.bool_]
 BeliefGrid = NDArray[np.uint8]
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
-
-
-def cell_of(x: float, y: float) -> tuple[int, int]:
-    """Return the (row, col) of the cell containing world point (x, y).
-
-    >>> cell_of(3.7, 1.2)
-    (1, 3)
-    """
-    return int(np.floor(y)), int(np.floor(x))
-
-
-def centre_of(row: int, col: int) -> tuple[float, float]:
-    """Return the world (x, y) of the centre of cell (row, col).
-
-    >>> centre_of(1, 3)
-    (3.5, 1.5)
-    """
-    return col + 0.5, row + 0.5

@@ -32,6 +32,9 @@ from .types import BoolGrid, FloatArray
 WALL_CATEGORY = 0b01
 ROBOT_CATEGORY = 0b10
 ALL_BITS = 0xFFFFFFFF
+
+Point = tuple[float, float]
+QueryFilter = tuple[int, int, int]  # Chipmunk shape filter: (group, categories, mask)
 SHUFFLE_SEED = 0x5EED  # fixed: segment insertion order is part of the world, not of the run
 
 
@@ -116,7 +119,7 @@ class World:
             body.position = position
             self.space.reindex_shapes_for_body(body)
 
-    def query_filter(self, robot_index: int | None, robots_block: bool) -> tuple[int, int, int]:
+    def query_filter(self, robot_index: int | None, robots_block: bool) -> QueryFilter:
         """The Chipmunk filter for queries by ``robot_index``: walls, plus other robots."""
         mask = WALL_CATEGORY | (ROBOT_CATEGORY if robots_block else 0)
         group = 0 if robot_index is None else robot_index + 1
@@ -124,10 +127,10 @@ class World:
 
     def first_hit(
         self,
-        start: tuple[float, float],
-        end: tuple[float, float],
+        start: Point,
+        end: Point,
         radius: float,
-        shape_filter: tuple[int, int, int],
+        shape_filter: QueryFilter,
     ) -> Hit | None:
         """The first shape a segment (swept by ``radius``) from ``start`` to ``end`` touches."""
         info, space = self._info, self.space._space  # never keep the cdata beyond the Space
@@ -142,10 +145,10 @@ class World:
 
     def cast_rays(
         self,
-        origin: tuple[float, float],
+        origin: Point,
         angles: FloatArray,
         max_range: float,
-        shape_filter: tuple[int, int, int],
+        shape_filter: QueryFilter,
     ) -> Scan:
         """Cast one ray per angle from ``origin``; exact distance to the first hit."""
         ox, oy = origin
@@ -179,10 +182,10 @@ class World:
 
     def blocked(
         self,
-        start: tuple[float, float],
-        end: tuple[float, float],
+        start: Point,
+        end: Point,
         radius: float,
-        shape_filter: tuple[int, int, int],
+        shape_filter: QueryFilter,
     ) -> Hit | None:
         """The obstacle a circle of ``radius`` moving from ``start`` to ``end`` would hit.
 

@@ -17,6 +17,7 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import connected_components
 
 from ..agents import Agent, TeammateInfo
+from ..mapping import merge_into
 
 
 def linked_groups(links: np.ndarray) -> list[list[int]]:
@@ -41,7 +42,7 @@ def share_group(agents: Sequence[Agent], step: int) -> None:
     """Give every agent of a linked group the union of the group's knowledge."""
     belief, safe = agents[0].belief.copy(), agents[0].safe.copy()
     for agent in agents[1:]:
-        np.maximum(belief, agent.belief, out=belief)
+        merge_into(belief, agent.belief)
         safe |= agent.safe
     records = newest_records(agents, step)
     for agent in agents:
@@ -57,7 +58,7 @@ def share_direct(agents: Sequence[Agent], links: np.ndarray, step: int) -> None:
     records = {i: newest_records([agents[i]], step) for i in linked}
     for i in linked:
         for j in np.flatnonzero(links[i]):
-            np.maximum(agents[i].belief, before[j][0], out=agents[i].belief)
+            merge_into(agents[i].belief, before[j][0])
             agents[i].safe |= before[j][1]
             for name, record in records[j].items():
                 held = agents[i].teammates.get(name)

@@ -154,9 +154,7 @@ class FrontierExploration:
         )
         return ignored * 2 < frontiers.sizes
 
-    def _candidates(
-        self, frontiers: Frontiers, fresh: np.ndarray, costs: np.ndarray
-    ) -> np.ndarray:
+    def _candidates(self, frontiers: Frontiers, fresh: np.ndarray, costs: np.ndarray) -> np.ndarray:
         """Indices of the best reachable, not-given-up frontiers, best first."""
         u = utility(frontiers.sizes.astype(float), costs)
         order = np.argsort(-u, kind="stable")
