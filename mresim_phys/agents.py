@@ -14,6 +14,7 @@ from typing import Literal
 
 import numpy as np
 
+from .planners import Planner
 from .scenario import RobotSpec
 from .strategies.base import Decision, Strategy
 from .types import UNKNOWN, BeliefGrid, BoolGrid, FloatArray
@@ -74,6 +75,7 @@ class Robot(Agent):
 
     spec: RobotSpec | None = None
     strategy: Strategy | None = None
+    planner: Planner | None = None
     heading: float = 0.0
     path: FloatArray = field(default_factory=lambda: np.zeros((0, 2)))
     goal: tuple[float, float] | None = None

@@ -2,8 +2,8 @@
 
 The only module that reads the schema and builds runtime objects: it loads the
 ground-truth map, builds the pymunk world, checks every robot's start against
-it, creates the agents with their strategies and random streams, and the comm
-model. Everything downstream takes these objects, never the Scenario.
+it, creates the agents with their strategies, planners and random streams, and
+the comm model. Everything downstream takes these objects, never the Scenario.
 """
 
 from __future__ import annotations
@@ -19,6 +19,7 @@ from .errors import ScenarioError
 from .io import LoadedMap, load_image_map, load_ros_map, load_text_map
 from .mapping import Coverage
 from .maps import free_components_mask
+from .planners import PLANNERS, Planner
 from .rng import named_stream
 from .scenario import MapSpec, RobotSpec, Scenario
 from .strategies import STRATEGIES, Strategy
@@ -82,9 +83,10 @@ def check_base(world: World, scenario: Scenario) -> None:
 
 
 def make_robot(spec: RobotSpec, index: int, seed: int, shape: tuple[int, int]) -> Robot:
-    """A robot with an all-unknown map, its strategy and its own random stream."""
+    """A robot with an all-unknown map, its strategy, its planner and its own random stream."""
     belief, safe = empty_belief(shape)
     strategy: Strategy = make_plugin(STRATEGIES, spec.strategy.name, spec.strategy.params)
+    planner: Planner = make_plugin(PLANNERS, spec.planner.name, spec.planner.params)
     return Robot(
         name=spec.name,
         index=index,
@@ -95,6 +97,7 @@ def make_robot(spec: RobotSpec, index: int, seed: int, shape: tuple[int, int]) -
         role=spec.role,
         spec=spec,
         strategy=strategy,
+        planner=planner,
         heading=math.radians(spec.heading_deg),
         rng=named_stream(seed, "strategy", index),
     )

@@ -11,16 +11,19 @@ from __future__ import annotations
 
 import difflib
 from pathlib import Path
-from typing import Any, get_args
+from typing import Any, TypeVar, get_args
 
 from pydantic import BaseModel, ValidationError
 
 from .comms import COMM_MODELS
 from .errors import ScenarioError, UnknownPluginError
 from .io import read_yaml_mapping
+from .planners import PLANNERS
 from .registry import Registry
-from .scenario import PluginSpec, Scenario
+from .scenario import PluginSpec, RobotParams, Scenario
 from .strategies import STRATEGIES
+
+RobotT = TypeVar("RobotT", bound=RobotParams)
 
 
 def load_scenario(path: str | Path, **overrides: Any) -> Scenario:
@@ -43,14 +46,9 @@ def validate_scenario(data: dict[str, Any], source: str = "<scenario>") -> Scena
     except ValidationError as exc:
         raise ScenarioError(describe_errors(source, exc)) from None
     check_event_robots(scenario, source)
-    team = scenario.team.model_copy(
-        update={"strategy": resolve_strategy(scenario.team.strategy, source, "team.strategy")}
-    )
+    team = resolve_robot_plugins(scenario.team, source, "team")
     robots = [
-        r.model_copy(
-            update={"strategy": resolve_strategy(r.strategy, source, f"robots[{i}].strategy")}
-        )
-        for i, r in enumerate(scenario.robots)
+        resolve_robot_plugins(r, source, f"robots[{i}]") for i, r in enumerate(scenario.robots)
     ]
     comm = scenario.communication
     params = resolve_params(COMM_MODELS, comm.model, comm.params, source, "communication.model")
@@ -71,9 +69,23 @@ def check_event_robots(scenario: Scenario, source: str) -> None:
             )
 
 
-def resolve_strategy(spec: PluginSpec, source: str, where: str) -> PluginSpec:
-    """A strategy spec with its params validated and every default filled in."""
-    params = resolve_params(STRATEGIES, spec.name, spec.params, source, f"{where}.name")
+ROBOT_PLUGINS: dict[str, Registry[Any]] = {"strategy": STRATEGIES, "planner": PLANNERS}
+
+
+def resolve_robot_plugins(robot: RobotT, source: str, where: str) -> RobotT:
+    """A robot (or the team) with each plugin spec's params validated and filled in."""
+    update = {
+        key: resolve_plugin(registry, getattr(robot, key), source, f"{where}.{key}")
+        for key, registry in ROBOT_PLUGINS.items()
+    }
+    return robot.model_copy(update=update)
+
+
+def resolve_plugin(
+    registry: Registry[Any], spec: PluginSpec, source: str, where: str
+) -> PluginSpec:
+    """A plugin spec with its params validated and every default filled in."""
+    params = resolve_params(registry, spec.name, spec.params, source, f"{where}.name")
     return spec.model_copy(update={"params": params})
 
 
@@ -90,7 +102,7 @@ def resolve_params(
         raise ScenarioError(
             f"{source}: {where}: {name!r} is not a usable {registry.kind}: its class needs a"
             " 'Params' attribute that is a pydantic model of its parameters (subclass"
-            " StrategyParams or CommParams); see docs/writing-a-strategy.md."
+            " StrategyParams, PlannerParams or CommParams); see docs/writing-a-strategy.md."
         )
     prefix = where.rsplit(".", 1)[0] + ".params"
     try:

@@ -72,7 +72,7 @@ def _clearance_kernel(clearance: float) -> NDArray[np.uint8]:
     return (gap[:, None] ** 2 + gap[None, :] ** 2 < clearance**2).astype(np.uint8)
 
 
-def _bbox(mask: BoolGrid) -> Box | None:
+def bbox(mask: BoolGrid) -> Box | None:
     """Half-open bounding box (row0, row1, col0, col1) of the True cells, None if none."""
     rows = np.flatnonzero(mask.any(axis=1))
     if rows.size == 0:
@@ -111,7 +111,7 @@ def traversable(belief: BeliefGrid, clearance: float) -> BoolGrid:
         Boolean grid of the same shape, True where the robot centre may be.
     """
     free = belief == FREE
-    box = _bbox(free)
+    box = bbox(free)
     if box is None or clearance <= 0.0:
         return free
     kernel = _clearance_kernel(float(clearance))
@@ -338,7 +338,7 @@ def distance_field(
         The ``DistanceField`` of the start.
     """
     start = snap_to_passable(passable, start_xy, max_snap)
-    box = _bbox(passable)
+    box = bbox(passable)
     if start is None or box is None:
         return DistanceField((int(passable.shape[0]), int(passable.shape[1])), None)
     return _field_in(passable, start, _window(start, box, limit), limit)
@@ -363,7 +363,7 @@ def plan_path(
     """
     start = snap_to_passable(passable, start_xy, max_snap)
     goal = int(np.floor(goal_xy[1])), int(np.floor(goal_xy[0]))
-    box = _bbox(passable)
+    box = bbox(passable)
     rows, cols = passable.shape
     if start is None or box is None or not (0 <= goal[0] < rows and 0 <= goal[1] < cols):
         return np.empty((0, 2))

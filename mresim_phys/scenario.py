@@ -115,6 +115,10 @@ class RobotParams(Strict):
     wall_margin: float = Field(
         1.0, ge=0, description="Extra clearance (cells) the planner keeps from known walls."
     )
+    planner: PluginSpec = Field(
+        default_factory=lambda: PluginSpec(name="astar"),
+        description="Path planner (astar, jps or topological): a name or {name, params}.",
+    )
 
 
 class RobotSpec(RobotParams):

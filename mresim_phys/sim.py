@@ -185,6 +185,7 @@ class Simulation:
             rng=robot.rng,
             bumped=robot.status == "error",
             reached_goal=robot.reached_goal,
+            planner=robot.planner,
         )
 
     def communicate(self) -> None:

@@ -18,6 +18,7 @@ sys.path.insert(0, str(ROOT))
 
 from mresim_phys import COMM_MODELS, STRATEGIES  # noqa: E402
 from mresim_phys import scenario as schema  # noqa: E402
+from mresim_phys.planners import PLANNERS  # noqa: E402
 
 SECTIONS: list[tuple[str, type[BaseModel]]] = [
     ("Scenario (top level)", schema.Scenario),
@@ -27,7 +28,7 @@ SECTIONS: list[tuple[str, type[BaseModel]]] = [
     ("robots[i] (adds to the team fields)", schema.RobotSpec),
     ("sensor", schema.SensorSpec),
     ("communication", schema.CommSpec),
-    ("strategy", schema.PluginSpec),
+    ("strategy and planner", schema.PluginSpec),
     ("stop", schema.StopSpec),
     ("simulation", schema.SimulationSpec),
     ("render", schema.RenderSpec),
@@ -82,7 +83,12 @@ def render() -> str:
     ]
     for title, model in SECTIONS:
         lines += [f"## {title}", "", *table(model, own_only=model is schema.RobotSpec), ""]
-    for kind, registry in (("Strategies", STRATEGIES), ("Communication models", COMM_MODELS)):
+    registries = (
+        ("Strategies", STRATEGIES),
+        ("Planners", PLANNERS),
+        ("Communication models", COMM_MODELS),
+    )
+    for kind, registry in registries:
         lines += [f"## {kind}", ""]
         for name in registry.names():
             cls = registry.get(name)

@@ -7,7 +7,8 @@ sees the true map. It returns a :class:`Decision`: a path of world points to
 follow, the goal it is heading for, and whether it has nothing left to explore.
 
 :func:`plan_context` gives a strategy the configuration space and one distance
-field from the robot, computed once per decision.
+field from the robot, computed once per decision, and plans the path to a chosen
+goal with the robot's own planner (``RobotView.planner``).
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ from typing import TYPE_CHECKING, Any, ClassVar, Protocol, runtime_checkable
 import numpy as np
 from pydantic import BaseModel, ConfigDict
 
+from ..planners import Planner
 from ..planning import DistanceField, distance_field, traversable
 from ..registry import Registry
 from ..types import BeliefGrid, FloatArray
@@ -55,6 +57,7 @@ class RobotView:
     rng: np.random.Generator
     bumped: bool = False
     reached_goal: bool = False
+    planner: Planner | None = None  # the robot's path planner (None: distance-field paths)
 
 
 @dataclass(frozen=True)
@@ -85,7 +88,11 @@ STRATEGIES: Registry[Strategy] = Registry("strategy", "mresim_phys.strategies")
 
 
 class PlanContext:
-    """Configuration space and distance field of one robot, computed lazily once."""
+    """Configuration space and distance field of one robot, computed lazily once.
+
+    Distance fields answer "how far is everything" (utilities, costs); ``plan_to``
+    gives the path the robot follows to the goal it chose, from its planner.
+    """
 
     def __init__(self, view: RobotView) -> None:
         self.view = view
@@ -114,6 +121,22 @@ class PlanContext:
             limit *= 2
         yield self.field
 
+    def plan_to(self, row: int, col: int) -> FloatArray:
+        """The path the robot follows to cell (row, col): from its planner, if it has one.
+
+        Without a planner the path is the distance field's (the same length as ``astar``).
+        Empty (0, 2) if the cell cannot be reached.
+        """
+        planner = self.view.planner
+        if planner is None:
+            return self.field.path_to(row, col)
+        return planner.plan(self.passable, self.view.position, (row, col))
+
+    def planner_info(self) -> dict[str, Any]:
+        """What the robot's planner adds to a decision's ``info`` (e.g. its ``skeleton``)."""
+        planner = self.view.planner
+        return dict(planner.info()) if planner is not None else {}
+
     def path_towards(self, x: float, y: float) -> FloatArray:
         """Path to the reachable cell nearest (straight-line) to world point (x, y)."""
         costs = self.field.costs
@@ -122,7 +145,7 @@ class PlanContext:
             return np.zeros((0, 2))
         d2 = (cols + 0.5 - x) ** 2 + (rows + 0.5 - y) ** 2
         best = int(np.lexsort((costs[rows, cols], d2))[0])
-        return self.field.path_to(int(rows[best]), int(cols[best]))
+        return self.plan_to(int(rows[best]), int(cols[best]))
 
 
 def plan_context(view: RobotView) -> PlanContext:
@@ -145,4 +168,4 @@ def return_to_base(
         return Decision(goal=home, done=True)
     path = context.path_towards(*view.base_position)
     goal = (float(path[-1, 0]), float(path[-1, 1])) if len(path) else view.position
-    return Decision(path=path, goal=goal, done=True)
+    return Decision(path=path, goal=goal, done=True, info=context.planner_info())

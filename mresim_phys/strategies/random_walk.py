@@ -31,11 +31,15 @@ class RandomWalk:
 
     def decide(self, view: RobotView) -> Decision:
         """A path to a random cell reachable within ``distance``."""
-        field = plan_context(view).field
-        costs = field.costs
+        context = plan_context(view)
+        costs = context.field.costs
         rows, cols = np.nonzero(np.isfinite(costs) & (costs <= self.params.distance))
         if len(rows) == 0:
             return Decision()
         pick = int(view.rng.integers(len(rows)))
         row, col = int(rows[pick]), int(cols[pick])
-        return Decision(path=field.path_to(row, col), goal=(col + 0.5, row + 0.5))
+        return Decision(
+            path=context.plan_to(row, col),
+            goal=(col + 0.5, row + 0.5),
+            info=context.planner_info(),
+        )

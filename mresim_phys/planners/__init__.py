@@ -1,0 +1,17 @@
+"""Path planners (phase 4b): a plugin family keyed by the YAML name.
+
+``team: {planner: astar | jps | topological}`` (or per robot) picks how a robot finds
+the path it follows to the goal its strategy chose. Built-ins register themselves on
+import; third-party planners register through the ``mresim_phys.planners`` entry-point
+group or are named as ``package.module:ClassName``. See docs/planning.md.
+"""
+
+from __future__ import annotations
+
+from . import astar
+from .base import PLANNERS, Planner, PlannerParams
+
+BUILT_IN = ("astar",)
+assert {astar.AStar.name} == set(BUILT_IN)
+
+__all__ = ["BUILT_IN", "PLANNERS", "Planner", "PlannerParams"]
