@@ -15,12 +15,20 @@ from typing import Any, TypeVar, get_args
 
 from pydantic import BaseModel, ValidationError
 
+from .agents import BASE_NAME
 from .comms import COMM_MODELS
 from .errors import ScenarioError, UnknownPluginError
 from .io import read_yaml_mapping
 from .planners import PLANNERS
 from .registry import Registry
-from .scenario import PluginSpec, RobotParams, Scenario
+from .scenario import (
+    BlackoutEvent,
+    CommSpec,
+    FailEvent,
+    PluginSpec,
+    RobotParams,
+    Scenario,
+)
 from .strategies import STRATEGIES
 
 RobotT = TypeVar("RobotT", bound=RobotParams)
@@ -50,23 +58,40 @@ def validate_scenario(data: dict[str, Any], source: str = "<scenario>") -> Scena
     robots = [
         resolve_robot_plugins(r, source, f"robots[{i}]") for i, r in enumerate(scenario.robots)
     ]
-    comm = scenario.communication
-    params = resolve_params(COMM_MODELS, comm.model, comm.params, source, "communication.model")
-    comm = comm.model_copy(update={"params": params})
+    comm = resolve_comm(scenario.communication, source)
     return scenario.model_copy(update={"robots": robots, "team": team, "communication": comm})
 
 
 def check_event_robots(scenario: Scenario, source: str) -> None:
-    """Every event must name a robot of the team."""
+    """Every event must name robots of the team (a blackout may also name the base)."""
     names = [r.name for r in scenario.robots]
     for i, event in enumerate(scenario.events):
-        if event.fail not in names:
-            close = difflib.get_close_matches(event.fail, names, n=1)
-            hint = f" Did you mean {close[0]!r}?" if close else ""
-            raise ScenarioError(
-                f"{source}: events[{i}].fail: no robot is called {event.fail!r}.{hint}"
-                f" The robots are {names}."
-            )
+        if isinstance(event, BlackoutEvent):
+            for k, name in enumerate(event.blackout):
+                check_agent_name(name, [BASE_NAME, *names], source, f"events[{i}].blackout[{k}]")
+        else:
+            check_agent_name(event.fail, names, source, f"events[{i}].fail")
+
+
+def check_agent_name(name: str, names: list[str], source: str, where: str) -> None:
+    """``name`` must be one of ``names``; the error suggests the closest."""
+    if name not in names:
+        close = difflib.get_close_matches(name, names, n=1)
+        hint = f" Did you mean {close[0]!r}?" if close else ""
+        raise ScenarioError(
+            f"{source}: {where}: no robot is called {name!r}.{hint} The robots are {names}."
+        )
+
+
+def resolve_comm(comm: CommSpec, source: str) -> CommSpec:
+    """The communication spec with the main and control models' params validated."""
+    params = resolve_params(COMM_MODELS, comm.model, comm.params, source, "communication.model")
+    control = comm.control
+    if control is not None:
+        where = "communication.control.model"
+        control_params = resolve_params(COMM_MODELS, control.model, control.params, source, where)
+        control = control.model_copy(update={"params": control_params})
+    return comm.model_copy(update={"params": params, "control": control})
 
 
 ROBOT_PLUGINS: dict[str, Registry[Any]] = {"strategy": STRATEGIES, "planner": PLANNERS}
@@ -141,10 +166,13 @@ def describe_errors(
 
 def describe_error(error: Any, prefix: str, keys: list[str] | None = None) -> str:
     """One validation error as ``field.path: message``, with a hint for unknown keys."""
-    path = field_path((*([prefix] if prefix else []), *error["loc"]))
+    loc, event_model = untagged(tuple(error["loc"]))
+    path = field_path((*([prefix] if prefix else []), *loc))
     if error["type"] == "extra_forbidden":
-        key = str(error["loc"][-1])
-        valid = keys if keys is not None else keys_at(Scenario, error["loc"][:-1])
+        key = str(loc[-1])
+        if keys is None and event_model is not None:
+            keys = list(event_model.model_fields)
+        valid = keys if keys is not None else keys_at(Scenario, loc[:-1])
         close = difflib.get_close_matches(key, valid, n=1)
         hint = f"; did you mean {close[0]!r}?" if close else "; remove it or check the spelling"
         return f"{path}: unknown key {key!r}{hint}"
@@ -152,6 +180,20 @@ def describe_error(error: Any, prefix: str, keys: list[str] | None = None) -> st
     value = error.get("input")
     shown = error["type"] != "missing" and not isinstance(value, (dict, list))
     return f"{path}: {message}" + (f" (got {value!r})" if shown else "")
+
+
+EVENT_KINDS: dict[str, type[BaseModel]] = {"fail": FailEvent, "blackout": BlackoutEvent}
+
+
+def untagged(loc: tuple[Any, ...]) -> tuple[tuple[Any, ...], type[BaseModel] | None]:
+    """``loc`` without the event-kind tag pydantic inserts, and the event model it names.
+
+    >>> untagged(("events", 0, "blackout", "until"))[0]
+    ('events', 0, 'until')
+    """
+    if len(loc) > 2 and loc[0] == "events" and loc[2] in EVENT_KINDS:
+        return (*loc[:2], *loc[3:]), EVENT_KINDS[loc[2]]
+    return loc, None
 
 
 def field_path(loc: tuple[Any, ...]) -> str:

@@ -3,7 +3,13 @@
 ``explored`` is the fraction of truth-free cells reachable from the robots'
 starts that the team (robots and base together) has marked free;
 ``known_at_base`` the same for the base station's own grid. Both are in [0, 1]
-and never decrease. A :class:`StepRecord` is one row of ``metrics.csv``;
+and never decrease. ``links`` counts linked agent pairs (the base included),
+``comm_bytes`` what the main channel sent this step (maps and teammate records,
+all links), ``control_bytes`` the same for the control channel; the information
+latency at the base is the age of each alive robot's newest report the base
+holds (its max and mean over robots, as the original logs it), and each robot's
+``base_contact`` is the last step its data reached the base (-1: never).
+A :class:`StepRecord` is one row of ``metrics.csv``;
 :class:`Milestones` remembers the first step each fraction crossed 0.5/0.9/0.95.
 """
 
@@ -21,6 +27,7 @@ class RobotRecord:
     name: str
     distance: float
     state: str
+    base_contact: int = -1
 
 
 @dataclass(frozen=True)
@@ -34,6 +41,11 @@ class StepRecord:
     alive: int
     links: int
     robots: tuple[RobotRecord, ...]
+    comm_bytes: int = 0
+    control_links: int = 0
+    control_bytes: int = 0
+    latency_max: float = 0.0
+    latency_mean: float = 0.0
 
     def csv_row(self) -> list[str]:
         """Values in :func:`csv_header` order, floats as exact round-trip text."""
@@ -44,9 +56,15 @@ class StepRecord:
             repr(self.distance),
             str(self.alive),
             str(self.links),
+            str(self.comm_bytes),
+            str(self.control_links),
+            str(self.control_bytes),
+            repr(self.latency_max),
+            repr(self.latency_mean),
         ]
         row += [repr(r.distance) for r in self.robots]
         row += [r.state for r in self.robots]
+        row += [str(r.base_contact) for r in self.robots]
         return row
 
 
@@ -54,9 +72,26 @@ def csv_header(robot_names: list[str]) -> list[str]:
     """Column names of ``metrics.csv``."""
     return (
         ["step", "explored", "known_at_base", "distance", "alive", "links"]
+        + ["comm_bytes", "control_links", "control_bytes", "latency_max", "latency_mean"]
         + [f"distance_{n}" for n in robot_names]
         + [f"state_{n}" for n in robot_names]
+        + [f"base_contact_{n}" for n in robot_names]
     )
+
+
+def base_latency(step: int, heard: dict[str, int], robots: list[str]) -> tuple[float, float]:
+    """(max, mean) age at ``step`` of the newest report the base holds from each robot.
+
+    ``heard`` maps a robot name to the step of its newest report at the base; a
+    robot never heard from counts from step 0.
+
+    >>> base_latency(10, {"A": 8}, ["A", "B"])
+    (10.0, 6.0)
+    """
+    if not robots:
+        return 0.0, 0.0
+    ages = [float(step - heard.get(name, 0)) for name in robots]
+    return max(ages), sum(ages) / len(ages)
 
 
 @dataclass

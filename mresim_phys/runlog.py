@@ -25,7 +25,7 @@ from .errors import MresimError
 from .mapping import Coverage
 from .maps import free_components_mask
 from .metrics import RobotRecord, StepRecord
-from .snapshot import AgentSnapshot, Snapshot, read_only
+from .snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
 from .types import FREE, BoolGrid, IntArray
 
 FORMAT, VERSION = "mresim-runlog", 1
@@ -88,9 +88,32 @@ def agent_line(agent: AgentSnapshot) -> dict[str, Any]:
     pose = {"position": point(agent.position), "heading": float(agent.heading)}
     row = {**pose, "state": agent.state, "role": agent.role, "goal": point(agent.goal)}
     row["distance"] = float(agent.distance)
+    if agent.kind == "robot":
+        row["base_contact"] = int(agent.base_contact)
     if agent.parent is not None:
         row["parent"] = agent.parent
     return row
+
+
+def comm_line(comm: CommSummary) -> dict[str, Any]:
+    """A step's communication summary as JSON (control links as flat indices)."""
+    control = None if comm.control_links is None else np.flatnonzero(comm.control_links).tolist()
+    return {
+        "bytes": int(comm.comm_bytes),
+        "control_links": control,
+        "control_bytes": int(comm.control_bytes),
+        "latency": [float(comm.latency_max), float(comm.latency_mean)],
+    }
+
+
+def comm_summary(line: dict[str, Any] | None, n: int) -> CommSummary:
+    """The CommSummary of a logged step (an empty one for logs written before it existed)."""
+    if line is None:
+        return CommSummary()
+    control = line["control_links"]
+    links = None if control is None else np.isin(np.arange(n * n), control).reshape(n, n)
+    latency_max, latency_mean = line["latency"]
+    return CommSummary(line["bytes"], links, line["control_bytes"], latency_max, latency_mean)
 
 
 def path_keep(prev: np.ndarray, cur: np.ndarray) -> int:
@@ -162,6 +185,7 @@ class RunLogWriter:
                 self._parts[name].append(part)
         line = {"step": snap.step, "events": list(snap.events)}
         line["links"] = np.flatnonzero(snap.links).tolist()
+        line["comm"] = comm_line(snap.comm)
         line["agents"] = [agent_line(a) for a in snap.agents]
         self._lines.append(json.dumps(line, separators=(",", ":")))
         self._last_step = snap.step
@@ -324,7 +348,8 @@ class Replay:
         free = [self.apply(i, chunk, j * n + i) for i in range(n)]
         links = np.isin(np.arange(n * n), line["links"]).reshape(n, n)
         agents = tuple(self.agent(i, row) for i, row in enumerate(line["agents"]))
-        record = self.measure(line["step"], free[1:], links, agents)  # robots: agents 1..n-1
+        comm = comm_summary(line.get("comm"), n)
+        record = self.measure(line["step"], free[1:], links, agents, comm)  # robots: 1..n-1
         snap = Snapshot(
             step=line["step"],
             explored=record.explored,
@@ -335,6 +360,7 @@ class Replay:
             links=links,
             events=tuple(line["events"]),
             resolution=self.log.meta.get("resolution"),
+            comm=comm,
         )
         return snap, record
 
@@ -362,7 +388,12 @@ class Replay:
         return AgentSnapshot(**static, **row, belief=belief, safe=safe, path=self.paths[i])
 
     def measure(
-        self, step: int, free: list[IntArray], links: np.ndarray, agents: tuple[AgentSnapshot, ...]
+        self,
+        step: int,
+        free: list[IntArray],
+        links: np.ndarray,
+        agents: tuple[AgentSnapshot, ...],
+        comm: CommSummary,
     ) -> StepRecord:
         """The step's metrics as ``Simulation.measure`` computes them, from cells newly FREE."""
         self.count_free(np.concatenate([np.zeros(0, np.int64), *free]))
@@ -372,7 +403,8 @@ class Replay:
             fraction = known / self.coverage.total if self.coverage.total else 1.0
             self.known_at_base = float(max(self.known_at_base, min(fraction, 1.0)))
         self.first = False
-        robots = tuple(RobotRecord(a.name, a.distance, a.state) for a in agents[1:])
+        robots = tuple(RobotRecord(a.name, a.distance, a.state, a.base_contact) for a in agents[1:])
+        control = 0 if comm.control_links is None else int(np.triu(comm.control_links).sum())
         return StepRecord(
             step=step,
             explored=min(self.coverage.fraction, 1.0),
@@ -381,6 +413,11 @@ class Replay:
             alive=sum(r.state != "failed" for r in robots),
             links=int(np.triu(links).sum()),
             robots=robots,
+            comm_bytes=comm.comm_bytes,
+            control_links=control,
+            control_bytes=comm.control_bytes,
+            latency_max=comm.latency_max,
+            latency_mean=comm.latency_mean,
         )
 
     def count_free(self, idx: IntArray) -> None:

@@ -8,9 +8,17 @@ inherits; a robot entry may override any of them (nested ``sensor`` keys merge).
 
 from __future__ import annotations
 
-from typing import Any, Literal
+from typing import Annotated, Any, Literal
 
-from pydantic import BaseModel, ConfigDict, Field, field_validator, model_validator
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    Tag,
+    field_validator,
+    model_validator,
+)
 
 Point = tuple[float, float]
 
@@ -74,18 +82,41 @@ class PluginSpec(Strict):
         return shorthand("name", value)
 
 
-class CommSpec(Strict):
-    """The communication model chosen by registry name, with its params."""
+class ChannelSpec(Strict):
+    """A radio channel: its model chosen by registry name, with its params and link losses."""
 
     model: str = Field("disk", description="Comm model name (or package.module:Class).")
     params: dict[str, Any] = Field(
         default_factory=dict, description="The model's own parameters (see below)."
+    )
+    dropout: float = Field(
+        0.0, ge=0, le=1, description="Probability that a link is lost, per link and step."
     )
 
     @model_validator(mode="before")
     @classmethod
     def _from_name(cls, value: Any) -> Any:
         return shorthand("model", value)
+
+
+class ControlSpec(ChannelSpec):
+    """The long-range, low-bandwidth control channel: teammate records only, no maps."""
+
+    range: float = Field(
+        500.0, ge=0, description="Every agent's range (cells) on the control channel."
+    )
+
+
+class CommSpec(ChannelSpec):
+    """The main channel (maps and teammate records) and an optional control channel."""
+
+    maps: Literal["delta", "full"] = Field(
+        "delta",
+        description="Maps sent as changes since the pair last met, or whole grids each time.",
+    )
+    control: ControlSpec | None = Field(
+        None, description="Optional control channel: {model, params, range, dropout}."
+    )
 
 
 class SensorSpec(Strict):
@@ -107,6 +138,9 @@ class RobotParams(Strict):
     radius: float = Field(2.0, gt=0, description="Body radius in cells.")
     sensor: SensorSpec = Field(default_factory=SensorSpec)
     comm_range: float = Field(150.0, ge=0, description="Communication range in cells.")
+    comm_power_dbm: float | None = Field(
+        None, description="path_loss: signal (dBm) at comm_range; None = the model's default."
+    )
     role: Literal["explorer", "relay"] = Field("explorer", description="Team role.")
     strategy: PluginSpec = Field(
         default_factory=lambda: PluginSpec(name="frontier"),
@@ -134,6 +168,9 @@ class BaseStationSpec(Strict):
 
     position: Point = Field(description="[x, y] in cells.")
     comm_range: float = Field(150.0, ge=0, description="Communication range in cells.")
+    comm_power_dbm: float | None = Field(
+        None, description="path_loss: signal (dBm) at comm_range; None = the model's default."
+    )
 
 
 class StopSpec(Strict):
@@ -183,6 +220,36 @@ class FailEvent(Strict):
     fail: str = Field(description="Name of the robot that fails for good.")
 
 
+class BlackoutEvent(Strict):
+    """From ``step`` until before ``until``, the named agents can neither send nor receive."""
+
+    step: int = Field(ge=0, description="First step of the blackout.")
+    until: int = Field(ge=1, description="First step after the blackout.")
+    blackout: list[str] = Field(min_length=1, description="Robot names (or 'base') that go silent.")
+    channel: Literal["main", "control", "both"] = Field(
+        "both", description="Which channel goes silent."
+    )
+
+    @model_validator(mode="after")
+    def _ordered(self) -> BlackoutEvent:
+        if self.until <= self.step:
+            raise ValueError(f"'until' ({self.until}) must be after 'step' ({self.step})")
+        return self
+
+
+def event_kind(value: Any) -> str | None:
+    """Which event a YAML entry is: a failure or a blackout (None: neither key given)."""
+    if isinstance(value, dict):
+        return "blackout" if "blackout" in value else "fail"
+    return "blackout" if isinstance(value, BlackoutEvent) else "fail"
+
+
+Event = Annotated[
+    Annotated[FailEvent, Tag("fail")] | Annotated[BlackoutEvent, Tag("blackout")],
+    Discriminator(event_kind),
+]
+
+
 class Scenario(Strict):
     """A whole run: map, base station, team, communication and events."""
 
@@ -203,8 +270,8 @@ class Scenario(Strict):
     render: RenderSpec = Field(
         default_factory=RenderSpec, description="Video, pictures, run log and plots."
     )
-    events: list[FailEvent] = Field(
-        default_factory=list, description="Scheduled events (robot failures)."
+    events: list[Event] = Field(
+        default_factory=list, description="Scheduled events: robot failures and blackouts."
     )
 
     @model_validator(mode="before")

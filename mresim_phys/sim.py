@@ -21,16 +21,17 @@ import numpy as np
 
 from .agents import Agent, Robot
 from .build import Parts, build_parts
-from .comms.exchange import exchange
+from .comms.ledger import box_around
+from .comms.network import Network, build_network
 from .errors import ScenarioError
 from .load import load_scenario
 from .mapping import integrate_scan
-from .metrics import Milestones, RobotRecord, StepRecord
+from .metrics import Milestones, RobotRecord, StepRecord, base_latency
 from .motion import MoveRules, take_step
 from .rng import named_stream
-from .scenario import Scenario
+from .scenario import BlackoutEvent, Scenario
 from .sensing import scan
-from .snapshot import AgentSnapshot, Snapshot, read_only
+from .snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
 from .strategies import RobotView
 from .types import FREE
 
@@ -52,7 +53,10 @@ class Simulation:
         self.t = 0
         self.phase_times: dict[str, float] = dict.fromkeys(PHASES, 0.0)
         self.events_now: list[str] = []
-        self.links = np.zeros((len(self.agents), len(self.agents)), dtype=bool)
+        self.network: Network = build_network(
+            scenario, self.parts.comm, self.parts.truth.occupied.shape
+        )
+        self.comm = self.network.idle(len(self.agents))
         self.known_at_base = 0.0
         self.milestones = Milestones()
         self._sensing_rngs = [named_stream(scenario.seed, "sensing", r.index) for r in self.robots]
@@ -125,13 +129,23 @@ class Simulation:
         return all(not r.alive or (r.done and len(r.path) == 0) for r in self.robots)
 
     def apply_events(self) -> None:
-        """Events scheduled for this step (robot failures)."""
+        """Events scheduled for this step: failures now, blackouts starting or ending."""
         self.events_now = []
         for event in self.scenario.events:
-            if event.step == self.t:
+            if isinstance(event, BlackoutEvent):
+                self.note_blackout(event)
+            elif event.step == self.t:
                 failed = self.robot(event.fail)
                 failed.status, failed.path = "failed", failed.path[:0]
                 self.events_now.append(f"fail {event.fail}")
+
+    def note_blackout(self, event: BlackoutEvent) -> None:
+        """Log a blackout's start and end (the network applies it)."""
+        who = f"{','.join(event.blackout)} ({event.channel})"
+        if event.step == self.t:
+            self.events_now.append(f"blackout {who} until {event.until}")
+        elif event.until == self.t:
+            self.events_now.append(f"blackout over {who}")
 
     def robot_filter(self, robot: Robot) -> tuple[int, int, int]:
         """What ``robot``'s rays and motion collide with."""
@@ -156,6 +170,10 @@ class Simulation:
         self.phase_times["mapping"] += perf_counter() - scanned
         if update is not None:
             self.coverage.touch(robot.belief, update)
+            h, w = update.free.shape
+            self.network.note_scan(
+                robot.index, (update.row0, update.row0 + h, update.col0, update.col0 + w)
+            )
 
     def replan(self, robot: Robot) -> None:
         """Ask the robot's strategy for a new path from what the robot knows."""
@@ -188,17 +206,20 @@ class Simulation:
             planner=robot.planner,
         )
 
+    @property
+    def links(self) -> np.ndarray:
+        """This step's main-channel links (index 0 = base)."""
+        return self.comm.links
+
     def communicate(self) -> None:
         """Find links among alive agents and exchange knowledge along them."""
         started = perf_counter()
-        agents = self.agents
-        positions = np.array([a.position for a in agents], dtype=float)
-        ranges = np.array([a.comm_range for a in agents], dtype=float)
-        alive = np.array([a.alive for a in agents])
-        links = self.parts.comm.links(positions, ranges, self.world) & np.outer(alive, alive)
-        self.links = links
-        exchange(agents, links, self.t, self.scenario.simulation.multi_hop)
-        if links[0].any() or self.t == 0:
+        for robot in self.robots:  # a bump marks a cell next to the robot outside any scan
+            self.network.note_scan(
+                robot.index, box_around(robot.position, robot.radius + 2, self.world.shape)
+            )
+        self.comm = self.network.communicate(self.agents, self.world, self.t)
+        if self.links[0].any() or self.t == 0:
             known = np.count_nonzero((self.base.belief == FREE) & self.coverage.reachable)
             fraction = known / self.coverage.total if self.coverage.total else 1.0
             self.known_at_base = float(max(self.known_at_base, min(fraction, 1.0)))
@@ -217,13 +238,24 @@ class Simulation:
             links=self.links.copy(),
             events=tuple(self.events_now),
             resolution=self.scenario.map.resolution or self.parts.truth.resolution,
+            comm=CommSummary(
+                self.record.comm_bytes,
+                self.comm.control_links.copy() if self.network.control else None,
+                self.record.control_bytes,
+                self.record.latency_max,
+                self.record.latency_mean,
+            ),
         )
 
     def measure(self) -> StepRecord:
         """This step's row of metrics."""
         started = perf_counter()
         self.coverage.settle()
-        robots = tuple(RobotRecord(r.name, r.distance, r.state) for r in self.robots)
+        robots = tuple(
+            RobotRecord(r.name, r.distance, r.state, r.last_base_contact) for r in self.robots
+        )
+        heard = {name: info.step for name, info in self.base.teammates.items()}
+        latency = base_latency(self.t, heard, [r.name for r in self.robots if r.alive])
         record = StepRecord(
             step=self.t,
             explored=min(self.coverage.fraction, 1.0),
@@ -232,6 +264,11 @@ class Simulation:
             alive=sum(r.alive for r in self.robots),
             links=int(np.triu(self.links).sum()),
             robots=robots,
+            comm_bytes=self.comm.traffic.total,
+            control_links=int(np.triu(self.comm.control_links).sum()),
+            control_bytes=self.comm.control_traffic.total,
+            latency_max=latency[0],
+            latency_mean=latency[1],
         )
         self.milestones.update(record)
         self.phase_times["metrics"] += perf_counter() - started
@@ -262,4 +299,5 @@ def agent_snapshot(agent: Agent) -> AgentSnapshot:
         distance=robot.distance if robot else 0.0,
         skeleton=info.get("skeleton"),
         rendezvous=info.get("rendezvous"),
+        base_contact=agent.last_base_contact,
     )

@@ -43,6 +43,18 @@ class AgentSnapshot:
     parent: str | None = None
     skeleton: BoolGrid | None = None  # from a strategy's Decision.info["skeleton"], if any
     rendezvous: FloatArray | None = None  # (k, 2) points from Decision.info["rendezvous"]
+    base_contact: int = -1  # last step this agent's data reached the base (-1: never)
+
+
+@dataclass(frozen=True)
+class CommSummary:
+    """What the communication phase did in a step, beyond the main-channel links."""
+
+    comm_bytes: int = 0
+    control_links: np.ndarray | None = None  # (n, n) bool; None without a control channel
+    control_bytes: int = 0
+    latency_max: float = 0.0
+    latency_mean: float = 0.0
 
 
 @dataclass(frozen=True)
@@ -58,6 +70,7 @@ class Snapshot:
     links: np.ndarray  # (n, n) bool, same order as agents
     events: tuple[str, ...] = ()
     resolution: float | None = None
+    comm: CommSummary = field(default_factory=CommSummary)
 
     @property
     def base(self) -> AgentSnapshot:

@@ -133,6 +133,8 @@ class World:
         shape_filter: QueryFilter,
     ) -> Hit | None:
         """The first shape a segment (swept by ``radius``) from ``start`` to ``end`` touches."""
+        if radius > 0:
+            return self._first_swept_hit(start, end, radius, shape_filter)
         info, space = self._info, self.space._space  # never keep the cdata beyond the Space
         if lib.cpSpaceSegmentQueryFirst(space, start, end, radius, shape_filter, info) == ffi.NULL:
             return None
@@ -141,6 +143,35 @@ class World:
             (info.normal.x, info.normal.y),
             info.alpha,
             is_wall_shape(info.shape),
+        )
+
+    def _first_swept_hit(
+        self, start: Point, end: Point, radius: float, shape_filter: QueryFilter
+    ) -> Hit | None:
+        """Swept-circle query: candidates from the swept box, then an exact query per shape.
+
+        Chipmunk's own segment query ignores the radius in its broad phase (it
+        walks the tree with the bare segment), so it misses a wall the circle
+        grazes but the centre line does not cross.
+        """
+        box = pymunk.BB(
+            min(start[0], end[0]) - radius,
+            min(start[1], end[1]) - radius,
+            max(start[0], end[0]) + radius,
+            max(start[1], end[1]) + radius,
+        )
+        best = None
+        for shape in self.space.bb_query(box, pymunk.ShapeFilter(*shape_filter)):
+            info = shape.segment_query(start, end, radius)
+            if info is not None and (best is None or info.alpha < best.alpha):
+                best = info
+        if best is None:
+            return None
+        return Hit(
+            (best.point.x, best.point.y),
+            (best.normal.x, best.normal.y),
+            best.alpha,
+            bool(best.shape.filter.categories & WALL_CATEGORY),
         )
 
     def cast_rays(

@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
-from . import disk
-from .base import COMM_MODELS, CommModel, CommParams
+from . import disk, line_of_sight, path_loss
+from .base import COMM_MODELS, CommModel, CommParams, Radios
 
-BUILT_IN = ("disk",)
-assert {disk.DiskComm.name} == set(BUILT_IN)
+BUILT_IN = ("disk", "line_of_sight", "path_loss")
+assert {disk.DiskComm.name, line_of_sight.LineOfSightComm.name, path_loss.PathLossComm.name} == set(
+    BUILT_IN
+)
 
-__all__ = ["BUILT_IN", "COMM_MODELS", "CommModel", "CommParams"]
+__all__ = ["BUILT_IN", "COMM_MODELS", "CommModel", "CommParams", "Radios"]

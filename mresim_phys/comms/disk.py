@@ -2,7 +2,8 @@
 
 Two agents are linked when their distance is below the SUM of their two comm
 ranges (the original's semantics: each range is a disk around its agent and the
-link holds when the disks overlap). Symmetric by construction.
+link holds when the disks overlap). Symmetric by construction. An agent's
+region is its own disk.
 """
 
 from __future__ import annotations
@@ -11,11 +12,16 @@ import numpy as np
 
 from ..types import FloatArray
 from ..world import World
-from .base import COMM_MODELS, CommParams, pair_distances, without_self_links
+from .base import COMM_MODELS, CommParams, Radios, pair_distances, without_self_links
 
 
 class DiskParams(CommParams):
     """The disk model has no parameters: ranges come from each agent."""
+
+
+def disk_reach(radios: Radios) -> FloatArray:
+    """(n, n) sums of ranges: the distance below which two agents are within each other's disk."""
+    return radios.ranges[:, None] + radios.ranges[None, :]
 
 
 @COMM_MODELS.register("disk")
@@ -27,7 +33,10 @@ class DiskComm:
     def __init__(self, params: DiskParams) -> None:
         self.params = params
 
-    def links(self, positions: FloatArray, ranges: FloatArray, world: World) -> np.ndarray:
+    def links(self, radios: Radios, world: World) -> np.ndarray:
         """Pairs closer than the sum of their ranges."""
-        reach = ranges[:, None] + ranges[None, :]
-        return without_self_links(pair_distances(positions) < reach)
+        return without_self_links(pair_distances(radios.positions) < disk_reach(radios))
+
+    def reach(self, radios: Radios, index: int, angles: FloatArray, world: World) -> FloatArray:
+        """The agent's own disk: its range in every direction."""
+        return np.full(len(angles), radios.ranges[index])

@@ -1,23 +1,68 @@
-"""Knowledge exchange (phase 6b): merge maps and teammate records along links.
+"""Knowledge exchange (phase 6b): maps and teammate records travel along links.
 
-Linked agents swap occupancy grids (``np.maximum``: known beats unknown, a cell
-seen as obstacle by either stays obstacle), safe space (OR) and teammate
-records (the newer report of each agent wins). With ``multi_hop`` (the default,
-as the original closes its link table over chains) every connected group of
-agents ends the step with the same knowledge; without it, each agent merges
-only what its direct neighbours knew at the start of the phase.
+Linked agents merge occupancy grids (``np.maximum``: known beats unknown, a cell
+seen as obstacle by either stays obstacle), safe space (OR) and teammate records
+(the newer report of each agent wins). What travels is counted:
+
+* maps as deltas (:mod:`.ledger`): a transmission carries the cells changed since
+  the pair last synchronised, ``CELL_BYTES`` each (a 4-byte cell index and one
+  byte of state); ``full`` exchange sends the whole grid every time, one byte
+  per cell, for comparison;
+* teammate records the receiver does not hold in a newer version, ``RECORD_BYTES``
+  each (name, position, goal, state, role and step).
+
+With ``multi_hop`` (the default, as the original closes its link table over
+chains) each connected group gathers along a breadth-first spanning tree (from
+its lowest index: the base station when present) and scatters back, so every
+member ends the step with the group's union; on the way back a parent sends a
+child only what the child lacks (the parent can tell from the child's upload),
+and no agent sends a cell back to the agent its value came from.
+Without it, each agent merges what its direct neighbours knew before the phase.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import connected_components
+from scipy.sparse.csgraph import breadth_first_order, connected_components
 
 from ..agents import Agent, TeammateInfo
-from ..mapping import merge_into
+from .ledger import Box, Ledger, cell_codes, received_tick, sensed_tick, window
+
+CELL_BYTES = 5
+RECORD_BYTES = 40
+
+# One map transmission: the box, which of its cells are sent (None: all) and the
+# sender's cell codes in the box (see ledger.cell_codes).
+Packet = tuple[Box, np.ndarray | None, np.ndarray]
+
+
+@dataclass
+class Traffic:
+    """Bytes sent this step: ``sent[i, j]`` from agent i to agent j, maps and records."""
+
+    sent: np.ndarray
+    cells: int = 0
+    records: int = 0
+
+    @classmethod
+    def empty(cls, n: int) -> Traffic:
+        """No traffic among ``n`` agents."""
+        return cls(np.zeros((n, n), dtype=np.int64))
+
+    @property
+    def total(self) -> int:
+        """All bytes sent this step."""
+        return int(self.sent.sum())
+
+    def add(self, sender: int, receiver: int, cells: int, records: int, cell_bytes: int) -> None:
+        """Count one transmission."""
+        self.cells += cells
+        self.records += records
+        self.sent[sender, receiver] += cells * cell_bytes + records * RECORD_BYTES
 
 
 def linked_groups(links: np.ndarray) -> list[list[int]]:
@@ -27,54 +72,160 @@ def linked_groups(links: np.ndarray) -> list[list[int]]:
     return sorted((g for g in groups if len(g) > 1), key=lambda g: g[0])
 
 
-def newest_records(agents: Sequence[Agent], step: int) -> dict[str, TeammateInfo]:
-    """Every record the agents hold plus their own, keeping the newest per agent name."""
-    merged: dict[str, TeammateInfo] = {}
-    for agent in agents:
-        for record in (*agent.teammates.values(), agent.own_record(step)):
-            held = merged.get(record.name)
-            if held is None or record.step > held.step:
-                merged[record.name] = record
-    return merged
+def spanning_tree(links: np.ndarray, root: int) -> list[tuple[int, int]]:
+    """(parent, child) edges of a breadth-first tree from ``root``, in visiting order."""
+    order, parents = breadth_first_order(csr_matrix(links), root, directed=False)
+    return [(int(parents[c]), int(c)) for c in order[1:]]
 
 
-def share_group(agents: Sequence[Agent], step: int) -> None:
-    """Give every agent of a linked group the union of the group's knowledge."""
-    belief, safe = agents[0].belief.copy(), agents[0].safe.copy()
-    for agent in agents[1:]:
-        merge_into(belief, agent.belief)
-        safe |= agent.safe
-    records = newest_records(agents, step)
-    for agent in agents:
-        np.copyto(agent.belief, belief)
-        np.copyto(agent.safe, safe)
-        agent.teammates = {k: v for k, v in records.items() if k != agent.name}
+def held_records(agent: Agent, step: int) -> list[TeammateInfo]:
+    """Every record ``agent`` can send: those it holds and its own."""
+    return [*agent.teammates.values(), agent.own_record(step)]
 
 
-def share_direct(agents: Sequence[Agent], links: np.ndarray, step: int) -> None:
-    """One hop only: each agent merges what its direct neighbours knew before the phase."""
-    linked = np.flatnonzero(links.any(axis=1))
-    before = {i: (agents[i].belief.copy(), agents[i].safe.copy()) for i in linked}
-    records = {i: newest_records([agents[i]], step) for i in linked}
-    for i in linked:
-        for j in np.flatnonzero(links[i]):
-            merge_into(agents[i].belief, before[j][0])
-            agents[i].safe |= before[j][1]
-            for name, record in records[j].items():
-                held = agents[i].teammates.get(name)
-                if name != agents[i].name and (held is None or record.step > held.step):
-                    agents[i].teammates[name] = record
+def learn_records(receiver: Agent, records: Sequence[TeammateInfo]) -> int:
+    """Keep the records newer than the receiver's; return how many it learned."""
+    learned = 0
+    for record in records:
+        held = receiver.teammates.get(record.name)
+        if record.name != receiver.name and (held is None or record.step > held.step):
+            receiver.teammates[record.name] = record
+            learned += 1
+    return learned
 
 
-def exchange(agents: Sequence[Agent], links: np.ndarray, step: int, multi_hop: bool) -> None:
-    """Exchange knowledge along ``links`` (index 0 = base) and stamp base contacts."""
+class Exchange:
+    """Moves knowledge along one step's links and counts what it costs."""
+
+    def __init__(self, ledger: Ledger, full_maps: bool = False, maps: bool = True) -> None:
+        self.ledger = ledger
+        self.full_maps = full_maps
+        self.maps = maps
+
+    def run(
+        self, agents: Sequence[Agent], links: np.ndarray, step: int, multi_hop: bool
+    ) -> Traffic:
+        """Exchange along ``links`` (index 0 = base); return the traffic."""
+        traffic = Traffic.empty(len(agents))
+        if multi_hop:
+            for group in linked_groups(links):
+                self.share_group(agents, links, group, step, traffic)
+        else:
+            self.share_direct(agents, links, step, traffic)
+        return traffic
+
+    def share_group(
+        self,
+        agents: Sequence[Agent],
+        links: np.ndarray,
+        group: list[int],
+        step: int,
+        traffic: Traffic,
+    ) -> None:
+        """Gather the group's knowledge up a spanning tree, then scatter it back down."""
+        tree = spanning_tree(links, group[0])
+        for parent, child in reversed(tree):
+            self.send(agents, child, parent, step, traffic, only_lacking=False)
+        for parent, child in tree:
+            self.send(agents, parent, child, step, traffic, only_lacking=True)
+        if self.maps:
+            self.ledger.mark_synced(group, received_tick(step))
+
+    def share_direct(
+        self, agents: Sequence[Agent], links: np.ndarray, step: int, traffic: Traffic
+    ) -> None:
+        """One hop only: every linked agent gets what its neighbours knew before the phase."""
+        pairs = [(int(i), int(j)) for i, j in np.argwhere(links)]
+        packets = {(i, j): self.package(agents[i], j, step) for i, j in pairs}
+        for (i, j), (maps, records) in packets.items():
+            cells = self.deliver(agents[j], maps, step, i)
+            traffic.add(i, j, cells, learn_records(agents[j], records), self.cell_bytes)
+            if self.maps:
+                self.ledger.synced[i, j] = sensed_tick(step)
+
+    @property
+    def cell_bytes(self) -> int:
+        """Bytes per map cell sent: 1 for whole grids, index + state for deltas."""
+        return 1 if self.full_maps else CELL_BYTES
+
+    def send(
+        self,
+        agents: Sequence[Agent],
+        sender: int,
+        receiver: int,
+        step: int,
+        traffic: Traffic,
+        only_lacking: bool,
+    ) -> None:
+        """One transmission of maps and records from ``sender`` to ``receiver``."""
+        maps = self.select(agents[sender], agents[receiver], sender, receiver, only_lacking)
+        cells = self.deliver(agents[receiver], maps, step, sender)
+        records = learn_records(agents[receiver], held_records(agents[sender], step))
+        traffic.add(sender, receiver, cells, records, self.cell_bytes)
+
+    def package(
+        self, agent: Agent, receiver: int, step: int
+    ) -> tuple[Packet | None, list[TeammateInfo]]:
+        """What ``agent`` would send to ``receiver``, copied before anything is merged."""
+        maps = self.select(agent, None, agent.index, receiver, only_lacking=False)
+        if maps is not None:
+            box, mask, codes = maps
+            maps = (box, mask, codes.copy())
+        return maps, held_records(agent, step)
+
+    def select(
+        self,
+        sender: Agent,
+        receiver: Agent | None,
+        i: int,
+        j: int,
+        only_lacking: bool,
+    ) -> Packet | None:
+        """(box, cells to send or None for all, sender codes in the box) of one transmission."""
+        if not self.maps:
+            return None
+        if self.full_maps:
+            box = (0, sender.belief.shape[0], 0, sender.belief.shape[1])
+            return box, None, cell_codes(sender.belief, sender.safe)
+        since = int(self.ledger.synced[i, j])
+        box = self.ledger.newer_box(i, since)
+        if box is None:
+            return None
+        stamps, codes, origins = window(
+            box, self.ledger.stamps[i], self.ledger.copies[i], self.ledger.origins[i]
+        )
+        mask = (stamps > since) & (origins != j)
+        if only_lacking and receiver is not None:
+            mask &= codes != cell_codes(*window(box, receiver.belief, receiver.safe))
+        return box, mask, codes
+
+    def deliver(
+        self,
+        receiver: Agent,
+        maps: Packet | None,
+        step: int,
+        sender: int,
+    ) -> int:
+        """Merge a transmission's cells into ``receiver``; return how many cells were sent."""
+        if maps is None:
+            return 0
+        box, mask, codes = maps
+        belief, safe = window(box, receiver.belief, receiver.safe)
+        sent = codes if mask is None else np.where(mask, codes, np.uint8(0))
+        np.maximum(belief, sent & 3, out=belief)
+        safe |= (sent & 4).astype(bool)
+        codes_now = cell_codes(belief, safe)
+        self.ledger.stamp(receiver.index, box, codes_now, received_tick(step), origin=sender)
+        return codes.size if mask is None else int(np.count_nonzero(mask))
+
+
+def stamp_base_contacts(
+    agents: Sequence[Agent], links: np.ndarray, step: int, multi_hop: bool
+) -> None:
+    """Stamp ``last_base_contact`` on every agent whose data reached the base this step."""
     if multi_hop:
-        groups = linked_groups(links)
-        for group in groups:
-            share_group([agents[i] for i in group], step)
-        reach_base = next((g for g in groups if g[0] == 0), [])
+        reach = next((g for g in linked_groups(links) if g[0] == 0), [])
     else:
-        share_direct(agents, links, step)
-        reach_base = np.flatnonzero(links[0]).tolist()
-    for i in reach_base:
+        reach = np.flatnonzero(links[0]).tolist()
+    for i in reach:
         agents[i].last_base_contact = step

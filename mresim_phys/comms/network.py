@@ -1,0 +1,200 @@
+"""The communication phase (phase 6): links on two channels, then the exchange.
+
+Each step, for every channel, the channel's model gives the links among alive
+agents from their true positions and the true walls; scheduled blackouts silence
+agents; an optional per-link loss probability drops links at random (one draw
+per agent pair and step from the channel's named random stream, so the same seed
+drops the same links whatever else happens). Then knowledge moves:
+
+* the **main** channel carries maps (as deltas, :mod:`.ledger`) and teammate records;
+* the optional **control** channel (long range, low bandwidth: the paper's future
+  work 2) carries teammate records only: positions, goals, roles, states.
+
+Both relay along chains of linked agents within the step when ``multi_hop`` is
+on. What was sent is counted in bytes (:class:`~.exchange.Traffic`).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..agents import BASE_NAME, Agent
+from ..build import make_plugin
+from ..rng import named_stream
+from ..scenario import BlackoutEvent, Scenario
+from ..types import FloatArray
+from ..world import World
+from .base import COMM_MODELS, CommModel, Radios
+from .exchange import Exchange, Traffic, stamp_base_contacts
+from .ledger import Box, Ledger
+
+REGION_RAYS = 129  # directions sampled for an agent's communication region (as the original)
+
+
+@dataclass(frozen=True)
+class Blackout:
+    """Agents ``members`` are silent on ``channels`` from step ``start`` until before ``until``."""
+
+    start: int
+    until: int
+    members: tuple[int, ...]
+    channels: tuple[str, ...] = ("main", "control")
+
+    def silences(self, step: int, channel: str) -> bool:
+        """Whether this blackout is on at ``step`` for ``channel``."""
+        return self.start <= step < self.until and channel in self.channels
+
+
+@dataclass
+class Channel:
+    """One radio channel: a comm model, the agents' radios on it, and its link losses."""
+
+    name: str
+    model: CommModel
+    ranges: FloatArray
+    powers: FloatArray
+    dropout: float = 0.0
+    rng: np.random.Generator = field(default_factory=lambda: np.random.default_rng(0))
+
+    def radios(self, agents: Sequence[Agent]) -> Radios:
+        """The agents' radios on this channel at their current positions."""
+        return Radios(np.array([a.position for a in agents], dtype=float), self.ranges, self.powers)
+
+    def links(self, agents: Sequence[Agent], world: World, silent: np.ndarray) -> np.ndarray:
+        """This step's links: the model's, among alive and unsilenced agents, minus dropouts."""
+        speaking = np.array([a.alive for a in agents]) & ~silent
+        links = self.model.links(self.radios(agents), world) & np.outer(speaking, speaking)
+        return links & ~self.dropped(len(agents))
+
+    def dropped(self, n: int) -> np.ndarray:
+        """Symmetric matrix of the links lost this step (drawn every step for every pair)."""
+        lost = np.zeros((n, n), dtype=bool)
+        if self.dropout <= 0:
+            return lost
+        rows, cols = np.triu_indices(n, k=1)
+        draw = self.rng.random(len(rows)) < self.dropout
+        lost[rows[draw], cols[draw]] = lost[cols[draw], rows[draw]] = True
+        return lost
+
+
+@dataclass(frozen=True)
+class CommRecord:
+    """What the communication phase did in one step."""
+
+    links: np.ndarray
+    control_links: np.ndarray
+    traffic: Traffic
+    control_traffic: Traffic
+
+
+class Network:
+    """Runs the communication phase for a fixed set of agents (index 0 = base)."""
+
+    def __init__(
+        self,
+        main: Channel,
+        ledger: Ledger,
+        *,
+        control: Channel | None = None,
+        blackouts: Sequence[Blackout] = (),
+        multi_hop: bool = True,
+        full_maps: bool = False,
+    ) -> None:
+        self.main, self.control = main, control
+        self.ledger = ledger
+        self.blackouts = tuple(blackouts)
+        self.multi_hop = multi_hop
+        self.maps = Exchange(ledger, full_maps=full_maps)
+        self.records = Exchange(ledger, maps=False)
+
+    def idle(self, n: int) -> CommRecord:
+        """The record of a step in which nothing was linked or sent."""
+        none = np.zeros((n, n), dtype=bool)
+        return CommRecord(none, none.copy(), Traffic.empty(n), Traffic.empty(n))
+
+    def note_scan(self, index: int, box: Box) -> None:
+        """Agent ``index``'s own map may have changed inside ``box``."""
+        self.ledger.note(index, box)
+
+    def silent(self, n: int, step: int, channel: str) -> np.ndarray:
+        """Which of ``n`` agents a blackout silences at ``step`` on ``channel``."""
+        silent = np.zeros(n, dtype=bool)
+        for blackout in self.blackouts:
+            if blackout.silences(step, channel):
+                silent[list(blackout.members)] = True
+        return silent
+
+    def communicate(self, agents: Sequence[Agent], world: World, step: int) -> CommRecord:
+        """Find this step's links and move knowledge along them."""
+        for agent in agents:
+            self.ledger.stamp_sensed(agent.index, agent.belief, agent.safe, step)
+        n = len(agents)
+        links = self.main.links(agents, world, self.silent(n, step, "main"))
+        traffic = self.maps.run(agents, links, step, self.multi_hop)
+        stamp_base_contacts(agents, links, step, self.multi_hop)
+        control_links = np.zeros_like(links)
+        control_traffic = Traffic.empty(n)
+        if self.control is not None:
+            control_links = self.control.links(agents, world, self.silent(n, step, "control"))
+            control_traffic = self.records.run(agents, control_links, step, self.multi_hop)
+        return CommRecord(links, control_links, traffic, control_traffic)
+
+    def region(
+        self, agents: Sequence[Agent], index: int, world: World, rays: int = REGION_RAYS
+    ) -> FloatArray:
+        """(rays, 2) polygon around agent ``index`` where its main-channel signal holds."""
+        angles = np.linspace(0.0, 2.0 * np.pi, rays, endpoint=False)
+        reach = self.main.model.reach(self.main.radios(agents), index, angles, world)
+        origin = np.asarray(agents[index].position, dtype=float)
+        return origin + reach[:, None] * np.column_stack([np.cos(angles), np.sin(angles)])
+
+
+def channel_stream(seed: int, channel: str) -> np.random.Generator:
+    """The named random stream of one channel's link losses."""
+    return named_stream(seed, f"dropout-{channel}", 0)
+
+
+def blackouts_of(scenario: Scenario) -> list[Blackout]:
+    """The scenario's blackout events with agent names turned into indices."""
+    index = {BASE_NAME: 0} | {r.name: i + 1 for i, r in enumerate(scenario.robots)}
+    return [
+        Blackout(
+            e.step,
+            e.until,
+            tuple(index[name] for name in e.blackout),
+            ("main", "control") if e.channel == "both" else (e.channel,),
+        )
+        for e in scenario.events
+        if isinstance(e, BlackoutEvent)
+    ]
+
+
+def build_network(scenario: Scenario, model: CommModel, shape: tuple[int, int]) -> Network:
+    """The communication phase of ``scenario`` (its main model already built)."""
+    spec, seed = scenario.communication, scenario.seed
+    radios = [scenario.base_station, *scenario.robots]
+    ranges = np.array([r.comm_range for r in radios], dtype=float)
+    powers = np.array([np.nan if r.comm_power_dbm is None else r.comm_power_dbm for r in radios])
+    main = Channel("main", model, ranges, powers, spec.dropout, channel_stream(seed, "main"))
+    control = None
+    if spec.control is not None:
+        c = spec.control
+        control = Channel(
+            "control",
+            make_plugin(COMM_MODELS, c.model, c.params),
+            np.full(len(radios), c.range),
+            powers,
+            c.dropout,
+            channel_stream(seed, "control"),
+        )
+    return Network(
+        main,
+        Ledger(shape, len(radios)),
+        control=control,
+        blackouts=blackouts_of(scenario),
+        multi_hop=scenario.simulation.multi_hop,
+        full_maps=spec.maps == "full",
+    )

@@ -1,0 +1,227 @@
+"""Knowledge exchange: deltas, multi-hop, dropouts, blackouts, the control channel, metrics."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from mresim_phys import Simulation
+from mresim_phys.agents import Agent, empty_belief
+from mresim_phys.comms.exchange import Exchange, Traffic, stamp_base_contacts
+from mresim_phys.comms.ledger import Ledger
+from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
+
+ScenarioFile = Callable[..., Path]
+
+THREE = [
+    {"name": "A", "start": [8, 20], "heading_deg": 0},
+    {"name": "B", "start": [8, 40], "heading_deg": 0, "speed": 3},
+    {"name": "C", "start": [20, 30], "heading_deg": 90},
+]
+
+
+def make_agents(n: int, shape: tuple[int, int] = (4, 4)) -> list[Agent]:
+    agents = []
+    for i in range(n):
+        belief, safe = empty_belief(shape)
+        agents.append(Agent(f"a{i}", i, (float(i), 0.0), 1.0, belief, safe, "explorer"))
+    return agents
+
+
+class Exchanger:
+    """Agents whose maps tests edit by hand, exchanged through a ledger as the network does."""
+
+    def __init__(self, agents: list[Agent], full: bool = False) -> None:
+        self.agents = agents
+        self.ledger = Ledger(agents[0].belief.shape, len(agents))
+        self.exchange = Exchange(self.ledger, full_maps=full)
+
+    def __call__(self, links: np.ndarray, step: int, multi_hop: bool = True) -> Traffic:
+        rows, cols = self.agents[0].belief.shape
+        for agent in self.agents:
+            self.ledger.note(agent.index, (0, rows, 0, cols))
+            self.ledger.stamp_sensed(agent.index, agent.belief, agent.safe, step)
+        traffic = self.exchange.run(self.agents, links, step, multi_hop)
+        stamp_base_contacts(self.agents, links, step, multi_hop)
+        return traffic
+
+
+def chain_links(n: int) -> np.ndarray:
+    links = np.zeros((n, n), dtype=bool)
+    for i in range(n - 1):
+        links[i, i + 1] = links[i + 1, i] = True
+    return links
+
+
+def test_exchange_merges_maps_known_beats_unknown_obstacle_beats_free() -> None:
+    a, b = agents = make_agents(2)
+    a.belief[0, 0], b.belief[0, 1] = FREE, FREE
+    a.belief[1, 1], b.belief[1, 1] = FREE, OCCUPIED
+    a.safe[2, 2] = True
+    Exchanger(agents)(chain_links(2), step=3)
+    for agent in (a, b):
+        assert agent.belief[0, 0] == FREE and agent.belief[0, 1] == FREE
+        assert agent.belief[1, 1] == OCCUPIED
+        assert agent.belief[3, 3] == UNKNOWN
+        assert agent.safe[2, 2]
+    assert a.teammates["a1"].step == 3 and b.teammates["a0"].position == (0.0, 0.0)
+
+
+def test_multi_hop_relays_along_a_chain_in_one_step() -> None:
+    agents = make_agents(3)
+    agents[2].belief[2, 2] = FREE
+    Exchanger(agents)(chain_links(3), step=1)
+    assert agents[0].belief[2, 2] == FREE
+    assert "a2" in agents[0].teammates
+    assert agents[2].last_base_contact == 1
+
+
+def test_without_multi_hop_information_moves_one_link_per_step() -> None:
+    agents = make_agents(3)
+    agents[2].belief[2, 2] = FREE
+    exchange = Exchanger(agents)
+    exchange(chain_links(3), step=1, multi_hop=False)
+    assert agents[0].belief[2, 2] == UNKNOWN and agents[1].belief[2, 2] == FREE
+    assert "a2" not in agents[0].teammates
+    exchange(chain_links(3), step=2, multi_hop=False)
+    assert agents[0].belief[2, 2] == FREE
+    assert agents[0].teammates["a2"].step == 1
+
+
+def test_no_one_learns_of_an_agent_it_was_never_linked_to() -> None:
+    agents = make_agents(4)
+    links = np.zeros((4, 4), dtype=bool)
+    links[0, 1] = links[1, 0] = links[2, 3] = links[3, 2] = True
+    Exchanger(agents)(links, step=1)
+    assert set(agents[0].teammates) == {"a1"}
+    assert set(agents[3].teammates) == {"a2"}
+
+
+@pytest.mark.parametrize("multi_hop", [True, False])
+def test_repeated_contact_sends_only_what_changed(multi_hop: bool) -> None:
+    agents = make_agents(2, shape=(20, 30))
+    agents[0].belief[:10, :10] = FREE
+    exchange = Exchanger(agents)
+    first = exchange(chain_links(2), step=1, multi_hop=multi_hop)
+    assert first.cells == 100 and first.total >= 100 * 5
+    assert exchange(chain_links(2), step=2, multi_hop=multi_hop).cells == 0
+    agents[1].belief[15, 20:23] = OCCUPIED
+    third = exchange(chain_links(2), step=3, multi_hop=multi_hop)
+    assert third.cells == 3 and third.sent[1, 0] >= 3 * 5 and agents[0].belief[15, 21] == OCCUPIED
+
+
+def test_full_exchange_sends_whole_grids_every_time() -> None:
+    agents = make_agents(2, shape=(20, 30))
+    exchange = Exchanger(agents, full=True)
+    exchange(chain_links(2), step=1)
+    assert exchange(chain_links(2), step=2).cells == 2 * 600
+
+
+def run_beliefs(scenario_file: ScenarioFile, steps: int, **changes: Any) -> list[np.ndarray]:
+    """Every agent's belief and safe grid after each of ``steps`` steps."""
+    sim = Simulation.from_yaml(scenario_file(robots=THREE, steps=steps, **changes))
+    history = []
+    for _ in range(steps):
+        sim.step()
+        history.append(np.stack([a.belief | (a.safe.view(np.uint8) << 2) for a in sim.agents]))
+    return history
+
+
+@pytest.mark.parametrize("multi_hop", [True, False])
+def test_delta_exchange_ends_in_the_same_maps_as_full_exchange(
+    scenario_file: ScenarioFile, multi_hop: bool
+) -> None:
+    comm = {"model": "disk"}
+    simulation = {"multi_hop": multi_hop}
+    team = {"speed": 2, "radius": 1.0, "sensor": {"range": 30}, "comm_range": 12}
+    delta = run_beliefs(scenario_file, 40, communication=comm, simulation=simulation, team=team)
+    full = run_beliefs(
+        scenario_file, 40, communication={**comm, "maps": "full"}, simulation=simulation, team=team
+    )
+    for step, (got, expected) in enumerate(zip(delta, full, strict=True)):
+        assert np.array_equal(got, expected), f"maps differ after step {step + 1}"
+
+
+def link_history(sim: Simulation, steps: int) -> list[np.ndarray]:
+    return [sim.step() and sim.links.copy() for _ in range(steps)]
+
+
+def test_dropouts_reproduce_under_the_same_seed(scenario_file: ScenarioFile) -> None:
+    comm = {"model": "disk", "dropout": 0.4}
+    path = scenario_file(robots=THREE, communication=comm)
+    first = link_history(Simulation.from_yaml(path), 30)
+    again = link_history(Simulation.from_yaml(path), 30)
+    assert all(np.array_equal(a, b) for a, b in zip(first, again, strict=True))
+    never = link_history(Simulation.from_yaml(path, communication={"dropout": 0.0}), 30)
+    assert sum(int(x.sum()) for x in first) < sum(int(x.sum()) for x in never)
+    other = link_history(Simulation.from_yaml(path, seed=99), 30)
+    assert any(not np.array_equal(a, b) for a, b in zip(first, other, strict=True))
+
+
+def test_a_blackout_silences_an_agent_for_its_steps(scenario_file: ScenarioFile) -> None:
+    events = [{"step": 5, "until": 12, "blackout": ["base", "C"]}]
+    sim = Simulation.from_yaml(scenario_file(robots=THREE, events=events, steps=20))
+    silenced = []
+    for _ in range(14):
+        sim.step()
+        silenced.append(not sim.links[0].any() and not sim.links[3].any())
+        if sim.t == 5:
+            assert sim.events_now == ["blackout base,C (both) until 12"]
+    assert all(silenced[4:11])
+    assert not all(silenced[:4]) and not all(silenced[11:])
+    assert sim.robot("C").last_base_contact < 5 or sim.robot("C").last_base_contact >= 12
+
+
+def test_teammates_are_known_only_through_links(scenario_file: ScenarioFile) -> None:
+    team = {"speed": 2, "radius": 1.0, "sensor": {"range": 30}, "comm_range": 8}
+    sim = Simulation.from_yaml(scenario_file(robots=THREE, team=team, steps=60))
+    names = [a.name for a in sim.agents]
+    could_know = [{n} for n in names]  # who each agent could have heard of, through any chain
+    for _ in range(60):
+        sim.step()
+        for group in _groups(sim.links):
+            heard = set().union(*(could_know[i] for i in group))
+            for i in group:
+                could_know[i] = set(heard)
+        for i, agent in enumerate(sim.agents):
+            assert set(agent.teammates) <= could_know[i] - {agent.name}
+
+
+def _groups(links: np.ndarray) -> list[list[int]]:
+    from mresim_phys.comms.exchange import linked_groups
+
+    return linked_groups(links)
+
+
+def test_the_control_channel_carries_positions_but_no_maps(scenario_file: ScenarioFile) -> None:
+    team = {"speed": 2, "radius": 1.0, "sensor": {"range": 30}, "comm_range": 0.5}
+    comm = {"model": "disk", "control": {"model": "disk", "range": 200}}
+    base = {"position": [8, 30], "comm_range": 0.5}
+    path = scenario_file(robots=THREE, team=team, communication=comm, base_station=base)
+    sim = Simulation.from_yaml(path)
+    for _ in range(5):
+        record = sim.step()
+    assert record.links == 0 and record.comm_bytes == 0
+    assert record.control_links == 6 and record.control_bytes > 0
+    assert set(sim.base.teammates) == {"A", "B", "C"}
+    assert sim.base.teammates["A"].step == sim.t  # fresh positions over the control channel
+    assert not (sim.base.belief == FREE).any()  # ...but no map
+    assert record.latency_max == 0.0
+
+
+def test_comm_metrics_count_bytes_latency_and_base_contact(scenario_file: ScenarioFile) -> None:
+    team = {"speed": 2, "radius": 1.0, "sensor": {"range": 30}, "comm_range": 10}
+    sim = Simulation.from_yaml(scenario_file(robots=THREE, team=team, steps=80))
+    records = [sim.step() for _ in range(80)]
+    assert any(r.comm_bytes > 0 for r in records)
+    ages = [r.latency_max for r in records]
+    assert max(ages) > 0  # somebody was out of touch at some point
+    last = records[-1]
+    for robot in last.robots:
+        contact = robot.base_contact
+        assert contact <= last.step
+        assert last.latency_max >= last.step - contact - 0 or contact == -1
