@@ -18,7 +18,7 @@ from types import MappingProxyType
 import cv2
 import numpy as np
 
-from .frontiers import frontier_mask
+from .render_raster import AT_BASE, CLASSES, LabelGrids, colour_labels, packed_colours
 from .snapshot import AgentSnapshot, Snapshot
 from .types import FREE, OCCUPIED, UNKNOWN
 
@@ -32,8 +32,8 @@ DEFAULT_GLOBAL = frozenset(GLOBAL_LAYERS)
 DEFAULT_ROBOT = frozenset(ROBOT_LAYERS) - {"free_space", "safe_space"}
 DEFAULTS = DEFAULT_GLOBAL | DEFAULT_ROBOT
 _KINDS = f"global layers: {', '.join(GLOBAL_LAYERS)}; robot layers: {', '.join(ROBOT_LAYERS)}"
-_AT_BASE, _WALL, _SKELETON, _FRONTIER, _CLASSES = 2, 3, 4, 5, 6
 _SHIFT, _ONE, _FONT, _AA = 4, 16, cv2.FONT_HERSHEY_SIMPLEX, cv2.LINE_AA  # 4-bit fixed point
+_AREA = cv2.INTER_AREA
 _CLASS_COLOURS = ("team_known", "known_at_base", "wall", "skeleton", "frontier")  # classes 1-5
 _LEGEND = dict(zip(GLOBAL_LAYERS[:4], ("wall", *GLOBAL_LAYERS[1:4]), strict=True))  # -> colour
 assert (UNKNOWN, FREE, OCCUPIED) == (0, 1, 2)  # FREE is odd: ``belief & 1`` is the FREE mask
@@ -163,20 +163,12 @@ class Style:
             raise ValueError("Style.palette needs 1 to 20 colours")
         alpha = np.repeat((self.free_alpha, self.safe_alpha), n)[:, None, None]
         mixed = np.round((1 - alpha) * base + alpha * np.array(self.palette * 2)[:, None])
-        mixed[:, _AT_BASE + 1 :] = base[_AT_BASE + 1 :]  # (tint, class, BGR); walls stay black
-        table[: _CLASSES * (2 * n + 1), 0] = np.concatenate((base, mixed.reshape(-1, 3)))
+        mixed[:, AT_BASE + 1 :] = base[AT_BASE + 1 :]  # (tint, class, BGR); walls stay black
+        table[: CLASSES * (2 * n + 1), 0] = np.concatenate((base, mixed.reshape(-1, 3)))
         return table
 
 
 DEFAULT_STYLE = Style()
-
-
-def _bbox(mask: np.ndarray, pad: int = 0) -> tuple[slice, slice] | None:
-    """Slices of the bounding box of the non-zero cells of ``mask`` (+pad), None if empty."""
-    x, y, w, h = cv2.boundingRect(mask)
-    (rows, cols), lo = mask.shape, (max(y - pad, 0), max(x - pad, 0))
-    box = slice(lo[0], min(y + h + pad, rows)), slice(lo[1], min(x + w + pad, cols))
-    return box if w else None
 
 
 class Renderer:
@@ -201,9 +193,10 @@ class Renderer:
         self.size = tuple(max(n + n % 2, 2) for n in self.map_size)  # (width, height), even
         self._to_px = np.array(self.map_size) / (self.cols, self.rows) * _ONE
         self._lut = style.lut(layers)
+        self._table = packed_colours(self._lut)
         self._legend: tuple[tuple[str, ...], np.ndarray] | None = None
         # Scratch grids reused by every frame (fresh ones cost page faults at every frame).
-        self._grids = tuple(np.empty((self.rows, self.cols), dtype=np.uint8) for _ in range(3))
+        self._grids = LabelGrids((self.rows, self.cols))
         self._big = np.empty(self.map_size[::-1], dtype=np.uint8)
 
     def px(self, xy: Sequence[float] | np.ndarray) -> np.ndarray:
@@ -214,62 +207,22 @@ class Renderer:
         """The frame of ``snapshot``: (height, width, 3) uint8 BGR; the snapshot is not changed."""
         if snapshot.truth.shape != (self.rows, self.cols):
             raise ValueError(f"snapshot map {snapshot.truth.shape} != {(self.rows, self.cols)}")
-        image = self._colour(self._labels(snapshot))
+        label = self._grids.labels(snapshot, self.layers, len(self.style.palette))
+        image = self._colour(label)
         self._draw_vectors(image, snapshot)
         return image
-
-    def _labels(self, snapshot: Snapshot) -> np.ndarray:
-        """The label grid (class + 6 * tint) of ``snapshot``, in a scratch buffer.
-
-        Per robot, work is limited to the bounding box (+1) of its known cells, which holds
-        its free, frontier and safe cells. Tints keep the largest index: later robots win,
-        and safe space wins over free space.
-        """
-        on, n = self.layers.global_layers, len(self.style.palette)
-        label, work, tint = self._grids
-        work.fill(0)
-        tint.fill(0)
-        for robot in snapshot.robots if "team_known" in on else ():
-            np.bitwise_or(work, robot.belief, out=work)
-        np.bitwise_and(work, FREE, out=label)  # FREE in any robot's belief (FREE is odd)
-        if "known_at_base" in on:
-            np.equal(snapshot.base.belief, FREE, out=work.view(bool))
-            np.maximum(label, np.multiply(work, _AT_BASE, out=work), out=label)
-        if "walls" in on:
-            walls = np.asarray(snapshot.truth, dtype=bool).view(np.uint8)
-            np.maximum(label, np.multiply(walls, _WALL, out=work), out=label)
-        for i, robot in enumerate(snapshot.robots):
-            mine, box = self.layers.for_agent(robot.name), _bbox(robot.belief, pad=1)
-            if box is None:
-                continue
-            belief, lab, ti = robot.belief[box], label[box], tint[box]
-            if "free_space" in mine:
-                np.maximum(ti, (belief == FREE).view(np.uint8) * np.uint8(1 + i % n), out=ti)
-            if "safe_space" in mine:
-                safe = np.asarray(robot.safe[box], dtype=bool).view(np.uint8)
-                np.maximum(ti, safe * np.uint8(1 + n + i % n), out=ti)
-            if "frontiers" in mine:
-                frontier = frontier_mask(belief).view(np.uint8) * np.uint8(_FRONTIER)
-                np.maximum(lab, frontier, out=lab)
-            skeleton = robot.skeleton
-            if "skeleton" in mine and skeleton is not None:
-                skeleton = np.asarray(skeleton, dtype=bool).view(np.uint8) * np.uint8(_SKELETON)
-                np.maximum(label, skeleton, out=label)
-        label += np.multiply(tint, _CLASSES, out=tint)
-        return label
 
     def _colour(self, label: np.ndarray) -> np.ndarray:
         """Colour the label grid and resize it to the output size (padded to even)."""
         (mw, mh), (w, h) = self.map_size, self.size
-        upscale = mw >= self.cols  # upscale labels (nearest), downscale colours (area)
-        if upscale and (mw, mh) != label.shape[::-1]:
-            label = cv2.resize(label, (mw, mh), dst=self._big, interpolation=cv2.INTER_NEAREST)
-        image = cv2.applyColorMap(label, self._lut)  # = LUT(gray2bgr(label)), 2-3x faster
-        if not upscale:
-            image = cv2.resize(image, (mw, mh), interpolation=cv2.INTER_AREA)
-        if (w, h) != (mw, mh):
+        if mw < self.cols:  # downscale colours (area averaging), then pad
+            image = cv2.resize(cv2.applyColorMap(label, self._lut), (mw, mh), None, 0, 0, _AREA)
             pad = [int(v) for v in self._lut[0, 0]]
-            image = cv2.copyMakeBorder(image, 0, h - mh, 0, w - mw, cv2.BORDER_CONSTANT, value=pad)
+            return cv2.copyMakeBorder(image, 0, h - mh, 0, w - mw, cv2.BORDER_CONSTANT, value=pad)
+        if (mw, mh) != label.shape[::-1]:  # upscale labels (nearest), then colour
+            label = cv2.resize(label, (mw, mh), self._big, 0, 0, cv2.INTER_NEAREST)
+        image = np.empty((h, w, 3), dtype=np.uint8)
+        colour_labels(label, self._table, image)
         return image
 
     def _draw_vectors(self, image: np.ndarray, snap: Snapshot) -> None:
@@ -304,13 +257,13 @@ class Renderer:
                 radius = round(agent.comm_range * self.scale * _ONE)
                 cv2.circle(image, c, radius, colour, 1, _AA, _SHIFT)
         on, index = self.layers.global_layers, {a.name: i for i, a in enumerate(snap.agents)}
-        links = np.argwhere(np.triu(snap.links, 1)) if "links" in on else []
-        lines = [(i, j, self.style.link, 1) for i, j in links]
+        ends = centres[np.argwhere(np.triu(snap.links, 1))] if "links" in on else []
+        if len(ends):  # one call for all links: 1-pixel AA polylines draw as cv2.line does
+            cv2.polylines(image, list(ends), False, self.style.link, 1, _AA, _SHIFT)
         if "hierarchy" in on:
             parents = [(i, index.get(a.parent)) for i, a in enumerate(snap.agents)]
-            lines += [(i, j, self.style.hierarchy, 2) for i, j in parents if j is not None]
-        for i, j, colour, width in lines:
-            cv2.line(image, centres[i], centres[j], colour, width, _AA, _SHIFT)
+            for i, j in ((i, j) for i, j in parents if j is not None):
+                cv2.line(image, centres[i], centres[j], self.style.hierarchy, 2, _AA, _SHIFT)
 
     def _draw_plans(self, image: np.ndarray, robot: AgentSnapshot, colour: BGR) -> None:
         """A robot's path, goal and rendezvous points (each when its layer is on)."""
@@ -370,7 +323,7 @@ def draw_header(image: np.ndarray, snap: Snapshot, style: Style) -> None:
     text = f"step {snap.step}   explored {snap.explored:.1%}   at base {snap.known_at_base:.1%}"
     text += f"   robots {snap.alive}/{len(snap.robots)}"
     (_, th), base = cv2.getTextSize(text, _FONT, style.font_scale, 1)
-    image[: th + base + 6] = style.header_bg
+    cv2.rectangle(image, (0, 0), (image.shape[1], th + base + 5), style.header_bg, -1)
     cv2.putText(image, text, (4, th + 3), _FONT, style.font_scale, style.header_text, 1, _AA)
 
 
