@@ -30,14 +30,15 @@ from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import breadth_first_order, connected_components
 
 from ..agents import Agent, TeammateInfo
-from .ledger import Box, Ledger, cell_codes, received_tick, sensed_tick, window
+from .deltas import select_cells
+from .ledger import Ledger, received_tick, sensed_tick
 
 CELL_BYTES = 5
 RECORD_BYTES = 40
 
-# One map transmission: the box, which of its cells are sent (None: all) and the
-# sender's cell codes in the box (see ledger.cell_codes).
-Packet = tuple[Box, np.ndarray | None, np.ndarray]
+# The map part of one transmission: flat cell indices and their codes
+# (the occupancy value, plus 4 where the cell is safe space).
+Cells = tuple[np.ndarray, np.ndarray]
 
 
 @dataclass
@@ -136,10 +137,11 @@ class Exchange:
     ) -> None:
         """One hop only: every linked agent gets what its neighbours knew before the phase."""
         pairs = [(int(i), int(j)) for i, j in np.argwhere(links)]
-        packets = {(i, j): self.package(agents[i], j, step) for i, j in pairs}
-        for (i, j), (maps, records) in packets.items():
-            cells = self.deliver(agents[j], maps, step, i)
-            traffic.add(i, j, cells, learn_records(agents[j], records), self.cell_bytes)
+        packets = {(i, j): self.package(agents[i], agents[j], step) for i, j in pairs}
+        for (i, j), (cells, records) in packets.items():
+            self.deliver(agents[j], cells, step, i)
+            count = 0 if cells is None else len(cells[0])
+            traffic.add(i, j, count, learn_records(agents[j], records), self.cell_bytes)
             if self.maps:
                 self.ledger.synced[i, j] = sensed_tick(step)
 
@@ -158,65 +160,45 @@ class Exchange:
         only_lacking: bool,
     ) -> None:
         """One transmission of maps and records from ``sender`` to ``receiver``."""
-        maps = self.select(agents[sender], agents[receiver], sender, receiver, only_lacking)
-        cells = self.deliver(agents[receiver], maps, step, sender)
+        cells = self.select(agents[sender], agents[receiver], only_lacking)
+        self.deliver(agents[receiver], cells, step, sender)
         records = learn_records(agents[receiver], held_records(agents[sender], step))
-        traffic.add(sender, receiver, cells, records, self.cell_bytes)
+        traffic.add(
+            sender, receiver, 0 if cells is None else len(cells[0]), records, self.cell_bytes
+        )
 
     def package(
-        self, agent: Agent, receiver: int, step: int
-    ) -> tuple[Packet | None, list[TeammateInfo]]:
-        """What ``agent`` would send to ``receiver``, copied before anything is merged."""
-        maps = self.select(agent, None, agent.index, receiver, only_lacking=False)
-        if maps is not None:
-            box, mask, codes = maps
-            maps = (box, mask, codes.copy())
-        return maps, held_records(agent, step)
+        self, agent: Agent, receiver: Agent, step: int
+    ) -> tuple[Cells | None, list[TeammateInfo]]:
+        """What ``agent`` sends to ``receiver``, taken before anything is merged."""
+        return self.select(agent, receiver, only_lacking=False), held_records(agent, step)
 
-    def select(
-        self,
-        sender: Agent,
-        receiver: Agent | None,
-        i: int,
-        j: int,
-        only_lacking: bool,
-    ) -> Packet | None:
-        """(box, cells to send or None for all, sender codes in the box) of one transmission."""
+    def select(self, sender: Agent, receiver: Agent, only_lacking: bool) -> Cells | None:
+        """The map cells of one transmission (flat indices, cell codes), None without maps."""
         if not self.maps:
             return None
+        i, j, ledger = sender.index, receiver.index, self.ledger
         if self.full_maps:
-            box = (0, sender.belief.shape[0], 0, sender.belief.shape[1])
-            return box, None, cell_codes(sender.belief, sender.safe)
-        since = int(self.ledger.synced[i, j])
-        box = self.ledger.newer_box(i, since)
-        if box is None:
+            codes = ledger.copies[i].reshape(-1)
+            return np.arange(codes.size, dtype=np.int64), codes.copy()
+        boxes = ledger.newer_boxes(i, int(ledger.synced[i, j]))
+        if len(boxes) == 0:
             return None
-        stamps, codes, origins = window(
-            box, self.ledger.stamps[i], self.ledger.copies[i], self.ledger.origins[i]
+        return select_cells(
+            boxes,
+            int(ledger.synced[i, j]),
+            j,
+            ledger.stamps[i],
+            ledger.origins[i],
+            ledger.copies[i],
+            ledger.copies[j],
+            only_lacking,
         )
-        mask = (stamps > since) & (origins != j)
-        if only_lacking and receiver is not None:
-            mask &= codes != cell_codes(*window(box, receiver.belief, receiver.safe))
-        return box, mask, codes
 
-    def deliver(
-        self,
-        receiver: Agent,
-        maps: Packet | None,
-        step: int,
-        sender: int,
-    ) -> int:
-        """Merge a transmission's cells into ``receiver``; return how many cells were sent."""
-        if maps is None:
-            return 0
-        box, mask, codes = maps
-        belief, safe = window(box, receiver.belief, receiver.safe)
-        sent = codes if mask is None else np.where(mask, codes, np.uint8(0))
-        np.maximum(belief, sent & 3, out=belief)
-        safe |= (sent & 4).astype(bool)
-        codes_now = cell_codes(belief, safe)
-        self.ledger.stamp(receiver.index, box, codes_now, received_tick(step), origin=sender)
-        return codes.size if mask is None else int(np.count_nonzero(mask))
+    def deliver(self, receiver: Agent, cells: Cells | None, step: int, sender: int) -> None:
+        """Merge a transmission's cells into ``receiver``'s grids."""
+        if cells is not None and len(cells[0]):
+            self.ledger.merge(receiver.index, cells, (receiver.belief, receiver.safe), step, sender)
 
 
 def stamp_base_contacts(

@@ -20,10 +20,11 @@ from __future__ import annotations
 import numpy as np
 
 from ..types import BeliefGrid, BoolGrid
+from .deltas import merge_cells, stamp_changes
 
 Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)
 OWN = -1  # origin of a cell value the agent sensed itself
-MAX_BOXES = 24  # per agent; the oldest two are merged beyond this (a superset stays correct)
+MAX_BOXES = 96  # per agent; the oldest two are merged beyond this (a superset stays correct)
 
 
 def union_box(a: Box | None, b: Box | None) -> Box | None:
@@ -31,11 +32,6 @@ def union_box(a: Box | None, b: Box | None) -> Box | None:
     if a is None or b is None:
         return a or b
     return min(a[0], b[0]), max(a[1], b[1]), min(a[2], b[2]), max(a[3], b[3])
-
-
-def cell_codes(belief: BeliefGrid, safe: BoolGrid) -> np.ndarray:
-    """One byte per cell: the occupancy value, plus 4 where the cell is safe space."""
-    return belief | (safe.view(np.uint8) << 2)
 
 
 def sensed_tick(step: int) -> int:
@@ -55,7 +51,9 @@ class Ledger:
         self.stamps = [np.full(shape, -1, dtype=np.int32) for _ in range(n)]
         self.copies = [np.zeros(shape, dtype=np.uint8) for _ in range(n)]
         self.origins = [np.full(shape, OWN, dtype=np.int16) for _ in range(n)]
-        self.boxes: list[list[tuple[int, Box]]] = [[] for _ in range(n)]
+        self.box_ticks = np.zeros((n, MAX_BOXES + 1), dtype=np.int64)
+        self.boxes = np.zeros((n, MAX_BOXES + 1, 4), dtype=np.int64)
+        self.box_count = np.zeros(n, dtype=np.int64)
         self.pending: list[Box | None] = [None] * n
         self.synced = np.full((n, n), -1, dtype=np.int64)
 
@@ -66,43 +64,46 @@ class Ledger:
     def stamp_sensed(self, index: int, belief: BeliefGrid, safe: BoolGrid, step: int) -> None:
         """Give the cells agent ``index`` changed itself since the last call this step's tick."""
         box, self.pending[index] = self.pending[index], None
-        if box is not None:
-            self.stamp(index, box, cell_codes(*window(box, belief, safe)), sensed_tick(step))
-
-    def stamp(self, index: int, box: Box, codes: np.ndarray, tick: int, origin: int = -1) -> int:
-        """Stamp the cells of ``box`` whose code differs from the last copy; return how many.
-
-        ``origin`` is the agent the new values came from (-1: the agent's own sensing).
-        """
-        r0, r1, c0, c1 = box
-        copy = self.copies[index][r0:r1, c0:c1]
-        changed = codes != copy
-        count = int(np.count_nonzero(changed))
-        if count:
-            self.stamps[index][r0:r1, c0:c1][changed] = tick
-            self.origins[index][r0:r1, c0:c1][changed] = origin
-            copy[changed] = codes[changed]
-            self.add_box(index, tick, box)
-        return count
+        if box is None:
+            return
+        tick = sensed_tick(step)
+        args = (self.copies[index], self.stamps[index], self.origins[index], tick)
+        changed, *tight = stamp_changes(np.array(box, np.int64), belief, safe, *args)
+        if changed:
+            self.add_box(index, tick, (tight[0], tight[1], tight[2], tight[3]))
 
     def add_box(self, index: int, tick: int, box: Box) -> None:
         """Remember that agent ``index`` has cells of ``tick`` inside ``box``."""
-        boxes = self.boxes[index]
-        if boxes and boxes[-1][0] == tick:
-            boxes[-1] = (tick, union_box(boxes[-1][1], box) or box)
-        else:
-            boxes.append((tick, box))
-        if len(boxes) > MAX_BOXES:
-            (_, first), (tick2, second) = boxes[0], boxes[1]
-            boxes[:2] = [(tick2, union_box(first, second) or first)]
+        k = self.box_count[index]
+        self.box_ticks[index, k], self.boxes[index, k] = tick, box
+        if k < MAX_BOXES:
+            self.box_count[index] = k + 1
+            return
+        boxes, ticks = self.boxes[index], self.box_ticks[index]
+        merged = union_box(tuple(boxes[0].tolist()), tuple(boxes[1].tolist()))  # type: ignore[arg-type]
+        boxes[1], ticks[1] = merged, ticks[1]
+        boxes[:-1], ticks[:-1] = boxes[1:].copy(), ticks[1:].copy()
 
-    def newer_box(self, index: int, tick: int) -> Box | None:
-        """A box holding every cell of agent ``index`` stamped after ``tick``."""
-        box: Box | None = None
-        for stamped, part in self.boxes[index]:
-            if stamped > tick:
-                box = union_box(box, part)
-        return box
+    def newer_boxes(self, index: int, tick: int) -> np.ndarray:
+        """(k, 4) boxes that hold every cell of agent ``index`` stamped after ``tick``."""
+        k = self.box_count[index]
+        return self.boxes[index, :k][self.box_ticks[index, :k] > tick]
+
+    def merge(
+        self,
+        index: int,
+        cells: tuple[np.ndarray, np.ndarray],
+        grids: tuple[BeliefGrid, BoolGrid],
+        step: int,
+        sender: int,
+    ) -> int:
+        """Merge received ``cells`` (flat indices, codes) into agent ``index``'s grids."""
+        tick = received_tick(step)
+        args = (self.copies[index], self.stamps[index], self.origins[index], tick, sender)
+        changed, *tight = merge_cells(*cells, *grids, *args)
+        if changed:
+            self.add_box(index, tick, (tight[0], tight[1], tight[2], tight[3]))
+        return changed
 
     def mark_synced(self, members: list[int], tick: int) -> None:
         """Every pair of ``members`` now holds what the other had up to ``tick``."""
@@ -115,9 +116,3 @@ def box_around(position: tuple[float, float], radius: float, shape: tuple[int, i
     x, y = position
     r0, c0 = max(int(y - radius), 0), max(int(x - radius), 0)
     return r0, min(int(y + radius) + 1, shape[0]), c0, min(int(x + radius) + 1, shape[1])
-
-
-def window(box: Box, *grids: np.ndarray) -> list[np.ndarray]:
-    """Views of ``grids`` inside ``box``."""
-    r0, r1, c0, c1 = box
-    return [grid[r0:r1, c0:c1] for grid in grids]

@@ -1,0 +1,116 @@
+"""Map deltas (phase 6, kernels): pick and merge the cells one transmission carries.
+
+Each cell of an agent has a *code* (occupancy value, plus 4 where it is safe
+space), the *tick* it last changed and the agent its value came from. A
+transmission selects, inside a few boxes, the sender's cells newer than the
+pair's last sync and not received from the receiver; the receiver merges them
+(``max`` of occupancy, OR of safe space) and stamps what changed. ``numba``
+kernels visit each box cell once with no temporary grids: the numpy version of
+the same steps cost 8-10 ms per 8-robot step on the office map, mostly in
+temporaries over the union of every robot's scan windows.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ..types import BeliefGrid, BoolGrid, IntArray
+
+
+@njit(cache=True, nogil=True)
+def _seen_before(boxes: IntArray, k: int, r: int, c: int) -> bool:
+    """Whether cell (r, c) lies in one of ``boxes[:k]`` (visited already)."""
+    for m in range(k):  # noqa: SIM110 (numba compiles loops, not generators)
+        if boxes[m, 0] <= r < boxes[m, 1] and boxes[m, 2] <= c < boxes[m, 3]:
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True)
+def select_cells(
+    boxes: IntArray,
+    since: int,
+    receiver: int,
+    stamps: np.ndarray,
+    origins: np.ndarray,
+    codes: np.ndarray,
+    receiver_codes: np.ndarray,
+    only_lacking: bool,
+) -> tuple[IntArray, np.ndarray]:
+    """(flat indices, codes) of the sender's cells newer than ``since`` inside ``boxes``.
+
+    Cells whose value came from ``receiver`` are skipped; with ``only_lacking``
+    so are cells whose code the receiver already holds.
+    """
+    total = 0
+    for k in range(len(boxes)):
+        total += (boxes[k, 1] - boxes[k, 0]) * (boxes[k, 3] - boxes[k, 2])
+    index = np.empty(total, np.int64)
+    values = np.empty(total, np.uint8)
+    cols, n = stamps.shape[1], 0
+    for k in range(len(boxes)):
+        for r in range(boxes[k, 0], boxes[k, 1]):
+            for c in range(boxes[k, 2], boxes[k, 3]):
+                if stamps[r, c] <= since or origins[r, c] == receiver:
+                    continue
+                if only_lacking and codes[r, c] == receiver_codes[r, c]:
+                    continue
+                if k > 0 and _seen_before(boxes, k, r, c):
+                    continue
+                index[n] = r * cols + c
+                values[n] = codes[r, c]
+                n += 1
+    return index[:n], values[:n]
+
+
+@njit(cache=True, nogil=True)
+def merge_cells(
+    index: IntArray,
+    values: np.ndarray,
+    belief: BeliefGrid,
+    safe: BoolGrid,
+    codes: np.ndarray,
+    stamps: np.ndarray,
+    origins: np.ndarray,
+    tick: int,
+    sender: int,
+) -> tuple[int, int, int, int, int]:
+    """Merge received cells; return (cells changed, r0, r1, c0, c1 of the changed ones)."""
+    cols = belief.shape[1]
+    changed, r0, r1, c0, c1 = 0, belief.shape[0], 0, cols, 0
+    for k in range(len(index)):
+        r, c = index[k] // cols, index[k] % cols
+        old = codes[r, c]
+        new = max(old & 3, values[k] & 3) | ((old | values[k]) & 4)
+        if new == old:
+            continue
+        belief[r, c] = new & 3
+        safe[r, c] = (new & 4) != 0
+        codes[r, c], stamps[r, c], origins[r, c] = new, tick, sender
+        changed += 1
+        r0, r1, c0, c1 = min(r0, r), max(r1, r + 1), min(c0, c), max(c1, c + 1)
+    return changed, r0, r1, c0, c1
+
+
+@njit(cache=True, nogil=True)
+def stamp_changes(
+    box: IntArray,
+    belief: BeliefGrid,
+    safe: BoolGrid,
+    codes: np.ndarray,
+    stamps: np.ndarray,
+    origins: np.ndarray,
+    tick: int,
+) -> tuple[int, int, int, int, int]:
+    """Stamp the cells of ``box`` an agent changed itself; return (count, r0, r1, c0, c1)."""
+    changed, r0, r1, c0, c1 = 0, box[1], box[0], box[3], box[2]
+    for r in range(box[0], box[1]):
+        for c in range(box[2], box[3]):
+            code = belief[r, c] | (np.uint8(4) if safe[r, c] else np.uint8(0))
+            if code == codes[r, c]:
+                continue
+            codes[r, c], stamps[r, c], origins[r, c] = code, tick, -1
+            changed += 1
+            r0, r1, c0, c1 = min(r0, r), max(r1, r + 1), min(c0, c), max(c1, c + 1)
+    return changed, r0, r1, c0, c1
