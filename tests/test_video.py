@@ -117,6 +117,59 @@ def test_recorder_closes_on_error(tmp_path: Path) -> None:
     assert len(read_back(tmp_path / "x.mp4")) == 1
 
 
+def test_background_encoding_equals_foreground(tmp_path: Path) -> None:
+    for background in (True, False):
+        with VideoRecorder(
+            tmp_path / f"{background}.mp4", 10, (WIDTH, HEIGHT), None, background
+        ) as v:
+            for frame in frames(9):
+                v.write(frame)
+    back, fore = read_back(tmp_path / "True.mp4"), read_back(tmp_path / "False.mp4")
+    assert len(back) == len(fore) == 9
+    assert all(np.array_equal(a, b) for a, b in zip(back, fore, strict=True))
+
+
+def test_frames_can_be_reused_after_write(tmp_path: Path) -> None:
+    buffer = np.empty((HEIGHT, WIDTH, 3), np.uint8)
+    with VideoRecorder(tmp_path / "x.mp4", 10, (WIDTH, HEIGHT)) as video:
+        for value in (250, 5, 250, 5):
+            buffer[:] = value
+            video.write(buffer)
+            buffer[:] = 128  # after write: must not reach the file
+    levels = np.array([250, 5, 128])  # 128 would mean a frame changed after write
+    nearest = [int(np.argmin(abs(levels - np.median(f)))) for f in read_back(tmp_path / "x.mp4")]
+    assert nearest == [0, 1, 0, 1]
+
+
+class FailingWriter:
+    """Stands in for cv2.VideoWriter: opens, then fails on every frame."""
+
+    fourcc = staticmethod(cv2.VideoWriter.fourcc)
+
+    def __init__(self, *args: object) -> None:
+        self.released = False
+
+    def isOpened(self) -> bool:
+        return True
+
+    def write(self, frame: np.ndarray) -> None:
+        raise cv2.error("no space left on device")
+
+    def release(self) -> None:
+        self.released = True
+
+
+def test_encoding_failures_surface_on_close(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(cv2, "VideoWriter", FailingWriter)
+    video = VideoRecorder(tmp_path / "x.mp4", 10, (WIDTH, HEIGHT))
+    video.write(frames(1)[0])
+    with pytest.raises(MresimError, match="encoding failed: no space"):
+        video.close()
+    video.close()  # idempotent, also after a failure
+
+
 def test_write_png(tmp_path: Path) -> None:
     frame = frames(3)[2]
     write_png(tmp_path / "sub" / "f.png", frame)
