@@ -8,10 +8,13 @@ group or are named as ``package.module:ClassName``. See docs/planning.md.
 
 from __future__ import annotations
 
-from . import astar
+from . import astar, jps, topological
 from .base import PLANNERS, Planner, PlannerParams
+from .topomap import TopologicalMap, shared_map
 
-BUILT_IN = ("astar",)
-assert {astar.AStar.name} == set(BUILT_IN)
+BUILT_IN = ("astar", "jps", "topological")
+assert {astar.AStar.name, jps.JumpPointSearch.name, topological.TopologicalPlanner.name} == set(
+    BUILT_IN
+)
 
-__all__ = ["BUILT_IN", "PLANNERS", "Planner", "PlannerParams"]
+__all__ = ["BUILT_IN", "PLANNERS", "Planner", "PlannerParams", "TopologicalMap", "shared_map"]

@@ -17,7 +17,17 @@ from numpy.typing import NDArray
 
 from ..types import BoolGrid, FloatArray
 from .base import PLANNERS, GridPlanner, no_path
-from .grid import NO_PRED, SQRT2, Window, heap_new, heap_pop, heap_push, octile, walk_back
+from .grid import (
+    NO_PRED,
+    SQRT2,
+    Window,
+    heap_grow,
+    heap_new,
+    heap_pop,
+    heap_push,
+    octile,
+    walk_back,
+)
 
 _OFFSETS = ((-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1))
 NO_LABELS = np.zeros(0, dtype=np.int32)
@@ -46,9 +56,7 @@ def astar_kernel(
     tr, tc = target // wp, target % wp
     fs, gs, nodes = heap_new(1024)
     g[source] = 0.0
-    fs, gs, nodes, size = heap_push(
-        fs, gs, nodes, 0, octile(source // wp, source % wp, tr, tc), 0.0, source
-    )
+    size = heap_push(fs, gs, nodes, 0, octile(source // wp, source % wp, tr, tc), 0.0, source)
     expanded = 0
     while size > 0:
         u, size = heap_pop(fs, gs, nodes, size)
@@ -75,7 +83,9 @@ def astar_kernel(
             if cost < g[v]:
                 g[v], pred[v] = cost, u
                 f = cost + octile(ur + dr, uc + dc, tr, tc)
-                fs, gs, nodes, size = heap_push(fs, gs, nodes, size, f, cost, v)
+                if size == len(fs):
+                    fs, gs, nodes = heap_grow(fs, gs, nodes)
+                size = heap_push(fs, gs, nodes, size, f, cost, v)
     return g[target], pred, expanded
 
 

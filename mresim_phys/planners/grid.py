@@ -83,14 +83,22 @@ def heap_new(capacity: int) -> tuple[FloatArray, FloatArray, NDArray[np.int64]]:
 
 
 @njit(cache=True, nogil=True)
+def heap_grow(
+    fs: FloatArray, gs: FloatArray, nodes: NDArray[np.int64]
+) -> tuple[FloatArray, FloatArray, NDArray[np.int64]]:
+    """The heap storage with twice the capacity (called by a kernel when it is full)."""
+    return (
+        np.concatenate((fs, np.empty_like(fs))),
+        np.concatenate((gs, np.empty_like(gs))),
+        np.concatenate((nodes, np.empty_like(nodes))),
+    )
+
+
+@njit(cache=True, nogil=True)
 def heap_push(
     fs: FloatArray, gs: FloatArray, nodes: NDArray[np.int64], size: int, f: float, g: float, n: int
-) -> tuple[FloatArray, FloatArray, NDArray[np.int64], int]:
-    """Push ``(f, g, n)``; the storage doubles when full (so it is returned)."""
-    if size == len(fs):
-        fs = np.concatenate((fs, np.empty_like(fs)))
-        gs = np.concatenate((gs, np.empty_like(gs)))
-        nodes = np.concatenate((nodes, np.empty_like(nodes)))
+) -> int:
+    """Push ``(f, g, n)`` (the caller ensures ``size < capacity``); returns the new size."""
     i = size
     while i > 0:
         parent = (i - 1) >> 1
@@ -99,7 +107,7 @@ def heap_push(
         fs[i], gs[i], nodes[i] = fs[parent], gs[parent], nodes[parent]
         i = parent
     fs[i], gs[i], nodes[i] = f, g, n
-    return fs, gs, nodes, size + 1
+    return size + 1
 
 
 @njit(cache=True, nogil=True)
@@ -126,7 +134,7 @@ def heap_pop(
 
 
 @njit(cache=True, nogil=True)
-def walk_back(pred: NDArray[np.int64], target: int) -> NDArray[np.int64]:
+def walk_back(pred: NDArray[np.integer], target: int) -> NDArray[np.int64]:
     """Nodes from the root of ``pred`` to ``target`` (``pred[root] == NO_PRED``)."""
     count, node = 1, target
     while pred[node] != NO_PRED:

@@ -128,9 +128,10 @@ class FrontierExploration:
         chosen = self._auction(view, context, frontiers, targets, costs, candidates)
         self._chasing = frontiers.cells_rc[frontiers.cluster_of == chosen]
         row, col = (int(v) for v in targets[chosen])
+        path = context.plan_to(row, col)
         info = {"frontiers": frontiers, "target_cluster": chosen, **context.planner_info()}
         return Decision(
-            path=context.plan_to(row, col),
+            path=path,
             goal=(col + 0.5, row + 0.5),
             look_at=nearest_cell_centre(self._chasing, row, col),
             info=info,
