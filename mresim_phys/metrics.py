@@ -113,3 +113,34 @@ class Milestones:
                 key = str(threshold)
                 if table[key] is None and value >= threshold:
                     table[key] = record.step
+
+
+@dataclass
+class CommTotals:
+    """Communication over the whole run, for ``summary.json``."""
+
+    comm_bytes: int = 0
+    control_bytes: int = 0
+    link_steps: int = 0  # sum over steps of the linked pairs
+    latency_max: float = 0.0
+    latency_sum: float = 0.0
+    steps: int = 0
+
+    def update(self, record: StepRecord) -> None:
+        """Add one step."""
+        self.comm_bytes += record.comm_bytes
+        self.control_bytes += record.control_bytes
+        self.link_steps += record.links
+        self.latency_max = max(self.latency_max, record.latency_max)
+        self.latency_sum += record.latency_mean
+        self.steps += 1
+
+    def summary(self) -> dict[str, float | int]:
+        """The totals as JSON-ready numbers."""
+        return {
+            "comm_bytes": self.comm_bytes,
+            "control_bytes": self.control_bytes,
+            "mean_links": self.link_steps / self.steps if self.steps else 0.0,
+            "latency_max": self.latency_max,
+            "latency_mean": self.latency_sum / self.steps if self.steps else 0.0,
+        }

@@ -16,7 +16,7 @@ from typing import Any
 
 import yaml
 
-from .metrics import Milestones, StepRecord, csv_header
+from .metrics import CommTotals, Milestones, StepRecord, csv_header
 from .scenario import Scenario
 
 
@@ -62,6 +62,7 @@ def summarise(
     milestones: Milestones,
     wall_time_s: float,
     stop_reason: str,
+    comm: CommTotals | None = None,
 ) -> dict[str, Any]:
     """The run's headline numbers for ``summary.json``."""
     return {
@@ -77,5 +78,9 @@ def summarise(
         "steps_to_known_at_base": milestones.known_at_base,
         "total_distance": last.distance,
         "alive": last.alive,
-        "robots": {r.name: {"distance": r.distance, "state": r.state} for r in last.robots},
+        "robots": {
+            r.name: {"distance": r.distance, "state": r.state, "base_contact": r.base_contact}
+            for r in last.robots
+        },
+        "communication": (comm or CommTotals()).summary(),
     }

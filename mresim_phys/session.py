@@ -197,6 +197,6 @@ def run_session(
         for recorder in recorders:
             recorder.close()
     elapsed = time.perf_counter() - started
-    summary = summarise(sim.scenario, sim.record, sim.milestones, elapsed, reason)
+    summary = summarise(sim.scenario, sim.record, sim.milestones, elapsed, reason, sim.comm_totals)
     writer.write_summary(summary)
     return Outcome(summary, out_dir, video, reason)

@@ -26,7 +26,7 @@ from .comms.network import Network, build_network
 from .errors import ScenarioError
 from .load import load_scenario
 from .mapping import integrate_scan
-from .metrics import Milestones, RobotRecord, StepRecord, base_latency
+from .metrics import CommTotals, Milestones, RobotRecord, StepRecord, base_latency
 from .motion import MoveRules, take_step
 from .rng import named_stream
 from .scenario import BlackoutEvent, Scenario
@@ -59,6 +59,7 @@ class Simulation:
         self.comm = self.network.idle(len(self.agents))
         self.known_at_base = 0.0
         self.milestones = Milestones()
+        self.comm_totals = CommTotals()
         self._sensing_rngs = [named_stream(scenario.seed, "sensing", r.index) for r in self.robots]
         self.rules = MoveRules(scenario.simulation.scan == "point", self.robot_filter)
         for robot in self.robots:
@@ -271,6 +272,7 @@ class Simulation:
             latency_mean=latency[1],
         )
         self.milestones.update(record)
+        self.comm_totals.update(record)
         self.phase_times["metrics"] += perf_counter() - started
         return record
 

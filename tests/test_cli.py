@@ -82,6 +82,11 @@ def test_run_writes_summary_json(ran: tuple[Path, Path]) -> None:
     assert summary["final_known_at_base"] == float(last["known_at_base"])
     for key in ("steps_to_explored", "steps_to_known_at_base"):
         assert set(summary[key]) == {"0.5", "0.9", "0.95"}
+    rows = read_metrics(out)
+    comm = summary["communication"]
+    assert comm["comm_bytes"] == sum(int(r["comm_bytes"]) for r in rows) > 0
+    assert comm["latency_max"] == max(float(r["latency_max"]) for r in rows)
+    assert summary["robots"]["A"]["base_contact"] == int(last["base_contact_A"])
 
 
 def test_run_writes_the_fully_resolved_scenario(ran: tuple[Path, Path]) -> None:
