@@ -25,7 +25,11 @@ BASE_NAME = "base"
 
 @dataclass(frozen=True)
 class TeammateInfo:
-    """What one agent last heard about another: where it was, where it was heading, when."""
+    """What one agent last heard about another: where it was, where it was heading, when.
+
+    ``step`` is when the record was true (its sender's step); ``learned`` the step at
+    which the holder received it (-1 for an agent's own record, not yet sent).
+    """
 
     name: str
     position: tuple[float, float]
@@ -33,6 +37,7 @@ class TeammateInfo:
     state: str
     role: str
     step: int
+    learned: int = -1
 
 
 def empty_belief(shape: tuple[int, int]) -> tuple[BeliefGrid, BoolGrid]:

@@ -69,6 +69,7 @@ def test_exchange_merges_maps_known_beats_unknown_obstacle_beats_free() -> None:
         assert agent.belief[3, 3] == UNKNOWN
         assert agent.safe[2, 2]
     assert a.teammates["a1"].step == 3 and b.teammates["a0"].position == (0.0, 0.0)
+    assert a.teammates["a1"].learned == 3
 
 
 def test_multi_hop_relays_along_a_chain_in_one_step() -> None:
@@ -89,7 +90,8 @@ def test_without_multi_hop_information_moves_one_link_per_step() -> None:
     assert "a2" not in agents[0].teammates
     exchange(chain_links(3), step=2, multi_hop=False)
     assert agents[0].belief[2, 2] == FREE
-    assert agents[0].teammates["a2"].step == 1
+    assert agents[0].teammates["a2"].step == 1  # true at step 1, relayed by a1
+    assert agents[0].teammates["a2"].learned == 2
 
 
 def test_no_one_learns_of_an_agent_it_was_never_linked_to() -> None:

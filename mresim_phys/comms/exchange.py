@@ -23,7 +23,7 @@ Without it, each agent merges what its direct neighbours knew before the phase.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import numpy as np
 from scipy.sparse import csr_matrix
@@ -84,13 +84,13 @@ def held_records(agent: Agent, step: int) -> list[TeammateInfo]:
     return [*agent.teammates.values(), agent.own_record(step)]
 
 
-def learn_records(receiver: Agent, records: Sequence[TeammateInfo]) -> int:
-    """Keep the records newer than the receiver's; return how many it learned."""
+def learn_records(receiver: Agent, records: Sequence[TeammateInfo], step: int) -> int:
+    """Keep the records newer than the receiver's, stamped as learned at ``step``."""
     learned = 0
     for record in records:
         held = receiver.teammates.get(record.name)
         if record.name != receiver.name and (held is None or record.step > held.step):
-            receiver.teammates[record.name] = record
+            receiver.teammates[record.name] = replace(record, learned=step)
             learned += 1
     return learned
 
@@ -141,7 +141,7 @@ class Exchange:
         for (i, j), (cells, records) in packets.items():
             self.deliver(agents[j], cells, step, i)
             count = 0 if cells is None else len(cells[0])
-            traffic.add(i, j, count, learn_records(agents[j], records), self.cell_bytes)
+            traffic.add(i, j, count, learn_records(agents[j], records, step), self.cell_bytes)
             if self.maps:
                 self.ledger.synced[i, j] = sensed_tick(step)
 
@@ -162,7 +162,7 @@ class Exchange:
         """One transmission of maps and records from ``sender`` to ``receiver``."""
         cells = self.select(agents[sender], agents[receiver], only_lacking)
         self.deliver(agents[receiver], cells, step, sender)
-        records = learn_records(agents[receiver], held_records(agents[sender], step))
+        records = learn_records(agents[receiver], held_records(agents[sender], step), step)
         traffic.add(
             sender, receiver, 0 if cells is None else len(cells[0]), records, self.cell_bytes
         )
