@@ -6,15 +6,16 @@ base, 3 wall, 4 skeleton, 5 frontier (the larger wins). Tints: 0 none, ``1 + i``
 later robots over earlier ones, safe space over free space). ``render.Renderer`` colours
 labels with one lookup table.
 
-Per robot, the first pass (:func:`or_known_box`) ORs its belief into the team grid and finds
-the bounding box of its known cells; the second (:func:`mark_robot`) runs over that box (+1)
-only and fuses the free and safe tints with the frontier test (a FREE cell with an UNKNOWN
-cell among its 8 neighbours, as ``frontiers.frontier_mask``). The frontier test fills one
-row buffer per row ("an UNKNOWN cell above, at or below, in this column"), so every inner
-loop is branch-free over contiguous row slices and vectorises. These replaced ~20 numpy/cv2 calls per robot (bounding rectangle, masks,
-products and maxima, a dilation) that swept the same cells again and again: on an
-8-robot office frame (800x600, ``benchmarks/bench_render.py``) the label grid went from
-~5.2 ms to ~0.5 ms.
+Per robot, the first pass (:func:`known_box`) finds the bounding box of its known cells;
+the second (:func:`mark_robot`) runs over that box (+1) only, while the belief is still in
+cache, and fuses the team-known class, the free and safe tints and the frontier test (a
+FREE cell with an UNKNOWN cell among its 8 neighbours, as ``frontiers.frontier_mask``). The
+frontier test fills one row buffer per row ("an UNKNOWN cell above, at or below, in this
+column"), so every inner loop is branch-free over contiguous row slices and vectorises. A
+last pass (:func:`finish_labels`) adds the known-at-base and wall classes and the tints.
+These replaced ~20 numpy/cv2 calls per robot (bounding rectangle, masks, products and
+maxima, a dilation) that swept the same cells again and again: on an 8-robot office frame
+(800x600, ``benchmarks/bench_render.py``) the label grid went from ~5.2 ms to ~0.9 ms.
 
 Typical use: ``LabelGrids((rows, cols)).labels(snapshot, layers, palette_size)``.
 """
@@ -32,15 +33,13 @@ if TYPE_CHECKING:
     from .render import LayerSpec
     from .snapshot import Snapshot
 
-AT_BASE, WALL, SKELETON, FRONTIER, CLASSES = 2, 3, 4, 5, 6
+TEAM_KNOWN, AT_BASE, WALL, SKELETON, FRONTIER, CLASSES = 1, 2, 3, 4, 5, 6
 
 
 @njit(cache=True, nogil=True)
-def or_known_box(
-    belief: BeliefGrid, team: BeliefGrid, into_team: bool
-) -> tuple[int, int, int, int]:
-    """Bounding box (row0, row1, col0, col1; half-open; all 0 if none) of the non-zero cells
-    of ``belief``, ORing those rows into ``team`` if ``into_team``."""
+def known_box(belief: BeliefGrid) -> tuple[int, int, int, int]:
+    """Bounding box (row0, row1, col0, col1; half-open) of the non-zero cells of ``belief``,
+    or (0, 0, 0, 0) if there are none."""
     rows, cols = belief.shape
     seen = np.zeros(cols, np.uint8)
     r0, r1 = -1, -1
@@ -53,10 +52,6 @@ def or_known_box(
             r0, r1 = r if r0 < 0 else r0, r + 1
             for c in range(cols):
                 seen[c] = np.uint8(seen[c] | row[c])
-            if into_team:
-                out = team[r]
-                for c in range(cols):
-                    out[c] = np.uint8(out[c] | row[c])
     if r0 < 0:
         return 0, 0, 0, 0
     c0, c1 = 0, cols
@@ -74,10 +69,11 @@ def mark_robot(
     label: BeliefGrid,
     tint: BeliefGrid,
     box: tuple[int, int, int, int],
-    values: tuple[int, int, int],
+    values: tuple[int, int, int, int],
 ) -> None:
     """Within ``box``, raise ``tint`` to ``values[0]`` on FREE cells and to ``values[1]`` on
-    safe cells, and ``label`` to ``values[2]`` on frontier cells (0 leaves a layer off).
+    safe cells, and ``label`` to ``values[2]`` on frontier cells and to ``values[3]`` on
+    FREE cells (team-known); a value of 0 leaves its layer off.
 
     Frontier cells are FREE cells with an UNKNOWN cell among their 8 neighbours in the grid:
     per row, ``near[1 + k]`` flags an UNKNOWN cell in column c0 + k of the rows above, at
@@ -85,17 +81,18 @@ def mark_robot(
     """
     r0, r1, c0, c1 = box
     rows, cols = belief.shape
-    free_tint, safe_tint, frontier = np.uint8(values[0]), np.uint8(values[1]), np.uint8(values[2])
+    free_tint, safe_tint = np.uint8(values[0]), np.uint8(values[1])
+    frontier, known = np.uint8(values[2]), np.uint8(values[3])
     w = c1 - c0
     lo, hi = max(c0 - 1, 0), min(c1 + 1, cols)  # columns whose cells can be neighbours
     near = np.zeros(w + 2, np.uint8)  # stays 0 at columns outside the grid
     inside = near[lo - c0 + 1 : hi - c0 + 1]
-    known = np.ones(cols, np.uint8)  # the rows outside the grid are not unknown
+    outside = np.ones(cols, np.uint8)  # the rows outside the grid are not unknown
     for r in range(r0, r1):
         if frontier:
-            up = belief[r - 1, lo:hi] if r > 0 else known[lo:hi]
+            up = belief[r - 1, lo:hi] if r > 0 else outside[lo:hi]
             mid = belief[r, lo:hi]
-            down = belief[r + 1, lo:hi] if r + 1 < rows else known[lo:hi]
+            down = belief[r + 1, lo:hi] if r + 1 < rows else outside[lo:hi]
             for k in range(hi - lo):
                 unknown = np.uint8(up[k] == UNKNOWN) | np.uint8(mid[k] == UNKNOWN)
                 inside[k] = np.uint8(unknown | np.uint8(down[k] == UNKNOWN))
@@ -106,31 +103,23 @@ def mark_robot(
             raised = max(tint_row[k], np.uint8(free * free_tint))
             tint_row[k] = max(raised, np.uint8(np.uint8(safe_row[k]) * safe_tint))
             edge = np.uint8(np.uint8(near[k] | near[k + 1] | near[k + 2]) & free)
-            label_row[k] = max(label_row[k], np.uint8(edge * frontier))
+            marked = max(np.uint8(edge * frontier), np.uint8(free * known))
+            label_row[k] = max(label_row[k], marked)
 
 
 @njit(cache=True, nogil=True)
-def map_classes(
-    team: BeliefGrid, base: BeliefGrid, truth: BoolGrid, label: BeliefGrid, on: tuple[int, int, int]
+def finish_labels(
+    label: BeliefGrid, tint: BeliefGrid, base: BeliefGrid, truth: BoolGrid, on: tuple[int, int]
 ) -> None:
-    """``label`` = the largest of team-known (FREE in ``team``), known at base and wall,
-    each as its ``on`` value (0 = layer off)."""
-    team_on, base_on, wall_on = np.uint8(on[0]), np.uint8(on[1]), np.uint8(on[2])
+    """``label`` = the largest of ``label`` (robot marks), known at base and wall, each as
+    its ``on`` value (0 = layer off), plus ``CLASSES * tint``."""
+    base_on, wall_on = np.uint8(on[0]), np.uint8(on[1])
     for r in range(label.shape[0]):
-        known, at_base, wall, out = team[r], base[r], truth[r], label[r]
+        out, add, at_base, wall = label[r], tint[r], base[r], truth[r]
         for c in range(label.shape[1]):
-            value = np.uint8(np.uint8(known[c] & FREE) * team_on)
-            value = max(value, np.uint8(np.uint8(at_base[c] == FREE) * base_on))
-            out[c] = max(value, np.uint8(np.uint8(wall[c]) * wall_on))
-
-
-@njit(cache=True, nogil=True)
-def add_tints(label: BeliefGrid, tint: BeliefGrid) -> None:
-    """``label += CLASSES * tint``."""
-    for r in range(label.shape[0]):
-        out, add = label[r], tint[r]
-        for c in range(label.shape[1]):
-            out[c] = np.uint8(out[c] + np.uint8(CLASSES) * add[c])
+            value = max(out[c], np.uint8(np.uint8(at_base[c] == FREE) * base_on))
+            value = max(value, np.uint8(np.uint8(wall[c]) * wall_on))
+            out[c] = np.uint8(value + np.uint8(CLASSES) * add[c])
 
 
 @njit(cache=True, nogil=True)
@@ -153,33 +142,35 @@ class LabelGrids:
     """Scratch grids reused by every frame of one map (fresh ones cost page faults)."""
 
     def __init__(self, shape: tuple[int, int]) -> None:
-        self.label, self.team, self.tint = (np.empty(shape, dtype=np.uint8) for _ in range(3))
+        self.label, self.tint = (np.empty(shape, dtype=np.uint8) for _ in range(2))
 
     def labels(self, snapshot: Snapshot, layers: LayerSpec, n: int) -> np.ndarray:
-        """The label grid of ``snapshot`` (in a scratch buffer) for ``n`` palette colours."""
+        """The label grid of ``snapshot`` (in a scratch buffer) for ``n`` palette colours.
+
+        Robot by robot, the box pass and the marks over that box run back to back, while
+        the robot's belief is still in cache; the map classes come last (all are maxima).
+        """
         on = layers.global_layers
-        team = "team_known" in on
-        self.team.fill(0)
+        self.label.fill(0)
         self.tint.fill(0)
-        beliefs = [as_cells(robot.belief) for robot in snapshot.robots]
-        boxes = [or_known_box(belief, self.team, team) for belief in beliefs]
-        flags = (int(team), AT_BASE * ("known_at_base" in on), WALL * ("walls" in on))
-        base = as_cells(snapshot.base.belief)
-        map_classes(self.team, base, as_bool(snapshot.truth), self.label, flags)
-        for i, (robot, belief, box) in enumerate(zip(snapshot.robots, beliefs, boxes, strict=True)):
-            mine = layers.for_agent(robot.name)
+        for i, robot in enumerate(snapshot.robots):
+            mine, belief = layers.for_agent(robot.name), as_cells(robot.belief)
+            box = known_box(belief)
             if box[1] > box[0]:
                 values = (
                     (1 + i % n) * ("free_space" in mine),
                     (1 + n + i % n) * ("safe_space" in mine),
                     FRONTIER * ("frontiers" in mine),
+                    TEAM_KNOWN * ("team_known" in on),
                 )
                 box = padded_box(box, self.label.shape)
                 mark_robot(belief, as_bool(robot.safe), self.label, self.tint, box, values)
             if "skeleton" in mine and robot.skeleton is not None:
                 skeleton = as_bool(robot.skeleton).view(np.uint8) * np.uint8(SKELETON)
                 np.maximum(self.label, skeleton, out=self.label)
-        add_tints(self.label, self.tint)
+        flags = (AT_BASE * ("known_at_base" in on), WALL * ("walls" in on))
+        base, truth = as_cells(snapshot.base.belief), as_bool(snapshot.truth)
+        finish_labels(self.label, self.tint, base, truth, flags)
         return self.label
 
 

@@ -7,7 +7,7 @@ import pytest
 
 from mresim_phys.frontiers import frontier_mask
 from mresim_phys.render import ROBOT_LAYERS, LayerSpec, Renderer, Style
-from mresim_phys.render_raster import LabelGrids, colour_labels, or_known_box, packed_colours
+from mresim_phys.render_raster import LabelGrids, colour_labels, known_box, packed_colours
 from mresim_phys.snapshot import AgentSnapshot, Snapshot, read_only
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 
@@ -106,18 +106,16 @@ def test_frontier_cells_at_the_grid_edges() -> None:
 
 
 @pytest.mark.parametrize("shape", [(1, 1), (3, 8), (40, 30)])
-def test_known_box_and_team_union(shape: tuple[int, int]) -> None:
+def test_known_box(shape: tuple[int, int]) -> None:
     rng = np.random.default_rng(1)
     for _ in range(20):
         belief = (rng.random(shape) < rng.choice([0.0, 0.01, 0.3])).astype(np.uint8)
-        team = np.zeros(shape, np.uint8)
-        r0, r1, c0, c1 = or_known_box(belief, team, True)
         rows, cols = np.nonzero(belief)
         if len(rows):
-            assert (r0, r1, c0, c1) == (rows.min(), rows.max() + 1, cols.min(), cols.max() + 1)
+            expected = (rows.min(), rows.max() + 1, cols.min(), cols.max() + 1)
         else:
-            assert (r0, r1, c0, c1) == (0, 0, 0, 0)
-        assert np.array_equal(team, belief)
+            expected = (0, 0, 0, 0)
+        assert known_box(belief) == expected
 
 
 def test_colouring_pads_with_the_blank_colour() -> None:
