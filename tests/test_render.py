@@ -178,6 +178,21 @@ def test_overlays_change_pixels_only_when_on() -> None:
         assert (render(snap, f"{MAP_ONLY},{layer}") != plain).any(), layer
 
 
+def test_paths_and_goals_follow_their_own_robots() -> None:
+    snap = snapshot(path=np.array([[25.5, 15.5], [25.5, 5.5]]), goal=(25.5, 5.5))
+    b = replace(snap.robots[1], path=np.array([[32.5, 20.5], [32.5, 27.5]]), goal=(32.5, 27.5))
+    snap = replace(snap, agents=(snap.base, snap.robots[0], b))
+    frame = render(snap, MAP_ONLY + ",path,goal,A:-path")
+    changed = (frame != render(snap)).any(axis=2)
+    assert changed[5, 25] and not changed[12, 25]  # A: its goal only
+    assert changed[22, 32] and changed[27, 32]  # B: its path and its goal
+    a, b = (np.array(STYLE.robot_colour(i)) for i in (0, 1))
+    assert np.abs(frame[22, 32] - b).sum() < np.abs(frame[22, 32] - a).sum()  # B's colour
+    frame = render(snap, MAP_ONLY + ",path,B:-path")
+    assert np.abs(frame[12, 25] - a).sum() < np.abs(frame[12, 25] - b).sum()
+    assert pixel(frame, (22, 32)) == STYLE.team_known
+
+
 def test_header_and_legend_bands() -> None:
     frame = render(snapshot(), "default", scale=8.0)
     assert pixel(frame, (0, frame.shape[1] - 1)) == STYLE.header_bg
