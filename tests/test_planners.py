@@ -22,11 +22,12 @@ from mresim_phys.planners.astar import AStar, astar_search
 from mresim_phys.planners.base import PlannerParams
 from mresim_phys.planners.grid import Window
 from mresim_phys.planners.jps import JumpPointSearch, jps_search
+from mresim_phys.planners.skeleton import removal_table, thin
 from mresim_phys.planners.smoothing import smooth_path
 from mresim_phys.planners.topological import TopologicalParams, TopologicalPlanner
 from mresim_phys.planners.topomap import MapCache, build_map
 from mresim_phys.planning import distance_field, path_length, traversable
-from mresim_phys.strategies import RobotView
+from mresim_phys.strategies import RobotView, plan_context
 from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 
@@ -176,6 +177,43 @@ def test_regions_are_geodesic_a_wall_never_joins_two_rooms() -> None:
     assert topo.skeleton[topo.nodes_rc[:, 0], topo.nodes_rc[:, 1]].all()
 
 
+def full_scan_zhang_suen(mask: np.ndarray) -> np.ndarray:
+    """Reference thinning: every pixel re-examined in every subiteration (numpy)."""
+    img = np.pad(mask, 1).astype(np.uint8)
+    table = removal_table()
+    changed = True
+    while changed:
+        changed = False
+        for bit in (1, 2):
+            code = (img[:-2, :-2] + 2 * img[:-2, 1:-1] + 4 * img[:-2, 2:] + 8 * img[1:-1, 2:]
+                    + 16 * img[2:, 2:] + 32 * img[2:, 1:-1] + 64 * img[2:, :-2]
+                    + 128 * img[1:-1, :-2])  # fmt: skip
+            remove = img[1:-1, 1:-1].astype(bool) & ((table[code] & bit) > 0)
+            if remove.any():
+                img[1:-1, 1:-1][remove] = 0
+                changed = True
+    return img[1:-1, 1:-1].astype(bool)
+
+
+@settings(max_examples=100, deadline=None)
+@given(seed=SEEDS, rows=st.integers(1, 40), cols=st.integers(1, 40))
+def test_skeleton_equals_full_scan_zhang_suen(seed: int, rows: int, cols: int) -> None:
+    rng = np.random.default_rng(seed)
+    mask = rng.random((rows, cols)) > rng.uniform(0.0, 0.6)
+    if rng.random() < 0.5:  # blobs as well as noise
+        mask = traversable(np.where(mask, FREE, OCCUPIED).astype(np.uint8), 1.2)
+    skeleton = thin(mask)
+    assert np.array_equal(skeleton, full_scan_zhang_suen(mask))
+    assert not (skeleton & ~mask).any()
+
+
+def test_skeleton_of_a_corridor_is_its_centre_line() -> None:
+    mask = np.zeros((11, 60), dtype=bool)
+    mask[3:8, 2:58] = True
+    skeleton = thin(mask)
+    assert skeleton[5, 6:54].all() and skeleton.sum() < 60
+
+
 def shipped_truths() -> dict[str, np.ndarray]:
     return {
         "office": load_image_map(MAPS / "office.png").occupied,
@@ -236,6 +274,24 @@ def test_topological_skeleton_reaches_the_decision_info() -> None:
     skeleton = decision.info["skeleton"]
     assert skeleton.shape == belief.shape and skeleton.any()
     assert (belief[skeleton] == FREE).all()
+
+
+def test_strategies_get_the_topological_map_with_or_without_that_planner() -> None:
+    belief = np.full((40, 60), OCCUPIED, dtype=np.uint8)
+    belief[15:25, 2:58] = FREE  # two crossing corridors: a junction where they meet
+    belief[2:38, 25:35] = FREE
+    view = RobotView(
+        step=1, name="A", position=(10.5, 20.5), heading=0.0, belief=belief, radius=1.0,
+        clearance=2.0, speed=2.0, sensor_range=30.0, role="relay",
+        base_position=(10.5, 20.5), teammates={}, rng=np.random.default_rng(0),
+    )  # fmt: skip
+    topo = plan_context(view).topology(spacing=6)
+    assert topo.node_count > 2 and len(topo.junctions) > 0
+    assert topo.skeleton[topo.junctions[:, 0], topo.junctions[:, 1]].all()
+    assert (np.abs(topo.junctions - [20, 30]) <= 3).all()  # only at the crossing
+    planner = TopologicalPlanner(TopologicalParams(node_spacing=6), MapCache())
+    mine = plan_context(RobotView(**{**view.__dict__, "planner": planner})).topology()
+    assert mine is planner.map and mine is not None
 
 
 # --------------------------------------------------------------------------- smoothing

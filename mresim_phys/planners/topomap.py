@@ -2,7 +2,8 @@
 
 Built from a configuration-space mask (the cells a robot centre may occupy):
 
-1. skeleton: ``skimage.morphology.skeletonize`` of the passable cells (their medial lines);
+1. skeleton: Zhang-Suen thinning of the passable cells (their medial lines; a numba kernel,
+   :mod:`mresim_phys.planners.skeleton`, several times faster than scikit-image's);
 2. nodes: skeleton cells sampled uniformly, one per ``spacing`` x ``spacing`` block (the
    skeleton cell nearest the block centre);
 3. regions: every passable cell belongs to its nearest node ALONG passable space, by one
@@ -17,7 +18,7 @@ Built from a configuration-space mask (the cells a robot centre may occupy):
 Maps are content-addressed: ``shared_map`` returns the one build of an identical mask
 and spacing, so robots whose maps were merged (or the base station's) reuse one build.
 
-Typical use: ``topo = shared_map(passable, spacing=10)``; ``topo.route(a, b)``.
+Typical use: ``topo = shared_map(passable, spacing=10)``; ``nodes, cost = topo.route(a, b)``.
 """
 
 from __future__ import annotations
@@ -33,11 +34,11 @@ from numpy.typing import NDArray
 from scipy.ndimage import convolve
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import dijkstra
-from skimage.morphology import skeletonize
 
 from ..planning import bbox
 from ..types import BoolGrid, IntArray
 from .grid import SQRT2, Window
+from .skeleton import thin
 
 _OFFSETS = ((-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1))
 _FORWARD = ((0, 1), (1, -1), (1, 0), (1, 1))  # each undirected neighbour pair once
@@ -219,17 +220,21 @@ class TopologicalMap:
             member |= self.adjacency @ member
         return np.flatnonzero(member)
 
-    def route(self, a: int, b: int) -> IntArray:
-        """Node indices of the cheapest graph route from node ``a`` to node ``b`` (empty: none)."""
+    def route(self, a: int, b: int) -> tuple[IntArray, float]:
+        """Cheapest graph route from node ``a`` to node ``b`` (node indices) and its cost.
+
+        The cost is the length of a real path between the two nodes (each edge is one).
+        No route: an empty array and inf.
+        """
         if a == b:
-            return np.array([a], dtype=np.int64)
+            return np.array([a], dtype=np.int64), 0.0
         cost, pred = dijkstra(self.graph, indices=a, return_predecessors=True, min_only=False)
         if not np.isfinite(cost[b]):
-            return np.zeros(0, dtype=np.int64)
+            return np.zeros(0, dtype=np.int64), np.inf
         nodes = [b]
         while nodes[-1] != a:
             nodes.append(int(pred[nodes[-1]]))
-        return np.array(nodes[::-1], dtype=np.int64)
+        return np.array(nodes[::-1], dtype=np.int64), float(cost[b])
 
 
 def build_map(passable: BoolGrid, spacing: int) -> TopologicalMap:
@@ -242,9 +247,7 @@ def build_map(passable: BoolGrid, spacing: int) -> TopologicalMap:
         return _empty_map(frozen, spacing)
     window = Window.around(passable, box)
     skeleton = np.zeros(shape, dtype=bool)
-    skeleton[box[0] : box[1], box[2] : box[3]] = skeletonize(
-        passable[box[0] : box[1], box[2] : box[3]]
-    )
+    skeleton[box[0] : box[1], box[2] : box[3]] = thin(passable[box[0] : box[1], box[2] : box[3]])
     nodes = sample_nodes(np.argwhere(skeleton), spacing)
     label, dist = _assign(window.pad, window.wp, _flat(window, nodes))
     while True:  # passable pockets the skeleton missed get nodes of their own

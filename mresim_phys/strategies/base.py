@@ -7,8 +7,9 @@ sees the true map. It returns a :class:`Decision`: a path of world points to
 follow, the goal it is heading for, and whether it has nothing left to explore.
 
 :func:`plan_context` gives a strategy the configuration space and one distance
-field from the robot, computed once per decision, and plans the path to a chosen
-goal with the robot's own planner (``RobotView.planner``).
+field from the robot, computed once per decision, plans the path to a chosen
+goal with the robot's own planner (``RobotView.planner``) and gives the
+topological map of its known space (skeleton, junctions, node regions).
 """
 
 from __future__ import annotations
@@ -21,7 +22,8 @@ from typing import TYPE_CHECKING, Any, ClassVar, Protocol, runtime_checkable
 import numpy as np
 from pydantic import BaseModel, ConfigDict
 
-from ..planners import Planner
+from ..planners import Planner, TopologicalMap, shared_map
+from ..planners.topological import TopologicalPlanner
 from ..planning import DistanceField, distance_field, traversable
 from ..registry import Registry
 from ..types import BeliefGrid, FloatArray
@@ -131,6 +133,18 @@ class PlanContext:
         if planner is None:
             return self.field.path_to(row, col)
         return planner.plan(self.passable, self.view.position, (row, col))
+
+    def topology(self, spacing: int = 10) -> TopologicalMap:
+        """The topological map (skeleton, nodes, regions) of the robot's passable cells.
+
+        A robot with the ``topological`` planner gets its planner's map (rebuilt only when
+        its map changed enough); otherwise a build from the shared cache, ``spacing`` cells
+        between nodes. Role-based strategies pick rendezvous points from its ``junctions``.
+        """
+        planner = self.view.planner
+        if isinstance(planner, TopologicalPlanner):
+            return planner.current_map(self.passable)
+        return shared_map(self.passable, spacing)
 
     def planner_info(self) -> dict[str, Any]:
         """What the robot's planner adds to a decision's ``info`` (e.g. its ``skeleton``)."""
