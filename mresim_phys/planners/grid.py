@@ -13,6 +13,7 @@ forbidden only when both orthogonal cells it passes are blocked.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numba import njit
@@ -30,7 +31,7 @@ TIE = 1e-9  # f values closer than this count as equal, and the deeper node goes
 class Window:
     """A padded search window over a passable mask (flat, blocked border)."""
 
-    pad: NDArray[np.bool_]  # flat, (hp * wp,)
+    pad: NDArray[Any]  # flat (hp * wp,): a bool mask, or uint8 codes (topological corridor)
     wp: int
     origin: tuple[int, int]  # full-grid (row, col) of padded element [0, 0]
 

@@ -66,24 +66,29 @@ def _corridor_mask(
     labels: NDArray[np.int32],
     allowed: NDArray[np.bool_],
     box: tuple[int, int, int, int],
-) -> NDArray[np.bool_]:
-    """Flat padded window over ``box`` of the passable cells whose label is allowed."""
+) -> NDArray[np.uint8]:
+    """Flat padded window over ``box``: 2 = passable with an allowed label (may be entered),
+    1 = passable only (counts for the corner rule), 0 = blocked."""
     r0, r1, c0, c1 = box
     wp = c1 - c0 + 2
-    pad = np.zeros((r1 - r0 + 2) * wp, dtype=np.bool_)
+    pad = np.zeros((r1 - r0 + 2) * wp, dtype=np.uint8)
     for r in range(r0, r1):
         base = (r - r0 + 1) * wp + 1 - c0
         for c in range(c0, c1):
-            if passable[r, c] and allowed[labels[r, c] + 1]:
-                pad[base + c] = True
+            if passable[r, c]:
+                pad[base + c] = 2 if allowed[labels[r, c] + 1] else 1
     return pad
 
 
 @njit(cache=True, nogil=True)
 def _search_to(
-    pad: NDArray[np.bool_], wp: int, source: int, target: int
+    pad: NDArray[np.uint8], wp: int, source: int, target: int
 ) -> tuple[float, NDArray[np.int32]]:
     """Dijkstra with Dial's bucket ring (as ``planning._dijkstra``), stopped at the target.
+
+    Only cells marked 2 in ``pad`` are entered; a diagonal move is forbidden when both
+    cells beside it are blocked (0), as on the grid: a cell of a region outside the
+    corridor still lets a diagonal past it.
 
     The target's cost is final once its band is expanded. Returns that cost (inf if
     unreachable) and the predecessor array. A bucket queue costs ~0.05 us per cell, where
@@ -93,7 +98,7 @@ def _search_to(
     dist = np.full(pad.size, np.inf)
     pred = np.full(pad.size, NO_PRED, dtype=np.int32)
     queued = np.full(pad.size, -1, dtype=np.int32)
-    ring = np.empty((3, np.count_nonzero(pad)), dtype=np.int32)
+    ring = np.empty((3, max(np.count_nonzero(pad == 2), 1)), dtype=np.int32)
     sizes = np.zeros(3, dtype=np.int64)
     dist[source], queued[source] = 0.0, 0
     ring[0, 0], sizes[0] = source, 1
@@ -108,10 +113,10 @@ def _search_to(
             for dr in range(-1, 2):
                 for dc in range(-1, 2):
                     v = u + dr * wp + dc
-                    if v == u or not pad[v]:
+                    if v == u or pad[v] != 2:
                         continue
                     if dr != 0 and dc != 0:
-                        if not (pad[u + dr * wp] or pad[u + dc]):
+                        if pad[u + dr * wp] == 0 and pad[u + dc] == 0:
                             continue
                         cost = here + SQRT2
                     else:
@@ -194,14 +199,20 @@ def topological_path(
     start: tuple[int, int],
     goal: tuple[int, int],
     rings: int = 1,
+    fresh: bool = False,
 ) -> FloatArray:
     """Cell-centre path over the route's regions (see the module docstring); (0, 2) if none.
 
-    ``rings`` rings of neighbouring regions widen the corridor around the route.
+    ``rings`` rings of neighbouring regions widen the corridor around the route. ``fresh``
+    says the map was built from ``passable`` itself: its graph then knows connectivity
+    exactly (regions cover every passable cell, edges every legal move between regions),
+    so no route means no path, without the grid A* fallback.
     """
     ends = anchor(topo, passable, start), anchor(topo, passable, goal)
     if ends[0] is not None and ends[1] is not None:
         route, _ = topo.route(ends[0].node, ends[1].node)
+        if fresh and not len(route):
+            return np.zeros((0, 2))
         if len(route):
             nodes = topo.widen(route, rings)
             path = corridor_path(topo, passable, (start, goal), nodes, (ends[0], ends[1]))
@@ -249,22 +260,24 @@ class TopologicalPlanner(GridPlanner):
 
     def current_map(self, passable: BoolGrid) -> TopologicalMap:
         """The map to plan on: the last one, or a rebuild if ``passable`` changed enough."""
-        topo = self.map
-        if topo is None or topo.passable.shape != passable.shape or self._stale(topo, passable):
-            topo = self.map = self.cache.get(passable, self.params.node_spacing)
-        return topo
+        return self._refresh(passable)[0]
 
-    def _stale(self, topo: TopologicalMap, passable: BoolGrid) -> bool:
-        changed = np.count_nonzero(topo.passable != passable)
-        built = max(np.count_nonzero(topo.passable), 1)
-        return changed > self.params.rebuild_fraction * built or (changed > 0 and built <= 1)
+    def _refresh(self, passable: BoolGrid) -> tuple[TopologicalMap, bool]:
+        """The map to plan on, and whether it was built from ``passable`` itself."""
+        topo = self.map
+        if topo is not None and topo.passable.shape == passable.shape:
+            changed = np.count_nonzero(topo.passable != passable)
+            if changed <= self.params.rebuild_fraction * np.count_nonzero(topo.passable):
+                return topo, changed == 0
+        self.map = self.cache.get(passable, self.params.node_spacing)
+        return self.map, True
 
     def search(
         self, passable: BoolGrid, start: tuple[int, int], goal: tuple[int, int]
     ) -> FloatArray:
         """A cell-centre path through the node regions; (0, 2) if the goal is unreachable."""
-        topo = self.current_map(passable)
-        return topological_path(topo, passable, start, goal, self.params.corridor)
+        topo, fresh = self._refresh(passable)
+        return topological_path(topo, passable, start, goal, self.params.corridor, fresh)
 
     def info(self) -> Mapping[str, Any]:
         """The skeleton of the map last planned on, for the renderer's skeleton layer."""

@@ -180,7 +180,6 @@ class TopologicalMap:
         skeleton: Skeleton cells (bool grid, full size).
         nodes_rc: (k, 2) node cells (row, col).
         labels: Region (node index) of every cell, -1 where not passable (full size).
-        costs: Path cost from every cell to its node (inf where not passable).
         graph: Symmetric (k, k) CSR matrix of edge costs between adjacent regions.
         boxes: (k, 4) half-open full-grid box (row0, row1, col0, col1) of each region.
         spacing: Node spacing (cells) used to sample the skeleton.
@@ -189,8 +188,7 @@ class TopologicalMap:
     passable: BoolGrid
     skeleton: BoolGrid
     nodes_rc: IntArray
-    labels: NDArray[np.int32]
-    costs: NDArray[np.float64] = field(repr=False)
+    labels: NDArray[np.int32] = field(repr=False)
     graph: csr_matrix = field(repr=False)
     boxes: IntArray = field(repr=False)
     spacing: int = 10
@@ -260,10 +258,8 @@ def build_map(passable: BoolGrid, spacing: int) -> TopologicalMap:
     graph = _graph(window, label, dist, len(nodes))
     boxes = _region_boxes(label, window.wp, len(nodes))
     boxes += np.repeat(window.origin, 2)
-    return TopologicalMap(
-        frozen, skeleton, nodes, _full(window, label, shape, -1).astype(np.int32),
-        _full(window, dist, shape, np.inf), graph, boxes, spacing,
-    )  # fmt: skip
+    labels = _full(window, label, shape, -1)
+    return TopologicalMap(frozen, skeleton, nodes, labels, graph, boxes, spacing)
 
 
 def _flat(window: Window, nodes_rc: IntArray) -> NDArray[np.int64]:
@@ -296,8 +292,8 @@ def _empty_map(passable: BoolGrid, spacing: int) -> TopologicalMap:
     shape = passable.shape
     return TopologicalMap(
         passable, np.zeros(shape, dtype=bool), np.zeros((0, 2), dtype=np.int64),
-        np.full(shape, -1, dtype=np.int32), np.full(shape, np.inf),
-        csr_matrix((0, 0)), np.zeros((0, 4), dtype=np.int64), spacing,
+        np.full(shape, -1, dtype=np.int32), csr_matrix((0, 0)),
+        np.zeros((0, 4), dtype=np.int64), spacing,
     )  # fmt: skip
 
 
