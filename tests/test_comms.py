@@ -202,3 +202,17 @@ def test_links_are_symmetric_without_self_links(agents: list[tuple[float, float,
         links = model.links(points, world)
         assert np.array_equal(links, links.T)
         assert not links.diagonal().any()
+
+
+def test_region_probe_draws_polygons_except_for_disks() -> None:
+    from mresim_phys.comms.regions import REGION_RAYS, RegionProbe
+
+    world = walled_world(100)
+    ranges, powers = np.array([40.0, 40.0]), np.full(2, np.nan)
+    positions = np.array([[90.5, 30.5], [20.5, 30.5]])
+    assert RegionProbe(DiskComm(DiskParams()), ranges, powers, world)(positions) == [None, None]
+    polygons = RegionProbe(path_loss(), ranges, powers, world)(positions)
+    assert [p.shape for p in polygons] == [(REGION_RAYS, 2)] * 2
+    east = polygons[0][0]  # ray 0 points along +x, through the wall at x = 100
+    assert east[0] == pytest.approx(90.5 + 40.0 * WAF_FACTOR)
+    assert np.allclose(np.hypot(*(polygons[1] - positions[1]).T), 40.0)  # open space

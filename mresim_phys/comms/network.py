@@ -31,8 +31,6 @@ from .base import COMM_MODELS, CommModel, Radios
 from .exchange import Exchange, Traffic, stamp_base_contacts
 from .ledger import Box, Ledger
 
-REGION_RAYS = 129  # directions sampled for an agent's communication region (as the original)
-
 
 @dataclass(frozen=True)
 class Blackout:
@@ -141,15 +139,6 @@ class Network:
             control_links = self.control.links(agents, world, self.silent(n, step, "control"))
             control_traffic = self.records.run(agents, control_links, step, self.multi_hop)
         return CommRecord(links, control_links, traffic, control_traffic)
-
-    def region(
-        self, agents: Sequence[Agent], index: int, world: World, rays: int = REGION_RAYS
-    ) -> FloatArray:
-        """(rays, 2) polygon around agent ``index`` where its main-channel signal holds."""
-        angles = np.linspace(0.0, 2.0 * np.pi, rays, endpoint=False)
-        reach = self.main.model.reach(self.main.radios(agents), index, angles, world)
-        origin = np.asarray(agents[index].position, dtype=float)
-        return origin + reach[:, None] * np.column_stack([np.cos(angles), np.sin(angles)])
 
 
 def channel_stream(seed: int, channel: str) -> np.random.Generator:
