@@ -18,14 +18,18 @@ from numpy.typing import NDArray
 from ..types import BoolGrid, FloatArray
 from .base import PLANNERS, GridPlanner, no_path
 from .grid import (
+    CLOSED,
     NO_PRED,
+    OPEN,
     SQRT2,
+    UNSEEN,
     Window,
     heap_grow,
     heap_new,
     heap_pop,
     heap_push,
     octile,
+    search_arrays,
     walk_back,
 )
 
@@ -42,27 +46,28 @@ def astar_kernel(
     target: int,
     labels: NDArray[np.int32],
     allowed: NDArray[np.bool_],
-) -> tuple[float, NDArray[np.int64], int]:
+    g: FloatArray,
+    pred: NDArray[np.int64],
+    state: NDArray[np.uint8],
+) -> tuple[float, int]:
     """A* from ``source`` to ``target`` over a flat padded mask (border blocked).
 
     With a non-empty ``labels`` (one per cell) a cell may be entered only if
-    ``allowed[labels[cell] + 1]``. Returns the path cost (inf if unreachable), the
-    predecessor array and the number of expanded cells.
+    ``allowed[labels[cell] + 1]``. ``g``, ``pred`` and ``state`` come from
+    ``search_arrays``; ``pred`` is filled in. Returns the path cost (inf if unreachable)
+    and the number of expanded cells.
     """
     restricted = labels.size > 0
-    g = np.full(pad.size, np.inf)
-    pred = np.full(pad.size, NO_PRED, dtype=np.int64)
-    closed = np.zeros(pad.size, dtype=np.bool_)
     tr, tc = target // wp, target % wp
     fs, gs, nodes = heap_new(1024)
-    g[source] = 0.0
+    g[source], pred[source], state[source] = 0.0, NO_PRED, OPEN
     size = heap_push(fs, gs, nodes, 0, octile(source // wp, source % wp, tr, tc), 0.0, source)
     expanded = 0
     while size > 0:
         u, size = heap_pop(fs, gs, nodes, size)
-        if closed[u]:
+        if state[u] == CLOSED:
             continue
-        closed[u] = True
+        state[u] = CLOSED
         expanded += 1
         if u == target:
             break
@@ -70,7 +75,7 @@ def astar_kernel(
         ur, uc = u // wp, u % wp
         for dr, dc in _OFFSETS:
             v = u + dr * wp + dc
-            if not pad[v] or closed[v]:
+            if not pad[v] or state[v] == CLOSED:
                 continue
             if restricted and not allowed[labels[v] + 1]:
                 continue
@@ -80,13 +85,13 @@ def astar_kernel(
                 cost = here + SQRT2
             else:
                 cost = here + 1.0
-            if cost < g[v]:
-                g[v], pred[v] = cost, u
+            if state[v] == UNSEEN or cost < g[v]:
+                g[v], pred[v], state[v] = cost, u, OPEN
                 f = cost + octile(ur + dr, uc + dc, tr, tc)
                 if size == len(fs):
                     fs, gs, nodes = heap_grow(fs, gs, nodes)
                 size = heap_push(fs, gs, nodes, size, f, cost, v)
-    return g[target], pred, expanded
+    return (g[target] if state[target] != UNSEEN else np.inf), expanded
 
 
 def astar_search(
@@ -98,7 +103,10 @@ def astar_search(
 ) -> tuple[FloatArray, int]:
     """Cell-centre path (empty if unreachable) and expansion count of one A* search."""
     source, target = window.node(start), window.node(goal)
-    cost, pred, expanded = astar_kernel(window.pad, window.wp, source, target, labels, allowed)
+    g, pred, state = search_arrays(window.pad.size)
+    cost, expanded = astar_kernel(
+        window.pad, window.wp, source, target, labels, allowed, g, pred, state
+    )
     if not np.isfinite(cost):
         return no_path(), expanded
     return window.points(walk_back(pred, target)), expanded

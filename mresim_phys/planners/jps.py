@@ -28,7 +28,20 @@ from numpy.typing import NDArray
 
 from ..types import BoolGrid, FloatArray
 from .base import PLANNERS, GridPlanner, no_path
-from .grid import NO_PRED, Window, heap_grow, heap_new, heap_pop, heap_push, octile, walk_back
+from .grid import (
+    CLOSED,
+    NO_PRED,
+    OPEN,
+    UNSEEN,
+    Window,
+    heap_grow,
+    heap_new,
+    heap_pop,
+    heap_push,
+    octile,
+    search_arrays,
+    walk_back,
+)
 
 _DIRECTIONS = ((-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1))
 
@@ -111,24 +124,30 @@ def _successor_directions(
 
 @njit(cache=True, nogil=True)
 def jps_kernel(
-    pad: NDArray[np.bool_], wp: int, source: int, target: int
-) -> tuple[float, NDArray[np.int64], int]:
-    """Jump point search; returns (cost, predecessor array over jump points, expansions)."""
-    g = np.full(pad.size, np.inf)
-    pred = np.full(pad.size, NO_PRED, dtype=np.int64)
-    closed = np.zeros(pad.size, dtype=np.bool_)
+    pad: NDArray[np.bool_],
+    wp: int,
+    source: int,
+    target: int,
+    g: FloatArray,
+    pred: NDArray[np.int64],
+    state: NDArray[np.uint8],
+) -> tuple[float, int]:
+    """Jump point search (arrays from ``search_arrays``; ``pred`` links jump points).
+
+    Returns the cost (inf if unreachable) and the number of expanded jump points.
+    """
     tr, tc = target // wp, target % wp
     fs, gs, nodes = heap_new(256)
-    g[source] = 0.0
+    g[source], pred[source], state[source] = 0.0, NO_PRED, OPEN
     h0 = octile(source // wp, source % wp, tr, tc)
     size = heap_push(fs, gs, nodes, 0, h0, 0.0, source)
     directions = np.empty(8, dtype=np.int64)
     expanded = 0
     while size > 0:
         u, size = heap_pop(fs, gs, nodes, size)
-        if closed[u]:
+        if state[u] == CLOSED:
             continue
-        closed[u] = True
+        state[u] = CLOSED
         expanded += 1
         if u == target:
             break
@@ -139,17 +158,17 @@ def jps_kernel(
                 v = _jump_diagonal(pad, wp, u, dr, dc, target)
             else:
                 v = _jump_straight(pad, wp, u, dr, dc, target)
-            if v < 0 or closed[v]:
+            if v < 0 or state[v] == CLOSED:
                 continue
             vr, vc = v // wp, v % wp
             cost = g[u] + octile(ur, uc, vr, vc)
-            if cost < g[v]:
-                g[v], pred[v] = cost, u
+            if state[v] == UNSEEN or cost < g[v]:
+                g[v], pred[v], state[v] = cost, u, OPEN
                 f = cost + octile(vr, vc, tr, tc)
                 if size == len(fs):
                     fs, gs, nodes = heap_grow(fs, gs, nodes)
                 size = heap_push(fs, gs, nodes, size, f, cost, v)
-    return g[target], pred, expanded
+    return (g[target] if state[target] != UNSEEN else np.inf), expanded
 
 
 @njit(cache=True, nogil=True)
@@ -175,7 +194,8 @@ def jps_search(
 ) -> tuple[FloatArray, int]:
     """Cell-centre path (empty if unreachable) and expansion count of one JPS search."""
     source, target = window.node(start), window.node(goal)
-    cost, pred, expanded = jps_kernel(window.pad, window.wp, source, target)
+    g, pred, state = search_arrays(window.pad.size)
+    cost, expanded = jps_kernel(window.pad, window.wp, source, target, g, pred, state)
     if not np.isfinite(cost):
         return no_path(), expanded
     cells = _fill_segments(walk_back(pred, target), window.wp)
