@@ -8,9 +8,10 @@ Prints the median of ``--repeats`` runs (``time.perf_counter``, wall clock) of:
   corner-to-corner topological query on it (anchors, graph route, corridor search);
 * line-of-sight smoothing of the corner-to-corner path;
 
-on ``office`` (maps/office.png, 800x600), ``open800`` (800x600, 40 pillars), ``maze2000``
-(2000x2000 maze, 40-cell pitch) and ``open2000`` (2000x2000, 400 pillars); the synthetic maps
-are drawn by benchmarks/bench_planning.py's generators. Then, on every shipped map, the
+on ``office`` (maps/office.png, 800x600), two open maps, ``rubble`` (maps/rubble.png,
+500x400) and ``pillars800`` (800x600, 200 round pillars), then ``maze2000`` (2000x2000 maze,
+40-cell pitch) and ``open2000`` (2000x2000, 400 pillars); the synthetic maps are drawn by
+benchmarks/bench_planning.py's generators. Then, on every shipped map, the
 length of topological paths over optimal ones for random pairs of passable cells (sum over
 pairs, mean and worst pair) and corner to corner.
 
@@ -140,14 +141,16 @@ def main() -> None:
     topological_path(build_map(warm, 4), warm, (1, 1), (6, 6))
     print(f"first calls (numba compile or cache load): {1e3 * (time.perf_counter() - t0):.0f} ms")
     print(f"median of {args.repeats} runs, clearance {CLEARANCE}, node spacing {SPACING}")
-    bench_map("office", shipped()["office"], args.repeats)
-    bench_map("open800", make_open(800, 600), args.repeats)
+    maps = shipped()
+    bench_map("office", maps["office"], args.repeats)
+    bench_map("rubble", maps["rubble"], args.repeats)
+    bench_map("pillars800", make_open(800, 600, discs=200), args.repeats)
     if not args.skip_big:
         bench_map("maze2000", make_maze(2000, 2000, pitch=40, wall=4), args.repeats)
         bench_map("open2000", make_open(2000, 2000, discs=400), args.repeats)
     print(f"\ntopological / optimal path length, {args.pairs} random pairs per map")
     print(f"  {'map':<12} {'sum':>7} {'mean':>7} {'worst':>7} {'corner':>7}")
-    for name, occupied in shipped().items():
+    for name, occupied in maps.items():
         total, mean, worst, c2c = ratios(occupied, args.pairs)
         print(f"  {name:<12} {total:7.4f} {mean:7.4f} {worst:7.4f} {c2c:7.4f}")
     print("  (topological planner defaults: node spacing 10, corridor 1)")
