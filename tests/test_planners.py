@@ -282,6 +282,26 @@ def test_topological_skeleton_reaches_the_decision_info() -> None:
     assert (belief[skeleton] == FREE).all()
 
 
+def test_the_frontier_strategy_follows_its_planners_path() -> None:
+    belief = np.full((40, 100), OCCUPIED, dtype=np.uint8)
+    belief[5:35, 5:95] = FREE
+    belief[28:35, 60:95] = UNKNOWN  # the only frontier: down and to the right of the robot
+    view = RobotView(
+        step=1, name="A", position=(10.5, 8.5), heading=0.0, belief=belief, radius=1.0,
+        clearance=2.0, speed=2.0, sensor_range=30.0, role="explorer",
+        base_position=(10.5, 8.5), teammates={}, rng=np.random.default_rng(0),
+    )  # fmt: skip
+    plain = FrontierExploration(FrontierParams()).decide(view)
+    smooth = AStar(PlannerParams(smooth=True))
+    decision = FrontierExploration(FrontierParams()).decide(
+        RobotView(**{**view.__dict__, "planner": smooth})
+    )
+    assert decision.goal == plain.goal and decision.goal is not None
+    np.testing.assert_allclose(decision.path[[0, -1]], plain.path[[0, -1]])
+    assert len(decision.path) < len(plain.path) / 5  # straight across the open room
+    assert path_length(decision.path) < path_length(plain.path) - 1.0
+
+
 def test_strategies_get_the_topological_map_with_or_without_that_planner() -> None:
     belief = np.full((40, 60), OCCUPIED, dtype=np.uint8)
     belief[15:25, 2:58] = FREE  # two crossing corridors: a junction where they meet
