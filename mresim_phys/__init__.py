@@ -3,7 +3,7 @@
 The simulation cycle, one module per phase (paper, Algorithm 1)::
 
     scenario/load/io -> build -> world -> sensing -> mapping -> frontiers
-    -> planning -> strategies/ -> motion -> comms/ -> metrics -> recorders -> cli
+    -> planning -> planners/ -> strategies/ -> motion -> comms/ -> metrics -> recorders -> cli
 
 Typical use::
 
@@ -18,12 +18,14 @@ from .comms import COMM_MODELS
 from .errors import MapError, MresimError, ScenarioError, UnknownPluginError
 from .load import load_scenario, validate_scenario
 from .metrics import StepRecord
+from .planners import PLANNERS
 from .scenario import Scenario
 from .sim import Simulation
 from .strategies import STRATEGIES
 
 __all__ = [
     "COMM_MODELS",
+    "PLANNERS",
     "STRATEGIES",
     "MapError",
     "MresimError",
