@@ -15,7 +15,7 @@ column"), so every inner loop is branch-free over contiguous row slices and vect
 last pass (:func:`finish_labels`) adds the known-at-base and wall classes and the tints.
 These replaced ~20 numpy/cv2 calls per robot (bounding rectangle, masks, products and
 maxima, a dilation) that swept the same cells again and again: on an 8-robot office frame
-(800x600, ``benchmarks/bench_render.py``) the label grid went from ~5.2 ms to ~0.9 ms.
+(800x600, ``benchmarks/bench_render.py``) the label grid went from ~5.2 to ~1.0-1.3 ms.
 
 Typical use: ``LabelGrids((rows, cols)).labels(snapshot, layers, palette_size)``.
 """
