@@ -18,6 +18,7 @@ import re
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
+from typing import TYPE_CHECKING
 
 import cv2
 import numpy as np
@@ -26,6 +27,9 @@ from .render_draw import ONE, Overlay
 from .render_raster import AT_BASE, CLASSES, LabelGrids, colour_labels, packed_colours
 from .snapshot import Snapshot
 from .types import FREE, OCCUPIED, UNKNOWN
+
+if TYPE_CHECKING:
+    from .comms.regions import RegionProbe
 
 BGR = tuple[int, int, int]
 GLOBAL_LAYERS = ("walls", "unexplored", "team_known", "known_at_base", "links", "hierarchy")
@@ -182,11 +186,13 @@ class Renderer:
         layers: Layers to draw.
         scale: Output pixels per cell.
         style: Colours and sizes.
+        regions: Gives agents' communication-region polygons for the ``comm_range``
+            layer (``comms.regions.RegionProbe``); without it, or for ``disk``, circles.
     """
 
     def __init__(
         self, truth_shape: tuple[int, int], layers: LayerSpec, scale: float = 1.0,
-        style: Style = DEFAULT_STYLE,
+        style: Style = DEFAULT_STYLE, regions: RegionProbe | None = None,
     ) -> None:  # fmt: skip
         if scale <= 0:
             raise ValueError(f"scale must be positive, got {scale}")
@@ -198,6 +204,7 @@ class Renderer:
         self._lut = style.lut(layers)
         self._table = packed_colours(self._lut)
         self._overlay = Overlay(layers, style, self.scale, self._to_px)
+        self.regions = regions
         # Scratch grids reused by every frame (fresh ones cost page faults at every frame).
         self._grids = LabelGrids((self.rows, self.cols))
         self._big = np.empty(self.map_size[::-1], dtype=np.uint8)
@@ -212,8 +219,19 @@ class Renderer:
             raise ValueError(f"snapshot map {snapshot.truth.shape} != {(self.rows, self.cols)}")
         label = self._grids.labels(snapshot, self.layers, len(self.style.palette))
         image = self._colour(label)
-        self._overlay.draw(image, snapshot)
+        self._overlay.draw(image, snapshot, self._regions(snapshot))
         return image
+
+    def _regions(self, snapshot: Snapshot) -> list[np.ndarray | None]:
+        """Region polygons of the agents that show their comm range ([] for circles)."""
+        probe = self.regions
+        if probe is None or probe.circles:
+            return []
+        shown = ["comm_range" in self.layers.for_agent(a.name) for a in snapshot.agents]
+        if not any(shown):
+            return []
+        polygons = probe(np.array([a.position for a in snapshot.agents], dtype=float))
+        return [p if on else None for p, on in zip(polygons, shown, strict=True)]
 
     def _colour(self, label: np.ndarray) -> np.ndarray:
         """Colour the label grid and resize it to the output size (padded to even)."""

@@ -48,13 +48,19 @@ class Overlay:
         """World (x, y) points -> fixed-point output pixel coordinates (int32, 4 bits)."""
         return np.round(np.asarray(xy, dtype=float) * self.to_px - ONE / 2).astype(np.int32)
 
-    def draw(self, image: np.ndarray, snap: Snapshot) -> None:
-        """Everything drawn in output pixels, bottom to top."""
+    def draw(
+        self, image: np.ndarray, snap: Snapshot, regions: Sequence[np.ndarray | None] = ()
+    ) -> None:
+        """Everything drawn in output pixels, bottom to top.
+
+        ``regions`` are agents' communication-region polygons (world points), drawn
+        instead of the range circle where given.
+        """
         on, style = self.layers.global_layers, self.style
         layers = [self.layers.for_agent(a.name) for a in snap.agents]
         colours = [style.base, *(style.robot_colour(i) for i in range(len(snap.robots)))]
         centres, paths, goals = self._points(snap, layers)
-        self._draw_network(image, snap, centres, colours, layers)
+        self._draw_network(image, snap, centres, colours, layers, regions)
         for i, robot in enumerate(snap.robots, start=1):
             self._draw_plans(image, robot, paths[i], goals[i], colours[i], layers[i])
         if "location" in layers[0]:
@@ -105,10 +111,18 @@ class Overlay:
         centres: np.ndarray,
         colours: list[BGR],
         layers: list[frozenset[str]],
+        regions: Sequence[np.ndarray | None],
     ) -> None:
-        """Comm range circles, communication links and hierarchy (parent) lines."""
-        for agent, c, colour, mine in zip(snap.agents, centres, colours, layers, strict=True):
-            if "comm_range" in mine and agent.comm_range > 0:
+        """Comm range circles (or region polygons), links and hierarchy (parent) lines."""
+        polygons = list(regions) or [None] * len(snap.agents)
+        for agent, c, colour, mine, polygon in zip(
+            snap.agents, centres, colours, layers, polygons, strict=True
+        ):
+            if "comm_range" not in mine or agent.comm_range <= 0:
+                continue
+            if polygon is not None:
+                cv2.polylines(image, [self.px(polygon)], True, colour, 1, AA, SHIFT)
+            else:
                 radius = round(agent.comm_range * self.scale * ONE)
                 cv2.circle(image, c, radius, colour, 1, AA, SHIFT)
         on, index = self.layers.global_layers, {a.name: i for i, a in enumerate(snap.agents)}

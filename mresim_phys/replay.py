@@ -15,13 +15,16 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .errors import MresimError
+from .comms.regions import RegionProbe
+from .errors import MresimError, ScenarioError
 from .io import read_yaml_mapping
+from .load import validate_scenario
 from .metrics import csv_header
 from .render import Renderer, parse_layers
 from .runlog import RunLog, recompute_metrics
 from .scenario import RenderSpec
 from .video import VideoRecorder, write_png
+from .world import World
 
 
 @dataclass
@@ -58,14 +61,28 @@ def replay_video_path(spec: RenderSpec, log: RunLog) -> Path | None:
     return Path(str(spec.video))
 
 
-def replay_frames(log: RunLog, spec: RenderSpec, png_dir: Path) -> list[str]:
+def region_probe(run_dir: Path, log: RunLog) -> RegionProbe | None:
+    """The run's communication regions, from its resolved scenario and the logged truth."""
+    resolved = run_dir / "scenario.yaml"
+    if not resolved.is_file():
+        return None
+    try:
+        scenario = validate_scenario(read_yaml_mapping(resolved), str(resolved))
+    except ScenarioError:
+        return None  # a run of another version: draw range circles
+    return RegionProbe.of(scenario, World(log.truth, []))
+
+
+def replay_frames(
+    log: RunLog, spec: RenderSpec, png_dir: Path, regions: RegionProbe | None = None
+) -> list[str]:
     """Render the logged run into a video and/or PNGs; return what was written."""
     try:
         layers = parse_layers(spec.layers)
         layers.check_agents(log.names)
     except ValueError as exc:
         raise MresimError(f"--layers: {exc}") from None
-    renderer = Renderer(log.truth.shape, layers, spec.scale)
+    renderer = Renderer(log.truth.shape, layers, spec.scale, regions=regions)
     path = replay_video_path(spec, log)
     wanted = set(spec.snapshots)
     written: list[str] = []
@@ -111,7 +128,7 @@ def replay_run(run_dir: Path, overrides: dict[str, Any], metrics: bool) -> Repla
     result = ReplayResult()
     spec = render_spec(run_dir, overrides, default_video=not metrics)
     if spec.video is not False or spec.snapshots:
-        result.lines += replay_frames(log, spec, run_dir)
+        result.lines += replay_frames(log, spec, run_dir, region_probe(run_dir, log))
     if metrics:
         lines, result.ok = replay_metrics(log, run_dir)
         result.lines += lines

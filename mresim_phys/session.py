@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Protocol
 
+from .comms.regions import RegionProbe
 from .errors import ScenarioError
 from .metrics import StepRecord
 from .recorders import RunWriter, summarise
@@ -152,7 +153,8 @@ def frame_recorder(sim: Simulation, spec: RenderSpec, out_dir: Path) -> FrameRec
         layers.check_agents([r.name for r in sim.robots])
     except ValueError as exc:
         raise ScenarioError(f"render.layers: {exc}") from None
-    renderer = Renderer(sim.parts.truth.occupied.shape, layers, spec.scale)
+    regions = RegionProbe.of(sim.scenario, sim.world)
+    renderer = Renderer(sim.parts.truth.occupied.shape, layers, spec.scale, regions=regions)
     video = None
     if path is not None:
         video = VideoRecorder(path, spec.fps, renderer.size)

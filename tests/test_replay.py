@@ -41,15 +41,36 @@ def test_run_writes_video_snapshots_final_picture_and_log(
     assert (tmp_path / "run" / "log").is_dir()
 
 
-def test_replayed_frames_equal_live_frames(scenario_file: ScenarioFile, tmp_path: Path) -> None:
+@pytest.mark.parametrize(
+    "comm",
+    [{"model": "disk"}, {"model": "path_loss", "control": {"model": "disk", "range": 90}}],
+    ids=["disk circles", "path-loss regions"],
+)
+def test_replayed_frames_equal_live_frames(
+    scenario_file: ScenarioFile, tmp_path: Path, comm: dict[str, object]
+) -> None:
     out = tmp_path / "run"
-    run(scenario_file(steps=25), out, "--snapshot", "7,25", "--layers", "all", "--scale", "2")
+    path = scenario_file(steps=25, communication=comm)
+    run(path, out, "--snapshot", "7,25", "--layers", "all", "--scale", "2")
     code = main(["replay", str(out), "--snapshot", "7,25", "--layers", "all", "--scale", "2"])
     assert code == 0
     for step in (7, 25):
         live = read_png(out / f"step-{step:05d}.png")
         replayed = read_png(out / f"replay-step-{step:05d}.png")
         assert np.array_equal(live, replayed)
+
+
+def test_path_loss_regions_are_drawn_where_circles_would_be(
+    scenario_file: ScenarioFile, tmp_path: Path
+) -> None:
+    frames = {}
+    radio = {"position": [8, 30], "comm_range": 50}  # reaches through the wall at x = 40
+    for model in ("disk", "path_loss"):
+        out = tmp_path / model
+        path = scenario_file(steps=3, communication={"model": model}, base_station=radio)
+        run(path, out, "--snapshot", "3", "--layers", "all", "--scale", "4")
+        frames[model] = read_png(out / "step-00003.png")
+    assert not np.array_equal(frames["disk"], frames["path_loss"])
 
 
 def test_replayed_metrics_equal_live_metrics_with_a_failure(
