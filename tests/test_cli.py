@@ -149,9 +149,7 @@ def test_run_defaults_to_runs_name_seed_under_cwd(
 # --- reproducibility --------------------------------------------------------------------
 
 
-def run_metrics(
-    capsys: pytest.CaptureFixture[str], path: Path, out: Path, seed: int
-) -> bytes:
+def run_metrics(capsys: pytest.CaptureFixture[str], path: Path, out: Path, seed: int) -> bytes:
     code, _, _ = cli(capsys, "run", path, "--seed", str(seed), "--quiet", "--out", out)
     assert code == 0
     return (out / "metrics.csv").read_bytes()

@@ -263,9 +263,7 @@ def box_distance_to_occupied(belief: np.ndarray) -> np.ndarray:
 def test_traversable_is_free_and_clear_of_known_obstacles(seed: int, clearance: float) -> None:
     rng = np.random.default_rng(seed)
     shape = tuple(rng.integers(5, 25, size=2))
-    belief = rng.choice(
-        np.array([UNKNOWN, FREE, OCCUPIED]), size=shape, p=rng.dirichlet([1, 4, 1])
-    )
+    belief = rng.choice(np.array([UNKNOWN, FREE, OCCUPIED]), size=shape, p=rng.dirichlet([1, 4, 1]))
     passable = traversable(belief, clearance)
     dist = box_distance_to_occupied(belief)
     assert passable.shape == belief.shape
