@@ -98,8 +98,10 @@ def agent_line(agent: AgentSnapshot) -> dict[str, Any]:
 def comm_line(comm: CommSummary) -> dict[str, Any]:
     """A step's communication summary as JSON (control links as flat indices)."""
     control = None if comm.control_links is None else np.flatnonzero(comm.control_links).tolist()
+    sent = comm.link_bytes if comm.link_bytes is not None else np.zeros((0, 0), np.int64)
     return {
         "bytes": int(comm.comm_bytes),
+        "sent": [[int(i), int(j), int(sent[i, j])] for i, j in np.argwhere(sent)],
         "control_links": control,
         "control_bytes": int(comm.control_bytes),
         "latency": [float(comm.latency_max), float(comm.latency_mean)],
@@ -113,7 +115,10 @@ def comm_summary(line: dict[str, Any] | None, n: int) -> CommSummary:
     control = line["control_links"]
     links = None if control is None else np.isin(np.arange(n * n), control).reshape(n, n)
     latency_max, latency_mean = line["latency"]
-    return CommSummary(line["bytes"], links, line["control_bytes"], latency_max, latency_mean)
+    sent = np.zeros((n, n), dtype=np.int64)
+    for i, j, count in line.get("sent", []):
+        sent[i, j] = count
+    return CommSummary(line["bytes"], links, line["control_bytes"], latency_max, latency_mean, sent)
 
 
 def path_keep(prev: np.ndarray, cur: np.ndarray) -> int:

@@ -245,6 +245,7 @@ class Simulation:
                 self.record.control_bytes,
                 self.record.latency_max,
                 self.record.latency_mean,
+                self.comm.traffic.sent.copy(),
             ),
         )
 

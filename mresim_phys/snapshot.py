@@ -55,6 +55,7 @@ class CommSummary:
     control_bytes: int = 0
     latency_max: float = 0.0
     latency_mean: float = 0.0
+    link_bytes: np.ndarray | None = None  # (n, n) int: bytes sent from agent i to agent j
 
 
 @dataclass(frozen=True)

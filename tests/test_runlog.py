@@ -201,3 +201,19 @@ def test_the_log_is_small(scenario_file: ScenarioFile, tmp_path: Path) -> None:
     assert size < 1_000_000
     grids = 41 * 4 * 60 * 80 * 2  # what full grids for every agent and step would take
     assert size < grids / 10
+
+
+def test_the_log_keeps_bytes_per_link_and_blackouts(
+    scenario_file: ScenarioFile, tmp_path: Path
+) -> None:
+    events = [{"step": 3, "until": 6, "blackout": ["B"]}]
+    record_run(scenario_file(events=events), tmp_path / "log", 8, chunk_steps=3)
+    snaps = list(RunLog.open(tmp_path / "log").snapshots())
+    assert any("blackout B (both) until 6" in s.events for s in snaps)
+    assert any("blackout over B (both)" in s.events for s in snaps)
+    for snap in snaps:
+        sent = snap.comm.link_bytes
+        assert sent is not None and sent.sum() == snap.comm.comm_bytes
+        if 3 <= snap.step < 6:
+            assert not sent[2].any() and not sent[:, 2].any()  # B (agent 2) is silent
+    assert snaps[0].comm.comm_bytes > 0
