@@ -3,12 +3,14 @@
 from __future__ import annotations
 
 from collections.abc import Callable
+from itertools import pairwise
 from pathlib import Path
 
 import numpy as np
 import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy.sparse.csgraph import dijkstra
 from shapely.geometry import LineString, box
 from shapely.ops import unary_union
 from test_planning import assert_valid_path, random_passable, reference_dijkstra
@@ -246,6 +248,44 @@ def test_topological_paths_are_within_15_percent_of_optimal_on_shipped_maps(
         if len(path) > 1:
             assert_valid_path(path, passable)
             assert optimal - 1e-9 <= path_length(path) <= 1.15 * optimal
+
+
+def test_topological_queries_agree_however_freshness_is_known_and_however_wide_the_ring(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The corridor search reads the build's own padded mask when the map is fresh, or a
+    padded copy of the mask given (plus the cells in no region) otherwise; both give the
+    same path on a fresh map, as does a search whose bands outgrow the ring."""
+    passable = known_truth(shipped_truths()["office"])
+    topo = build_map(passable, 10)
+    rows, cols = np.nonzero(passable)
+    rng = np.random.default_rng(3)
+    for _ in range(6):
+        i, j = rng.integers(len(rows), size=2)
+        start, goal = (int(rows[i]), int(cols[i])), (int(rows[j]), int(cols[j]))
+        expected = topological.topological_path(topo, passable, start, goal, 1, True)
+        assert len(expected) > 0
+        for fresh in (None, False):
+            got = topological.topological_path(topo, passable.copy(), start, goal, 1, fresh)
+            np.testing.assert_array_equal(got, expected)
+        monkeypatch.setattr(topological._WORK, "ring", np.empty((3, 2), dtype=np.int32))
+        got = topological.topological_path(topo, passable, start, goal, 1, True)
+        np.testing.assert_array_equal(got, expected)
+        assert topological._WORK.ring.shape[1] > 2
+
+
+def test_graph_routes_cost_what_scipy_dijkstra_finds() -> None:
+    passable = known_truth(shipped_truths()["rubble"])
+    topo = build_map(passable, 10)
+    rng = np.random.default_rng(4)
+    for a in rng.integers(topo.node_count, size=5):
+        costs = dijkstra(topo.graph, indices=int(a))
+        for b in rng.integers(topo.node_count, size=10):
+            nodes, cost = topo.route(int(a), int(b))
+            assert cost == pytest.approx(costs[b], abs=1e-9)
+            assert nodes[0] == a and nodes[-1] == b
+            steps = [topo.graph[u, v] for u, v in pairwise(nodes)]
+            assert sum(steps) == pytest.approx(cost, abs=1e-9)
 
 
 def test_maps_are_rebuilt_only_when_changed_enough_and_shared() -> None:

@@ -27,13 +27,13 @@ import hashlib
 from collections import OrderedDict
 from dataclasses import dataclass, field
 from functools import cached_property
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 from scipy.ndimage import convolve
 from scipy.sparse import csr_matrix
-from scipy.sparse.csgraph import dijkstra
 
 from ..planning import bbox
 from ..types import BoolGrid, IntArray
@@ -153,6 +153,40 @@ def _region_boxes(label: NDArray[np.int32], wp: int, count: int) -> NDArray[np.i
     return boxes
 
 
+@njit(cache=True, nogil=True)
+def _region_cells(
+    label: NDArray[np.int32], count: int
+) -> tuple[NDArray[np.int32], NDArray[np.int64]]:
+    """Cells of each region, by a counting sort: region ``k`` holds the flat indices
+    ``cells[starts[k]:starts[k + 1]]``, in increasing order."""
+    starts = np.zeros(count + 1, dtype=np.int64)
+    for u in range(label.size):
+        if label[u] >= 0:
+            starts[label[u] + 1] += 1
+    for k in range(count):
+        starts[k + 1] += starts[k]
+    cells = np.empty(starts[count], dtype=np.int32)
+    fill = starts[:count].copy()
+    for u in range(label.size):
+        k = label[u]
+        if k >= 0:
+            cells[fill[k]] = u
+            fill[k] += 1
+    return cells, starts
+
+
+class SearchGrid(NamedTuple):
+    """What a corridor search needs, precomputed at build: the grid padded by one blocked
+    cell on every side and flattened (row width ``wp``), the mask the map was built from on
+    it, and the cells of each region (``cells[starts[k]:starts[k + 1]]``, flat padded
+    indices)."""
+
+    wp: int
+    passable: NDArray[np.bool_]
+    cells: NDArray[np.int32]
+    starts: NDArray[np.int64]
+
+
 def sample_nodes(cells_rc: IntArray, spacing: int) -> IntArray:
     """One cell per ``spacing`` x ``spacing`` block: the one nearest the block centre.
 
@@ -199,6 +233,17 @@ class TopologicalMap:
         return len(self.nodes_rc)
 
     @cached_property
+    def search_grid(self) -> SearchGrid:
+        """The padded grid and region cell lists for corridor searches (made at build)."""
+        rows, cols = self.passable.shape
+        label = np.full((rows + 2, cols + 2), -1, dtype=np.int32)
+        label[1:-1, 1:-1] = self.labels
+        cells, starts = _region_cells(label.ravel(), self.node_count)
+        pad = np.zeros((rows + 2, cols + 2), dtype=np.bool_)
+        pad[1:-1, 1:-1] = self.passable
+        return SearchGrid(cols + 2, pad.ravel(), cells, starts)
+
+    @cached_property
     def adjacency(self) -> csr_matrix:
         """Boolean (k, k) node adjacency."""
         return self.graph.astype(bool)
@@ -224,15 +269,61 @@ class TopologicalMap:
         The cost is the length of a real path between the two nodes (each edge is one).
         No route: an empty array and inf.
         """
-        if a == b:
-            return np.array([a], dtype=np.int64), 0.0
-        cost, pred = dijkstra(self.graph, indices=a, return_predecessors=True, min_only=False)
-        if not np.isfinite(cost[b]):
-            return np.zeros(0, dtype=np.int64), np.inf
-        nodes = [b]
-        while nodes[-1] != a:
-            nodes.append(int(pred[nodes[-1]]))
-        return np.array(nodes[::-1], dtype=np.int64), float(cost[b])
+        nodes, cost = _graph_route(self.graph.indptr, self.graph.indices, self.graph.data, a, b)
+        return nodes, cost
+
+
+@njit(cache=True, nogil=True)
+def _graph_route(
+    indptr: NDArray[np.int32],
+    indices: NDArray[np.int32],
+    costs: NDArray[np.float64],
+    a: int,
+    b: int,
+) -> tuple[NDArray[np.int64], float]:
+    """Dijkstra (an inline binary heap) on a CSR graph from ``a``, stopped once ``b`` is settled:
+    the route's nodes from ``a`` to ``b`` and its cost (empty and inf if there is none)."""
+    count = len(indptr) - 1
+    dist = np.full(count, np.inf)
+    pred = np.full(count, -1, dtype=np.int64)
+    done = np.zeros(count, dtype=np.bool_)
+    keys = np.empty(len(indices) + 1)  # a binary heap of (cost, node), one entry per push
+    items = np.empty(len(indices) + 1, dtype=np.int64)
+    keys[0], items[0], dist[a], size = 0.0, a, 0.0, 1
+    while size > 0:
+        u, size = items[0], size - 1
+        key, item, i = keys[size], items[size], 0
+        while 2 * i + 1 < size:  # sift the last entry down from the root
+            child = 2 * i + 1
+            if child + 1 < size and keys[child + 1] < keys[child]:
+                child += 1
+            if keys[child] >= key:
+                break
+            keys[i], items[i], i = keys[child], items[child], child
+        keys[i], items[i] = key, item
+        if done[u]:
+            continue
+        done[u] = True
+        if u == b:
+            break
+        for k in range(indptr[u], indptr[u + 1]):
+            v, cost = indices[k], dist[u] + costs[k]
+            if cost < dist[v]:
+                dist[v], pred[v], i = cost, u, size
+                size += 1
+                while i > 0 and keys[(i - 1) >> 1] > cost:  # sift up
+                    keys[i], items[i], i = keys[(i - 1) >> 1], items[(i - 1) >> 1], (i - 1) >> 1
+                keys[i], items[i] = cost, v
+    if not done[b]:
+        return np.zeros(0, dtype=np.int64), np.inf
+    length, node = 1, b
+    while node != a:
+        node, length = pred[node], length + 1
+    nodes = np.empty(length, dtype=np.int64)
+    node = b
+    for i in range(length - 1, -1, -1):
+        nodes[i], node = node, pred[node]
+    return nodes, dist[b]
 
 
 def build_map(passable: BoolGrid, spacing: int) -> TopologicalMap:
@@ -259,7 +350,9 @@ def build_map(passable: BoolGrid, spacing: int) -> TopologicalMap:
     boxes = _region_boxes(label, window.wp, len(nodes))
     boxes += np.repeat(window.origin, 2)
     labels = _full(window, label, shape, -1)
-    return TopologicalMap(frozen, skeleton, nodes, labels, graph, boxes, spacing)
+    topo = TopologicalMap(frozen, skeleton, nodes, labels, graph, boxes, spacing)
+    _ = topo.search_grid  # made now: a rebuild, not the first query, pays for it
+    return topo
 
 
 def _flat(window: Window, nodes_rc: IntArray) -> NDArray[np.int64]:
