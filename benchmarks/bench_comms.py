@@ -59,23 +59,28 @@ def jitter(points: np.ndarray, rng: np.random.Generator, shape: tuple[int, int])
     return np.clip(moved, 0.5, np.array([shape[1], shape[0]]) - 0.5)
 
 
+def time_links(model: object, points: np.ndarray, world: World, rng: np.random.Generator) -> None:
+    """Print the median link time of ``model`` for agents starting at ``points``."""
+    ranges = np.full(len(points), 150.0)
+    moving = [points]
+
+    def step() -> object:
+        moving[0] = jitter(moving[0], rng, world.shape)
+        return model.links(Radios.of(moving[0], ranges), world)  # type: ignore[attr-defined]
+
+    step()  # compile
+    median, p90 = median_ms(step)
+    label = f"{model.name} {getattr(model.params, 'walls', '')}".strip()  # type: ignore[attr-defined]
+    agents = len(points) - 1
+    print(f"links {label:20s} {agents:2d} agents + base: median {median:6.3f} ms  p90 {p90:6.3f}")
+
+
 def bench_links(world: World, agents: int, rng: np.random.Generator) -> None:
     """Median link time per model for ``agents`` robots plus the base."""
     points = free_points(world.occupied, agents + 1, rng)
     for label, params in MODELS.items():
         cls = COMM_MODELS.get(label.split()[0])
-        model = cls(cls.Params.model_validate(params))
-        state = {"points": points}
-
-        def step() -> object:
-            state["points"] = jitter(state["points"], rng, world.shape)
-            return model.links(Radios.of(state["points"], np.full(agents + 1, 150.0)), world)
-
-        model.links(Radios.of(points, np.full(agents + 1, 150.0)), world)  # compile
-        median, p90 = median_ms(step)
-        print(
-            f"links {label:20s} {agents:2d} agents + base: median {median:6.3f} ms  p90 {p90:6.3f}"
-        )
+        time_links(cls(cls.Params.model_validate(params)), points, world, rng)
 
 
 def bench_regions(world: World, rng: np.random.Generator) -> None:
