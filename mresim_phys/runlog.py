@@ -95,32 +95,6 @@ def agent_line(agent: AgentSnapshot) -> dict[str, Any]:
     return row
 
 
-def comm_line(comm: CommSummary) -> dict[str, Any]:
-    """A step's communication summary as JSON (control links as flat indices)."""
-    control = None if comm.control_links is None else np.flatnonzero(comm.control_links).tolist()
-    sent = comm.link_bytes if comm.link_bytes is not None else np.zeros((0, 0), np.int64)
-    return {
-        "bytes": int(comm.comm_bytes),
-        "sent": [[int(i), int(j), int(sent[i, j])] for i, j in np.argwhere(sent)],
-        "control_links": control,
-        "control_bytes": int(comm.control_bytes),
-        "latency": [float(comm.latency_max), float(comm.latency_mean)],
-    }
-
-
-def comm_summary(line: dict[str, Any] | None, n: int) -> CommSummary:
-    """The CommSummary of a logged step (an empty one for logs written before it existed)."""
-    if line is None:
-        return CommSummary()
-    control = line["control_links"]
-    links = None if control is None else np.isin(np.arange(n * n), control).reshape(n, n)
-    latency_max, latency_mean = line["latency"]
-    sent = np.zeros((n, n), dtype=np.int64)
-    for i, j, count in line.get("sent", []):
-        sent[i, j] = count
-    return CommSummary(line["bytes"], links, line["control_bytes"], latency_max, latency_mean, sent)
-
-
 def path_keep(prev: np.ndarray, cur: np.ndarray) -> int:
     """``len(cur)`` if ``cur`` is the tail of ``prev`` (a path being followed), else NEW_PATH."""
     keep = len(cur)
@@ -190,7 +164,7 @@ class RunLogWriter:
                 self._parts[name].append(part)
         line = {"step": snap.step, "events": list(snap.events)}
         line["links"] = np.flatnonzero(snap.links).tolist()
-        line["comm"] = comm_line(snap.comm)
+        line["comm"] = snap.comm.to_json()
         line["agents"] = [agent_line(a) for a in snap.agents]
         self._lines.append(json.dumps(line, separators=(",", ":")))
         self._last_step = snap.step
@@ -353,7 +327,7 @@ class Replay:
         free = [self.apply(i, chunk, j * n + i) for i in range(n)]
         links = np.isin(np.arange(n * n), line["links"]).reshape(n, n)
         agents = tuple(self.agent(i, row) for i, row in enumerate(line["agents"]))
-        comm = comm_summary(line.get("comm"), n)
+        comm = CommSummary.from_json(line.get("comm"), n)
         record = self.measure(line["step"], free[1:], links, agents, comm)  # robots: 1..n-1
         snap = Snapshot(
             step=line["step"],

@@ -10,6 +10,7 @@ same snapshots from a log, so a replayed frame equals the live one.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -56,6 +57,31 @@ class CommSummary:
     latency_max: float = 0.0
     latency_mean: float = 0.0
     link_bytes: np.ndarray | None = None  # (n, n) int: bytes sent from agent i to agent j
+
+    def to_json(self) -> dict[str, Any]:
+        """The run log's ``comm`` object (links as flat indices, bytes as [i, j, n])."""
+        control = self.control_links
+        sent = self.link_bytes if self.link_bytes is not None else np.zeros((0, 0), np.int64)
+        return {
+            "bytes": int(self.comm_bytes),
+            "sent": [[int(i), int(j), int(sent[i, j])] for i, j in np.argwhere(sent)],
+            "control_links": None if control is None else np.flatnonzero(control).tolist(),
+            "control_bytes": int(self.control_bytes),
+            "latency": [float(self.latency_max), float(self.latency_mean)],
+        }
+
+    @classmethod
+    def from_json(cls, line: dict[str, Any] | None, n: int) -> CommSummary:
+        """Read :meth:`to_json` back for ``n`` agents (empty for logs older than it)."""
+        if line is None:
+            return cls()
+        control = line["control_links"]
+        links = None if control is None else np.isin(np.arange(n * n), control).reshape(n, n)
+        sent = np.zeros((n, n), dtype=np.int64)
+        for i, j, count in line.get("sent", []):
+            sent[i, j] = count
+        latency_max, latency_mean = line["latency"]
+        return cls(line["bytes"], links, line["control_bytes"], latency_max, latency_mean, sent)
 
 
 @dataclass(frozen=True)
