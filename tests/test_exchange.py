@@ -11,7 +11,7 @@ import pytest
 
 from mresim_phys import Simulation
 from mresim_phys.agents import Agent, empty_belief
-from mresim_phys.comms.exchange import Exchange, Traffic, stamp_base_contacts
+from mresim_phys.comms.exchange import Exchange, Traffic, hop_groups, stamp_base_contacts
 from mresim_phys.comms.ledger import Ledger
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 
@@ -45,8 +45,9 @@ class Exchanger:
         for agent in self.agents:
             self.ledger.note(agent.index, (0, rows, 0, cols))
             self.ledger.stamp_sensed(agent.index, agent.belief, agent.safe, step)
-        traffic = self.exchange.run(self.agents, links, step, multi_hop)
-        stamp_base_contacts(self.agents, links, step, multi_hop)
+        groups = hop_groups(links, multi_hop)
+        traffic = self.exchange.run(self.agents, links, step, groups)
+        stamp_base_contacts(self.agents, links, step, groups)
         return traffic
 
 

@@ -73,6 +73,14 @@ def linked_groups(links: np.ndarray) -> list[list[int]]:
     return sorted((g for g in groups if len(g) > 1), key=lambda g: g[0])
 
 
+Groups = list[list[int]] | None  # linked groups for multi-hop exchange, None for one hop
+
+
+def hop_groups(links: np.ndarray, multi_hop: bool) -> Groups:
+    """The linked groups knowledge spreads through this step (None: one hop only)."""
+    return linked_groups(links) if multi_hop else None
+
+
 def spanning_tree(links: np.ndarray, root: int) -> list[tuple[int, int]]:
     """(parent, child) edges of a breadth-first tree from ``root``, in visiting order."""
     order, parents = breadth_first_order(csr_matrix(links), root, directed=False)
@@ -103,13 +111,15 @@ class Exchange:
         self.full_maps = full_maps
         self.maps = maps
 
-    def run(
-        self, agents: Sequence[Agent], links: np.ndarray, step: int, multi_hop: bool
-    ) -> Traffic:
-        """Exchange along ``links`` (index 0 = base); return the traffic."""
+    def run(self, agents: Sequence[Agent], links: np.ndarray, step: int, groups: Groups) -> Traffic:
+        """Exchange along ``links`` (index 0 = base); return the traffic.
+
+        ``groups`` are the linked groups for multi-hop exchange (:func:`hop_groups`),
+        None for one hop per step.
+        """
         traffic = Traffic.empty(len(agents))
-        if multi_hop:
-            for group in linked_groups(links):
+        if groups is not None:
+            for group in groups:
                 self.share_group(agents, links, group, step, traffic)
         else:
             self.share_direct(agents, links, step, traffic)
@@ -202,11 +212,11 @@ class Exchange:
 
 
 def stamp_base_contacts(
-    agents: Sequence[Agent], links: np.ndarray, step: int, multi_hop: bool
+    agents: Sequence[Agent], links: np.ndarray, step: int, groups: Groups
 ) -> None:
     """Stamp ``last_base_contact`` on every agent whose data reached the base this step."""
-    if multi_hop:
-        reach = next((g for g in linked_groups(links) if g[0] == 0), [])
+    if groups is not None:
+        reach = next((g for g in groups if g[0] == 0), [])
     else:
         reach = np.flatnonzero(links[0]).tolist()
     for i in reach:

@@ -28,7 +28,7 @@ from ..scenario import BlackoutEvent, Scenario
 from ..types import FloatArray
 from ..world import World
 from .base import COMM_MODELS, CommModel, Radios
-from .exchange import Exchange, Traffic, stamp_base_contacts
+from .exchange import Exchange, Traffic, hop_groups, stamp_base_contacts
 from .ledger import Box, Ledger
 
 
@@ -131,13 +131,15 @@ class Network:
             self.ledger.stamp_sensed(agent.index, agent.belief, agent.safe, step)
         n = len(agents)
         links = self.main.links(agents, world, self.silent(n, step, "main"))
-        traffic = self.maps.run(agents, links, step, self.multi_hop)
-        stamp_base_contacts(agents, links, step, self.multi_hop)
+        groups = hop_groups(links, self.multi_hop)
+        traffic = self.maps.run(agents, links, step, groups)
+        stamp_base_contacts(agents, links, step, groups)
         control_links = np.zeros_like(links)
         control_traffic = Traffic.empty(n)
         if self.control is not None:
             control_links = self.control.links(agents, world, self.silent(n, step, "control"))
-            control_traffic = self.records.run(agents, control_links, step, self.multi_hop)
+            control_groups = hop_groups(control_links, self.multi_hop)
+            control_traffic = self.records.run(agents, control_links, step, control_groups)
         return CommRecord(links, control_links, traffic, control_traffic)
 
 

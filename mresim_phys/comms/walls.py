@@ -39,6 +39,16 @@ def _axis_setup(origin: float, delta: float, cell: int) -> tuple[int, float, flo
     return 0, _BIG, _BIG
 
 
+@njit(cache=True, nogil=True, inline="always")
+def _next_cell(
+    c: int, r: int, t_c: float, t_r: float, step_c: int, step_r: int, dt_c: float, dt_r: float
+) -> tuple[int, int, float, float]:
+    """One step of the traversal: into the column or the row whose boundary comes first."""
+    if t_c <= t_r:
+        return c + step_c, r, t_c + dt_c, t_r
+    return c, r + step_r, t_c, t_r + dt_r
+
+
 @njit(cache=True, nogil=True)
 def segment_walls(
     occupied: BoolGrid, x0: float, y0: float, x1: float, y1: float
@@ -62,12 +72,7 @@ def segment_walls(
                     runs += 1
             was_wall = wall
         t = t_next
-        if t_c <= t_r:
-            c += step_c
-            t_c += dt_c
-        else:
-            r += step_r
-            t_r += dt_r
+        c, r, t_c, t_r = _next_cell(c, r, t_c, t_r, step_c, step_r, dt_c, dt_r)
     return runs, inside
 
 
@@ -161,12 +166,7 @@ def _reach_one(
                 return t
             was_wall = wall
         t = t_next
-        if t_c <= t_r:
-            c += step_c
-            t_c += dt_c
-        else:
-            r += step_r
-            t_r += dt_r
+        c, r, t_c, t_r = _next_cell(c, r, t_c, t_r, step_c, step_r, dt_c, dt_r)
     return limit
 
 

@@ -30,6 +30,7 @@ from .grid import (
     heap_push,
     octile,
     search_arrays,
+    search_window,
     walk_back,
 )
 
@@ -120,6 +121,4 @@ class AStar(GridPlanner):
         self, passable: BoolGrid, start: tuple[int, int], goal: tuple[int, int]
     ) -> FloatArray:
         """The optimal cell-centre path; (0, 2) if the goal is unreachable."""
-        window = Window.of(passable)
-        assert window is not None  # the start is passable
-        return astar_search(window, start, goal)[0]
+        return search_window(passable, start, goal, astar_search)

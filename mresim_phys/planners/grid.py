@@ -12,6 +12,7 @@ forbidden only when both orthogonal cells it passes are blocked.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
@@ -60,6 +61,18 @@ class Window:
 
 
 UNSEEN, OPEN, CLOSED = 0, 1, 2  # search state of a cell
+
+
+def search_window(
+    passable: BoolGrid,
+    start: tuple[int, int],
+    goal: tuple[int, int],
+    engine: Callable[[Window, tuple[int, int], tuple[int, int]], tuple[FloatArray, int]],
+) -> FloatArray:
+    """The path ``engine`` (a window search returning (path, expansions)) finds."""
+    window = Window.of(passable)
+    assert window is not None  # the start is passable
+    return engine(window, start, goal)[0]
 
 
 def search_arrays(size: int) -> tuple[FloatArray, NDArray[np.int64], NDArray[np.uint8]]:

@@ -40,6 +40,7 @@ from .grid import (
     heap_push,
     octile,
     search_arrays,
+    search_window,
     walk_back,
 )
 
@@ -210,6 +211,4 @@ class JumpPointSearch(GridPlanner):
         self, passable: BoolGrid, start: tuple[int, int], goal: tuple[int, int]
     ) -> FloatArray:
         """An optimal cell-centre path; (0, 2) if the goal is unreachable."""
-        window = Window.of(passable)
-        assert window is not None  # the start is passable
-        return jps_search(window, start, goal)[0]
+        return search_window(passable, start, goal, jps_search)
