@@ -19,12 +19,12 @@ from pathlib import Path
 
 import numpy as np
 
-from mresim_phys.bench import team_scenario
 from mresim_phys.comms import COMM_MODELS, Radios
-from mresim_phys.io import load_image_map
-from mresim_phys.load import validate_scenario
+from mresim_phys.output.bench import team_scenario
+from mresim_phys.scenario.load import validate_scenario
+from mresim_phys.scenario.readers import load_image_map
 from mresim_phys.sim import Simulation
-from mresim_phys.world import World
+from mresim_phys.world.space import World
 
 ROOT = Path(__file__).resolve().parents[1]
 REPEATS = 300

@@ -27,8 +27,8 @@ from pymunk._chipmunk_cffi import ffi, lib
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from mresim_phys.io import load_map  # noqa: E402
-from mresim_phys.maps import wall_segments  # noqa: E402
+from mresim_phys.scenario.readers import load_map  # noqa: E402
+from mresim_phys.world.maps import wall_segments  # noqa: E402
 
 REPEATS = 7
 N_POSES = 200

@@ -30,14 +30,14 @@ from pathlib import Path
 import numpy as np
 from bench_planning import corners, known_belief, make_maze, make_open
 
-from mresim_phys.io import load_image_map, load_ros_map, load_text_map
-from mresim_phys.planners.astar import astar_search
-from mresim_phys.planners.grid import Window
-from mresim_phys.planners.jps import jps_search
-from mresim_phys.planners.smoothing import smooth_path
-from mresim_phys.planners.topological import topological_path
-from mresim_phys.planners.topomap import build_map
-from mresim_phys.planning import distance_field, path_length, traversable
+from mresim_phys.planning.astar import astar_search
+from mresim_phys.planning.fields import distance_field, path_length, traversable
+from mresim_phys.planning.grid import Window
+from mresim_phys.planning.jps import jps_search
+from mresim_phys.planning.smoothing import smooth_path
+from mresim_phys.planning.topological import topological_path
+from mresim_phys.planning.topomap import build_map
+from mresim_phys.scenario.readers import load_image_map, load_ros_map, load_text_map
 from mresim_phys.types import BoolGrid
 
 CLEARANCE = 3.0

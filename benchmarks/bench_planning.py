@@ -27,8 +27,8 @@ import cv2
 import numpy as np
 from skimage.graph import MCP_Geometric
 
-from mresim_phys.frontiers import find_frontiers, frontier_targets
-from mresim_phys.planning import distance_field, plan_path, traversable
+from mresim_phys.knowledge.frontiers import find_frontiers, frontier_targets
+from mresim_phys.planning.fields import distance_field, plan_path, traversable
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN, BeliefGrid, BoolGrid
 
 CLEARANCE = 2.2  # robot radius 1.5 + 0.71 margin

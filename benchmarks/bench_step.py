@@ -28,12 +28,12 @@ sys.path.insert(0, str(ROOT))
 
 from mresim_phys import Simulation  # noqa: E402
 from mresim_phys.agents import empty_belief  # noqa: E402
-from mresim_phys.io import load_image_map  # noqa: E402
-from mresim_phys.load import validate_scenario  # noqa: E402
-from mresim_phys.mapping import integrate_scan  # noqa: E402
-from mresim_phys.scenario import SensorSpec  # noqa: E402
-from mresim_phys.sensing import scan  # noqa: E402
-from mresim_phys.world import World  # noqa: E402
+from mresim_phys.knowledge.mapping import integrate_scan  # noqa: E402
+from mresim_phys.scenario.load import validate_scenario  # noqa: E402
+from mresim_phys.scenario.readers import load_image_map  # noqa: E402
+from mresim_phys.scenario.schema import SensorSpec  # noqa: E402
+from mresim_phys.world.sensing import scan  # noqa: E402
+from mresim_phys.world.space import World  # noqa: E402
 
 OFFICE = ROOT / "maps" / "office.png"
 

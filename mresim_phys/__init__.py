@@ -14,14 +14,14 @@ Typical use::
 
 from __future__ import annotations
 
-from .comms import COMM_MODELS
-from .errors import MapError, MresimError, ScenarioError, UnknownPluginError
-from .load import load_scenario, validate_scenario
-from .metrics import StepRecord
-from .planners import PLANNERS
-from .scenario import Scenario
-from .sim import Simulation
-from .strategies import STRATEGIES
+from mresim_phys.comms import COMM_MODELS
+from mresim_phys.errors import MapError, MresimError, ScenarioError, UnknownPluginError
+from mresim_phys.metrics import StepRecord
+from mresim_phys.planning import PLANNERS
+from mresim_phys.scenario.load import load_scenario, validate_scenario
+from mresim_phys.scenario.schema import Scenario
+from mresim_phys.sim import Simulation
+from mresim_phys.strategies import STRATEGIES
 
 __all__ = [
     "COMM_MODELS",

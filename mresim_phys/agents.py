@@ -14,10 +14,10 @@ from typing import Literal
 
 import numpy as np
 
-from .planners import Planner
-from .scenario import RobotSpec
-from .strategies.base import Decision, Strategy
-from .types import UNKNOWN, BeliefGrid, BoolGrid, FloatArray
+from mresim_phys.planning import Planner
+from mresim_phys.scenario.schema import RobotSpec
+from mresim_phys.strategies.base import Decision, Strategy
+from mresim_phys.types import UNKNOWN, BeliefGrid, BoolGrid, FloatArray
 
 RobotState = Literal["active", "error", "done", "failed"]
 BASE_NAME = "base"

@@ -11,19 +11,18 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
-from .agents import BASE_NAME, Agent, Robot, empty_belief
-from .comms import COMM_MODELS, CommModel
-from .errors import ScenarioError
-from .io import LoadedMap, load_image_map, load_ros_map, load_text_map
-from .mapping import Coverage
-from .maps import free_components_mask
-from .planners import PLANNERS, Planner
-from .rng import named_stream
-from .scenario import MapSpec, RobotSpec, Scenario
-from .strategies import STRATEGIES, Strategy
-from .world import World
+from mresim_phys.agents import BASE_NAME, Agent, Robot, empty_belief
+from mresim_phys.comms import COMM_MODELS, CommModel
+from mresim_phys.errors import ScenarioError
+from mresim_phys.knowledge.mapping import Coverage
+from mresim_phys.planning import PLANNERS, Planner
+from mresim_phys.rng import named_stream
+from mresim_phys.scenario.readers import LoadedMap, load_image_map, load_ros_map, load_text_map
+from mresim_phys.scenario.schema import MapSpec, RobotSpec, Scenario
+from mresim_phys.strategies import STRATEGIES, Strategy
+from mresim_phys.world.maps import free_components_mask
+from mresim_phys.world.space import World
 
 
 @dataclass
@@ -46,12 +45,6 @@ def load_map(spec: MapSpec) -> LoadedMap:
     if kind == "grid":
         return load_text_map(Path(path))
     return load_ros_map(Path(path))
-
-
-def make_plugin(registry: Any, name: str, params: dict[str, Any]) -> Any:
-    """Instantiate plugin ``name`` from its (already validated) params."""
-    cls = registry.get(name)
-    return cls(cls.Params.model_validate(params))
 
 
 def check_start(world: World, robot: RobotSpec) -> None:
@@ -85,8 +78,8 @@ def check_base(world: World, scenario: Scenario) -> None:
 def make_robot(spec: RobotSpec, index: int, seed: int, shape: tuple[int, int]) -> Robot:
     """A robot with an all-unknown map, its strategy, its planner and its own random stream."""
     belief, safe = empty_belief(shape)
-    strategy: Strategy = make_plugin(STRATEGIES, spec.strategy.name, spec.strategy.params)
-    planner: Planner = make_plugin(PLANNERS, spec.planner.name, spec.planner.params)
+    strategy: Strategy = STRATEGIES.make(spec.strategy.name, spec.strategy.params)
+    planner: Planner = PLANNERS.make(spec.planner.name, spec.planner.params)
     return Robot(
         name=spec.name,
         index=index,
@@ -124,7 +117,5 @@ def build_parts(scenario: Scenario) -> Parts:
     robots = [make_robot(s, i + 1, scenario.seed, shape) for i, s in enumerate(scenario.robots)]
     world.place_robots([r.position for r in robots])
     reachable = free_components_mask(truth.occupied, [r.start for r in scenario.robots])
-    comm: CommModel = make_plugin(
-        COMM_MODELS, scenario.communication.model, scenario.communication.params
-    )
+    comm: CommModel = COMM_MODELS.make(scenario.communication.model, scenario.communication.params)
     return Parts(truth, world, base, robots, comm, Coverage(reachable))

@@ -15,14 +15,14 @@ from typing import Any
 
 from tqdm import tqdm
 
-from .bench import run_bench
-from .errors import MresimError
-from .metrics import StepRecord
-from .plots import plot_runs, plotting_available
-from .recorders import default_run_dir
-from .replay import replay_run
-from .session import run_session
-from .sim import Simulation
+from mresim_phys.errors import MresimError
+from mresim_phys.metrics import StepRecord
+from mresim_phys.output.bench import run_bench
+from mresim_phys.output.plots import plot_runs, plotting_available
+from mresim_phys.output.recorders import default_run_dir
+from mresim_phys.output.replay import replay_run
+from mresim_phys.output.session import run_session
+from mresim_phys.sim import Simulation
 
 EXIT_USER_ERROR = 2
 

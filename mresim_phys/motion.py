@@ -19,9 +19,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .agents import Robot
-from .mapping import mark_bump
-from .world import World
+from mresim_phys.agents import Robot
+from mresim_phys.knowledge.mapping import mark_bump
+from mresim_phys.world.space import World
 
 EPS = 1e-9
 

@@ -1,20 +1,23 @@
-"""Plugin registries: a YAML name -> a class, for strategies and communication models.
+"""Plugin registries (shared): a YAML name -> a class, for every plugin family.
 
-A registry is filled at import time by a class decorator, can be extended by a
-third-party package through an entry point group, and resolves
-``"package.module:ClassName"`` references for one-off user classes. Unknown names
-raise :class:`~mresim_phys.errors.UnknownPluginError` listing the close matches.
+A registry is filled at import time by a class decorator (the class's own
+``name`` is its key), can be extended by a third-party package through an entry
+point group, and resolves ``"package.module:ClassName"`` references for one-off
+user classes. :meth:`Registry.make` builds a plugin from its parameters. Unknown
+names raise :class:`~mresim_phys.errors.UnknownPluginError` listing the close matches.
 """
 
 from __future__ import annotations
 
 import difflib
 import importlib
-from collections.abc import Callable
+from collections.abc import Mapping
 from importlib.metadata import entry_points
-from typing import Generic, TypeVar
+from typing import Any, Generic, TypeVar
 
-from .errors import UnknownPluginError
+from pydantic import BaseModel
+
+from mresim_phys.errors import UnknownPluginError
 
 T = TypeVar("T")
 
@@ -28,17 +31,25 @@ class Registry(Generic[T]):
         self._classes: dict[str, type[T]] = {}
         self._discovered = False
 
-    def register(self, name: str) -> Callable[[type[T]], type[T]]:
-        """Class decorator adding ``cls`` under ``name``; a duplicate name is an error."""
+    def register(self, cls: type[T]) -> type[T]:
+        """Class decorator adding ``cls`` under its ``name``; a duplicate name is an error."""
+        name = getattr(cls, "name", None)
+        if not isinstance(name, str) or not name:
+            raise ValueError(f"a {self.kind} class needs a 'name' class attribute (its YAML key)")
+        if name in self._classes and self._classes[name] is not cls:
+            raise ValueError(f"{self.kind} {name!r} is already registered")
+        self._classes[name] = cls
+        return cls
 
-        def add(cls: type[T]) -> type[T]:
-            if name in self._classes and self._classes[name] is not cls:
-                raise ValueError(f"{self.kind} {name!r} is already registered")
-            self._classes[name] = cls
-            cls.name = name  # type: ignore[attr-defined]
-            return cls
+    def params_model(self, name: str) -> type[BaseModel] | None:
+        """The pydantic ``Params`` model of plugin ``name`` (None if it has none usable)."""
+        model = getattr(self.get(name), "Params", None)
+        return model if isinstance(model, type) and issubclass(model, BaseModel) else None
 
-        return add
+    def make(self, name: str, params: Mapping[str, Any] | None = None) -> T:
+        """A new instance of plugin ``name`` built from ``params`` (validated by its Params)."""
+        cls: Any = self.get(name)
+        return cls(cls.Params.model_validate(dict(params or {})))  # type: ignore[no-any-return]
 
     def names(self) -> list[str]:
         """All registered names (built-ins and discovered plugins), sorted."""

@@ -19,21 +19,21 @@ from typing import Any
 
 import numpy as np
 
-from .agents import Agent, Robot
-from .build import Parts, build_parts
-from .comms.ledger import box_around
-from .comms.network import Network, build_network
-from .errors import ScenarioError
-from .load import load_scenario
-from .mapping import integrate_scan
-from .metrics import CommTotals, Milestones, RobotRecord, StepRecord, base_latency
-from .motion import MoveRules, take_step
-from .rng import named_stream
-from .scenario import BlackoutEvent, Scenario
-from .sensing import scan
-from .snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
-from .strategies import RobotView
-from .types import FREE
+from mresim_phys.agents import Agent, Robot
+from mresim_phys.build import Parts, build_parts
+from mresim_phys.comms.ledger import box_around
+from mresim_phys.comms.network import Network, build_network
+from mresim_phys.errors import ScenarioError
+from mresim_phys.knowledge.mapping import integrate_scan
+from mresim_phys.metrics import CommTotals, Milestones, RobotRecord, StepRecord, base_latency
+from mresim_phys.motion import MoveRules, take_step
+from mresim_phys.rng import named_stream
+from mresim_phys.scenario.load import load_scenario
+from mresim_phys.scenario.schema import BlackoutEvent, Scenario
+from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
+from mresim_phys.strategies import RobotView
+from mresim_phys.types import FREE
+from mresim_phys.world.sensing import scan
 
 PHASES = ("sensing", "mapping", "planning", "communication", "metrics")
 

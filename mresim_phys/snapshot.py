@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from .types import BeliefGrid, BoolGrid, FloatArray
+from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray
 
 
 def read_only(array: np.ndarray) -> np.ndarray:

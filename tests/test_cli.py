@@ -14,7 +14,7 @@ import pytest
 import yaml
 
 from mresim_phys.cli import main
-from mresim_phys.load import load_scenario
+from mresim_phys.scenario.load import load_scenario
 
 MakeScenario = Callable[..., Path]
 

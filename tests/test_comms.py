@@ -16,7 +16,7 @@ from mresim_phys.comms.line_of_sight import LineOfSightComm, LineOfSightParams
 from mresim_phys.comms.path_loss import PathLossComm, PathLossParams
 from mresim_phys.comms.walls import segment_walls
 from mresim_phys.types import FloatArray
-from mresim_phys.world import World
+from mresim_phys.world.space import World
 
 WAF_FACTOR = 10 ** (-3.65 / 25)  # the original's range factor per wall: 0.714
 

@@ -8,8 +8,13 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from scipy import ndimage
 
-from mresim_phys.frontiers import _raster_ranks, find_frontiers, frontier_mask, frontier_targets
-from mresim_phys.planning import distance_field, traversable
+from mresim_phys.knowledge.frontiers import (
+    _raster_ranks,
+    find_frontiers,
+    frontier_mask,
+    frontier_targets,
+)
+from mresim_phys.planning.fields import distance_field, traversable
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 
 SEEDS = st.integers(0, 2**32 - 1)

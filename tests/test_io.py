@@ -11,7 +11,7 @@ from numpy.typing import NDArray
 from PIL import Image
 
 from mresim_phys.errors import MapError, ScenarioError
-from mresim_phys.io import (
+from mresim_phys.scenario.readers import (
     LoadedMap,
     load_image_map,
     load_map,

@@ -9,11 +9,11 @@ import shapely
 from scipy import ndimage
 
 from mresim_phys.agents import empty_belief
-from mresim_phys.mapping import NEAR_ROBOT, Coverage, integrate_scan, merge_into
-from mresim_phys.scenario import SensorSpec
-from mresim_phys.sensing import scan
+from mresim_phys.knowledge.mapping import NEAR_ROBOT, Coverage, integrate_scan, merge_into
+from mresim_phys.scenario.schema import SensorSpec
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
-from mresim_phys.world import Scan, World
+from mresim_phys.world.sensing import scan
+from mresim_phys.world.space import Scan, World
 
 
 def scanned_belief(

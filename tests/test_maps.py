@@ -18,8 +18,8 @@ from numpy.typing import NDArray
 from scipy import ndimage
 
 from mresim_phys.errors import MapError
-from mresim_phys.io import load_map
-from mresim_phys.maps import free_components_mask, wall_segments
+from mresim_phys.scenario.readers import load_map
+from mresim_phys.world.maps import free_components_mask, wall_segments
 
 Grid = NDArray[np.bool_]
 VERTEX_TOL = 1e-9

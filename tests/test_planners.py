@@ -18,17 +18,17 @@ from test_planning import assert_valid_path, random_passable, reference_dijkstra
 from mresim_phys import Simulation
 from mresim_phys.cli import main
 from mresim_phys.errors import ScenarioError, UnknownPluginError
-from mresim_phys.io import load_image_map, load_ros_map, load_text_map
-from mresim_phys.planners import BUILT_IN, PLANNERS, Planner, topological
-from mresim_phys.planners.astar import AStar, astar_search
-from mresim_phys.planners.base import PlannerParams
-from mresim_phys.planners.grid import Window
-from mresim_phys.planners.jps import JumpPointSearch, jps_search
-from mresim_phys.planners.skeleton import removal_table, thin
-from mresim_phys.planners.smoothing import smooth_path
-from mresim_phys.planners.topological import TopologicalParams, TopologicalPlanner
-from mresim_phys.planners.topomap import MapCache, build_map
-from mresim_phys.planning import distance_field, path_length, traversable
+from mresim_phys.planning import BUILT_IN, PLANNERS, Planner, topological
+from mresim_phys.planning.astar import AStar, astar_search
+from mresim_phys.planning.base import PlannerParams
+from mresim_phys.planning.fields import distance_field, path_length, traversable
+from mresim_phys.planning.grid import Window
+from mresim_phys.planning.jps import JumpPointSearch, jps_search
+from mresim_phys.planning.skeleton import removal_table, thin
+from mresim_phys.planning.smoothing import smooth_path
+from mresim_phys.planning.topological import TopologicalParams, TopologicalPlanner
+from mresim_phys.planning.topomap import MapCache, build_map
+from mresim_phys.scenario.readers import load_image_map, load_ros_map, load_text_map
 from mresim_phys.strategies import RobotView, plan_context
 from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN

@@ -10,7 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mresim_phys.planning import (
+from mresim_phys.planning.fields import (
     distance_field,
     path_length,
     plan_path,

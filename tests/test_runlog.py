@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from mresim_phys import MresimError, Simulation
-from mresim_phys.runlog import RunLog, RunLogWriter, chunk_file, recompute_metrics
+from mresim_phys.output.runlog import RunLog, RunLogWriter, chunk_file, recompute_metrics
 from mresim_phys.snapshot import Snapshot
 
 ScenarioFile = Callable[..., Path]

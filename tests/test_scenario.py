@@ -11,8 +11,8 @@ import pytest
 import yaml
 
 from mresim_phys.errors import MapError, ScenarioError
-from mresim_phys.load import load_scenario
-from mresim_phys.scenario import Scenario
+from mresim_phys.scenario.load import load_scenario
+from mresim_phys.scenario.schema import Scenario
 from mresim_phys.sim import Simulation
 from mresim_phys.strategies.frontier import FrontierParams
 

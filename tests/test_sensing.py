@@ -7,9 +7,9 @@ import math
 import numpy as np
 import pytest
 
-from mresim_phys.scenario import SensorSpec
-from mresim_phys.sensing import ray_offsets, scan
-from mresim_phys.world import World
+from mresim_phys.scenario.schema import SensorSpec
+from mresim_phys.world.sensing import ray_offsets, scan
+from mresim_phys.world.space import World
 
 
 def walls_only(world: World) -> tuple[int, int, int]:

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from mresim_phys import Simulation
-from mresim_phys.load import load_scenario
+from mresim_phys.scenario.load import load_scenario
 from mresim_phys.types import FREE, UNKNOWN
 
 ScenarioFile = Callable[..., Path]

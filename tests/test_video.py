@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from mresim_phys.errors import MresimError
-from mresim_phys.video import FOURCC, VideoRecorder, default_video_path, write_png
+from mresim_phys.output.video import FOURCC, VideoRecorder, default_video_path, write_png
 
 WIDTH, HEIGHT = 64, 48
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from mresim_phys.world import World
+from mresim_phys.world.space import World
 
 
 def test_a_swept_circle_hits_a_wall_corner_its_centre_line_passes() -> None:

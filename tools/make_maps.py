@@ -25,8 +25,8 @@ from scipy import ndimage
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from mresim_phys.io import LoadedMap, load_map  # noqa: E402
-from mresim_phys.maps import free_components_mask  # noqa: E402
+from mresim_phys.scenario.readers import LoadedMap, load_map  # noqa: E402
+from mresim_phys.world.maps import free_components_mask  # noqa: E402
 
 Image8 = NDArray[np.uint8]
 WALL, FREE, UNKNOWN = 0, 255, 205

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from . import disk, line_of_sight, path_loss
-from .base import COMM_MODELS, CommModel, CommParams, Radios
+from mresim_phys.comms import disk, line_of_sight, path_loss
+from mresim_phys.comms.base import COMM_MODELS, CommModel, CommParams, Radios
 
 BUILT_IN = ("disk", "line_of_sight", "path_loss")
 assert {disk.DiskComm.name, line_of_sight.LineOfSightComm.name, path_loss.PathLossComm.name} == set(

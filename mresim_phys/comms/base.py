@@ -17,17 +17,15 @@ from dataclasses import dataclass
 from typing import ClassVar, Protocol, runtime_checkable
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict
 
-from ..registry import Registry
-from ..types import FloatArray, IntArray
-from ..world import World
+from mresim_phys.plugin import PluginParams
+from mresim_phys.registry import Registry
+from mresim_phys.types import FloatArray, IntArray
+from mresim_phys.world.space import World
 
 
-class CommParams(BaseModel):
+class CommParams(PluginParams):
     """Base for comm-model parameters: unknown keys are errors."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True)
 
 
 @dataclass(frozen=True)

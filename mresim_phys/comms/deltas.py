@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from ..types import BeliefGrid, BoolGrid, IntArray
+from mresim_phys.types import BeliefGrid, BoolGrid, IntArray
 
 
 @njit(cache=True, nogil=True)

@@ -10,9 +10,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..types import FloatArray
-from ..world import World
-from .base import COMM_MODELS, CommParams, Radios, pair_distances, without_self_links
+from mresim_phys.comms.base import (
+    COMM_MODELS,
+    CommParams,
+    Radios,
+    pair_distances,
+    without_self_links,
+)
+from mresim_phys.plugin import Plugin
+from mresim_phys.types import FloatArray
+from mresim_phys.world.space import World
 
 
 class DiskParams(CommParams):
@@ -24,9 +31,11 @@ def disk_reach(radios: Radios) -> FloatArray:
     return radios.ranges[:, None] + radios.ranges[None, :]
 
 
-@COMM_MODELS.register("disk")
-class DiskComm:
+@COMM_MODELS.register
+class DiskComm(Plugin):
     """Linked iff distance < range_i + range_j."""
+
+    name = "disk"
 
     Params = DiskParams
 

@@ -29,9 +29,9 @@ import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import breadth_first_order, connected_components
 
-from ..agents import Agent, TeammateInfo
-from .deltas import select_cells
-from .ledger import Ledger, received_tick, sensed_tick
+from mresim_phys.agents import Agent, TeammateInfo
+from mresim_phys.comms.deltas import select_cells
+from mresim_phys.comms.ledger import Ledger, received_tick, sensed_tick
 
 CELL_BYTES = 5
 RECORD_BYTES = 40

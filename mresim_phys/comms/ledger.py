@@ -19,8 +19,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..types import BeliefGrid, BoolGrid
-from .deltas import merge_cells, stamp_changes
+from mresim_phys.comms.deltas import merge_cells, stamp_changes
+from mresim_phys.types import BeliefGrid, BoolGrid
 
 Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)
 OWN = -1  # origin of a cell value the agent sensed itself

@@ -12,10 +12,11 @@ from __future__ import annotations
 import numpy as np
 from pydantic import Field
 
-from ..types import FloatArray
-from ..world import World
-from .base import COMM_MODELS, CommParams, Radios, candidate_pairs, symmetric_links
-from .disk import disk_reach
+from mresim_phys.comms.base import COMM_MODELS, CommParams, Radios, candidate_pairs, symmetric_links
+from mresim_phys.comms.disk import disk_reach
+from mresim_phys.plugin import Plugin
+from mresim_phys.types import FloatArray
+from mresim_phys.world.space import World
 
 
 class LineOfSightParams(CommParams):
@@ -26,9 +27,11 @@ class LineOfSightParams(CommParams):
     )
 
 
-@COMM_MODELS.register("line_of_sight")
-class LineOfSightComm:
+@COMM_MODELS.register
+class LineOfSightComm(Plugin):
     """Linked iff distance < range_i + range_j and no wall crosses the segment between them."""
+
+    name = "line_of_sight"
 
     Params = LineOfSightParams
 

@@ -21,15 +21,14 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..agents import BASE_NAME, Agent
-from ..build import make_plugin
-from ..rng import named_stream
-from ..scenario import BlackoutEvent, Scenario
-from ..types import FloatArray
-from ..world import World
-from .base import COMM_MODELS, CommModel, Radios
-from .exchange import Exchange, Traffic, hop_groups, stamp_base_contacts
-from .ledger import Box, Ledger
+from mresim_phys.agents import BASE_NAME, Agent
+from mresim_phys.comms.base import COMM_MODELS, CommModel, Radios
+from mresim_phys.comms.exchange import Exchange, Traffic, hop_groups, stamp_base_contacts
+from mresim_phys.comms.ledger import Box, Ledger
+from mresim_phys.rng import named_stream
+from mresim_phys.scenario.schema import BlackoutEvent, Scenario
+from mresim_phys.types import FloatArray
+from mresim_phys.world.space import World
 
 
 @dataclass(frozen=True)
@@ -175,7 +174,7 @@ def build_network(scenario: Scenario, model: CommModel, shape: tuple[int, int]) 
         c = spec.control
         control = Channel(
             "control",
-            make_plugin(COMM_MODELS, c.model, c.params),
+            COMM_MODELS.make(c.model, c.params),
             np.full(len(radios), c.range),
             powers,
             c.dropout,

@@ -27,9 +27,7 @@ from typing import Literal
 import numpy as np
 from pydantic import Field
 
-from ..types import FloatArray
-from ..world import World
-from .base import (
+from mresim_phys.comms.base import (
     COMM_MODELS,
     CommParams,
     Radios,
@@ -37,7 +35,10 @@ from .base import (
     pair_distances,
     symmetric_links,
 )
-from .walls import reach_along_rays, walls_between
+from mresim_phys.comms.walls import reach_along_rays, walls_between
+from mresim_phys.plugin import Plugin
+from mresim_phys.types import FloatArray
+from mresim_phys.world.space import World
 
 
 class PathLossParams(CommParams):
@@ -58,9 +59,11 @@ class PathLossParams(CommParams):
     )
 
 
-@COMM_MODELS.register("path_loss")
-class PathLossComm:
+@COMM_MODELS.register
+class PathLossComm(Plugin):
     """Linked iff the path-loss signal is at or above the cut-off in both directions."""
+
+    name = "path_loss"
 
     Params = PathLossParams
 

@@ -11,12 +11,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..build import make_plugin
-from ..scenario import Scenario
-from ..types import FloatArray
-from ..world import World
-from .base import COMM_MODELS, CommModel, Radios
-from .disk import DiskComm
+from mresim_phys.comms.base import COMM_MODELS, CommModel, Radios
+from mresim_phys.comms.disk import DiskComm
+from mresim_phys.scenario.schema import Scenario
+from mresim_phys.types import FloatArray
+from mresim_phys.world.space import World
 
 REGION_RAYS = 129
 
@@ -46,7 +45,7 @@ class RegionProbe:
         powers = np.array(
             [np.nan if r.comm_power_dbm is None else r.comm_power_dbm for r in radios]
         )
-        return cls(make_plugin(COMM_MODELS, comm.model, comm.params), ranges, powers, world)
+        return cls(COMM_MODELS.make(comm.model, comm.params), ranges, powers, world)
 
     @property
     def circles(self) -> bool:

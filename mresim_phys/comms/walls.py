@@ -23,7 +23,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ..types import BoolGrid, FloatArray
+from mresim_phys.types import BoolGrid, FloatArray
 
 _BIG = 1e30
 TOUCH = 1e-9  # cells: a line this short inside a cell only touches it

@@ -7,8 +7,15 @@ the ``mresim_phys.strategies`` entry-point group, or are named in a scenario as
 
 from __future__ import annotations
 
-from . import frontier, random_walk
-from .base import STRATEGIES, Decision, RobotView, Strategy, StrategyParams, plan_context
+from mresim_phys.strategies import frontier, random_walk
+from mresim_phys.strategies.base import (
+    STRATEGIES,
+    Decision,
+    RobotView,
+    Strategy,
+    StrategyParams,
+    plan_context,
+)
 
 BUILT_IN = ("frontier", "random_walk")
 assert {frontier.FrontierExploration.name, random_walk.RandomWalk.name} == set(BUILT_IN)

@@ -20,22 +20,20 @@ from functools import cached_property
 from typing import TYPE_CHECKING, Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
-from pydantic import BaseModel, ConfigDict
 
-from ..planners import Planner, TopologicalMap, shared_map
-from ..planners.topological import TopologicalPlanner
-from ..planning import DistanceField, distance_field, traversable
-from ..registry import Registry
-from ..types import BeliefGrid, FloatArray
+from mresim_phys.planning import Planner, TopologicalMap, shared_map
+from mresim_phys.planning.fields import DistanceField, distance_field, traversable
+from mresim_phys.planning.topological import TopologicalPlanner
+from mresim_phys.plugin import PluginParams
+from mresim_phys.registry import Registry
+from mresim_phys.types import BeliefGrid, FloatArray
 
 if TYPE_CHECKING:
-    from ..agents import TeammateInfo
+    from mresim_phys.agents import TeammateInfo
 
 
-class StrategyParams(BaseModel):
+class StrategyParams(PluginParams):
     """Base for strategy parameters: unknown keys are errors."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True)
 
     replan_interval: int = 15
 

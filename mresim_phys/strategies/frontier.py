@@ -24,9 +24,10 @@ from dataclasses import dataclass
 import numpy as np
 from pydantic import Field
 
-from ..frontiers import Frontiers, find_frontiers, frontier_targets
-from ..planning import distance_field
-from .base import (
+from mresim_phys.knowledge.frontiers import Frontiers, find_frontiers, frontier_targets
+from mresim_phys.planning.fields import distance_field
+from mresim_phys.plugin import Plugin
+from mresim_phys.strategies.base import (
     STRATEGIES,
     Decision,
     PlanContext,
@@ -95,9 +96,11 @@ def utility(sizes: np.ndarray, costs: np.ndarray) -> np.ndarray:
     return np.where(np.isfinite(costs), u, -np.inf)
 
 
-@STRATEGIES.register("frontier")
-class FrontierExploration:
+@STRATEGIES.register
+class FrontierExploration(Plugin):
     """Greedy utility-based frontier exploration with a teammate auction."""
+
+    name = "frontier"
 
     Params = FrontierParams
 

@@ -10,7 +10,14 @@ from __future__ import annotations
 import numpy as np
 from pydantic import Field
 
-from .base import STRATEGIES, Decision, RobotView, StrategyParams, plan_context
+from mresim_phys.plugin import Plugin
+from mresim_phys.strategies.base import (
+    STRATEGIES,
+    Decision,
+    RobotView,
+    StrategyParams,
+    plan_context,
+)
 
 
 class RandomWalkParams(StrategyParams):
@@ -20,9 +27,11 @@ class RandomWalkParams(StrategyParams):
     distance: float = Field(30.0, gt=0, description="Longest path (cells) to a random goal.")
 
 
-@STRATEGIES.register("random_walk")
-class RandomWalk:
+@STRATEGIES.register
+class RandomWalk(Plugin):
     """Pick a uniformly random reachable cell within ``distance`` path cost; go there."""
+
+    name = "random_walk"
 
     Params = RandomWalkParams
 

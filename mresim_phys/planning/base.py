@@ -1,0 +1,107 @@
+"""Path planner contract (phase 4b): a robot's way from where it is to a chosen cell.
+
+A planner is a plugin (``team: {planner: astar | jps | topological}``, or per robot)
+built once per robot from its validated ``Params``. Strategies choose WHERE to go with
+distance fields (:mod:`mresim_phys.planning`); the robot's planner finds the path it
+then follows. Every planner works on the robot's configuration-space mask
+(``planning.traversable``: known free cells at least radius + wall margin from known
+obstacles; unknown cells are not traversable) with the move rules of
+:mod:`mresim_phys.planning`, and returns world points from the (snapped) start cell's
+centre to the goal cell's centre, optionally shortened by line-of-sight shortcuts
+(:mod:`mresim_phys.planners.smoothing`).
+
+Typical use: ``PLANNERS.get("jps")(JumpPointParams()).plan(passable, (x, y), (row, col))``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, ClassVar, Protocol, runtime_checkable
+
+import numpy as np
+from pydantic import Field
+
+from mresim_phys.planning.fields import snap_to_passable
+from mresim_phys.planning.smoothing import smooth_path
+from mresim_phys.plugin import Plugin, PluginParams
+from mresim_phys.registry import Registry
+from mresim_phys.types import BoolGrid, FloatArray
+
+MAX_SNAP = 3.0  # cells: as distance_field, a start off the passable cells snaps this far
+
+
+class PlannerParams(PluginParams):
+    """Base for planner parameters: unknown keys are errors."""
+
+    smooth: bool = Field(
+        False,
+        description="Shorten the grid path by line-of-sight shortcuts through passable cells.",
+    )
+
+
+@runtime_checkable
+class Planner(Protocol):
+    """A path planner: one instance per robot, built from its validated params."""
+
+    name: ClassVar[str]
+    Params: ClassVar[type[PlannerParams]]
+    params: PlannerParams
+
+    def plan(
+        self, passable: BoolGrid, start_xy: tuple[float, float], goal_rc: tuple[int, int]
+    ) -> FloatArray:
+        """World points (n, 2) from the start cell's centre to the goal cell's; (0, 2) if none."""
+        ...
+
+    def info(self) -> Mapping[str, Any]:
+        """Extra views for renderers (merged into ``Decision.info``), e.g. ``skeleton``."""
+        ...
+
+
+PLANNERS: Registry[Planner] = Registry("planner", "mresim_phys.planners")
+
+
+def no_path() -> FloatArray:
+    """The empty path."""
+    return np.zeros((0, 2))
+
+
+def endpoints(
+    passable: BoolGrid, start_xy: tuple[float, float], goal_rc: tuple[int, int]
+) -> tuple[tuple[int, int], tuple[int, int]] | None:
+    """Snapped start cell and goal cell, or None if either is off the passable cells."""
+    start = snap_to_passable(passable, start_xy, MAX_SNAP)
+    row, col = int(goal_rc[0]), int(goal_rc[1])
+    rows, cols = passable.shape
+    if start is None or not (0 <= row < rows and 0 <= col < cols) or not passable[row, col]:
+        return None
+    return start, (row, col)
+
+
+class GridPlanner(Plugin):
+    """Shared ``plan``: snap the ends, search (``search`` of a subclass), then smooth."""
+
+    Params: ClassVar[type[PlannerParams]] = PlannerParams
+
+    def __init__(self, params: PlannerParams) -> None:
+        self.params = params
+
+    def plan(
+        self, passable: BoolGrid, start_xy: tuple[float, float], goal_rc: tuple[int, int]
+    ) -> FloatArray:
+        """World points (n, 2) from the start cell's centre to the goal cell's; (0, 2) if none."""
+        ends = endpoints(passable, start_xy, goal_rc)
+        if ends is None:
+            return no_path()
+        path = self.search(passable, *ends)
+        return smooth_path(path, passable) if self.params.smooth and len(path) else path
+
+    def search(
+        self, passable: BoolGrid, start: tuple[int, int], goal: tuple[int, int]
+    ) -> FloatArray:
+        """Cell-centre path between two passable cells; (0, 2) if unreachable."""
+        raise NotImplementedError
+
+    def info(self) -> Mapping[str, Any]:
+        """Grid planners add nothing to the picture."""
+        return {}

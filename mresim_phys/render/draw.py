@@ -1,0 +1,241 @@
+"""Views (phase 8), vector stage: what a frame shows in output pixels, over the coloured map.
+
+Comm ranges, links, hierarchy, paths, goals, rendezvous points, robots, names, header and
+legend, bottom to top, with cv2 primitives in 4-bit fixed point (anti-aliased). Points are
+converted to pixels in one numpy call per frame (every agent, every path point, every
+goal), robot triangles in another, and all links are one ``cv2.polylines`` call; the
+drawing order (and so every blended pixel) is the same as one robot at a time. The legend
+band is drawn once per set of robot names and pasted.
+
+Typical use: ``Overlay(layers, style, scale, to_px).draw(image, snapshot)``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import cv2
+import numpy as np
+
+if TYPE_CHECKING:
+    from mresim_phys.render.frame import BGR, LayerSpec, Style
+    from mresim_phys.snapshot import AgentSnapshot, Snapshot
+
+SHIFT, ONE, FONT, AA = 4, 16, cv2.FONT_HERSHEY_SIMPLEX, cv2.LINE_AA  # 4-bit fixed point
+LEGEND = {"walls": "wall", "unexplored": "unexplored", "team_known": "team_known"}
+LEGEND["known_at_base"] = "known_at_base"  # global layer -> Style colour, in legend order
+TRIANGLE_TURNS = np.array((0.0, 2.4, -2.4))  # radians from the heading: tip, two corners
+TRIANGLE_REACH = np.array((1.6, 1.0, 1.0))  # in robot glyph sizes
+CROSS_ARMS = np.array(((1, 1), (1, -1)), dtype=np.int32) * ONE  # half-diagonals of an 'x'
+
+
+class Overlay:
+    """The vector stage of one renderer (one thread at a time).
+
+    Args:
+        layers: Layers to draw.
+        style: Colours and sizes.
+        scale: Output pixels per cell.
+        to_px: (2,) output fixed-point units per cell along x and y.
+    """
+
+    def __init__(self, layers: LayerSpec, style: Style, scale: float, to_px: np.ndarray) -> None:
+        self.layers, self.style, self.scale, self.to_px = layers, style, scale, to_px
+        self._legend: tuple[tuple[str, ...], np.ndarray] | None = None
+
+    def px(self, xy: Sequence[float] | np.ndarray) -> np.ndarray:
+        """World (x, y) points -> fixed-point output pixel coordinates (int32, 4 bits)."""
+        return np.round(np.asarray(xy, dtype=float) * self.to_px - ONE / 2).astype(np.int32)
+
+    def draw(
+        self, image: np.ndarray, snap: Snapshot, regions: Sequence[np.ndarray | None] = ()
+    ) -> None:
+        """Everything drawn in output pixels, bottom to top.
+
+        ``regions`` are agents' communication-region polygons (world points), drawn
+        instead of the range circle where given.
+        """
+        on, style = self.layers.global_layers, self.style
+        layers = [self.layers.for_agent(a.name) for a in snap.agents]
+        colours = [style.base, *(style.robot_colour(i) for i in range(len(snap.robots)))]
+        centres, paths, goals = self._points(snap, layers)
+        self._draw_network(image, snap, centres, colours, layers, regions)
+        for i, robot in enumerate(snap.robots, start=1):
+            self._draw_plans(image, robot, paths[i], goals[i], colours[i], layers[i])
+        if "location" in layers[0]:
+            c, half = centres[0], 5 * ONE
+            cv2.rectangle(image, c - half, c + half, style.base, -1, cv2.LINE_8, SHIFT)
+            draw_label(image, snap.base.name, centres[0], 5.0, style.base, style)
+        sizes = [max(style.robot_px, robot.radius * self.scale) for robot in snap.robots]
+        triangles = robot_triangles(snap.robots, centres[1:], sizes)
+        for i, robot in enumerate(snap.robots, start=1):
+            if "location" in layers[i]:
+                at, size = centres[i], sizes[i - 1]
+                draw_robot(image, robot.state, triangles[i - 1], at, size, colours[i], style)
+                draw_label(image, robot.name, at, size, colours[i], style)
+        if "header" in on:
+            draw_header(image, snap, style)
+        if "legend" in on:
+            self._paste_legend(image, tuple(r.name for r in snap.robots))
+
+    def _points(
+        self, snap: Snapshot, layers: list[frozenset[str]]
+    ) -> tuple[np.ndarray, list[np.ndarray | None], list[np.ndarray | None]]:
+        """Pixel centres of all agents and, per agent, its drawn path (from its position)
+        and goal (None where not drawn; the base has neither), converted in one call."""
+        pieces = [np.array([a.position for a in snap.agents], dtype=float)]
+        drawn = [(0, False)]  # per agent: points in its drawn path, goal drawn
+        for robot, mine in zip(snap.robots, layers[1:], strict=True):
+            path = len(robot.path) + 1 if "path" in mine and len(robot.path) else 0
+            goal = "goal" in mine and robot.goal is not None
+            if path:
+                pieces += [np.reshape(robot.position, (1, 2)), np.asarray(robot.path, float)]
+            if goal:
+                pieces.append(np.reshape(np.asarray(robot.goal, float), (1, 2)))
+            drawn.append((path, goal))
+        points = self.px(np.concatenate(pieces))
+        paths: list[np.ndarray | None] = []
+        goals: list[np.ndarray | None] = []
+        start = len(snap.agents)
+        for path, goal in drawn:
+            paths.append(points[start : start + path] if path else None)
+            goals.append(points[start + path] if goal else None)
+            start += path + goal
+        return points[: len(snap.agents)], paths, goals
+
+    def _draw_network(
+        self,
+        image: np.ndarray,
+        snap: Snapshot,
+        centres: np.ndarray,
+        colours: list[BGR],
+        layers: list[frozenset[str]],
+        regions: Sequence[np.ndarray | None],
+    ) -> None:
+        """Comm range circles (or region polygons), links and hierarchy (parent) lines."""
+        polygons = list(regions) or [None] * len(snap.agents)
+        for agent, c, colour, mine, polygon in zip(
+            snap.agents, centres, colours, layers, polygons, strict=True
+        ):
+            if "comm_range" not in mine or agent.comm_range <= 0:
+                continue
+            if polygon is not None:
+                cv2.polylines(image, [self.px(polygon)], True, colour, 1, AA, SHIFT)
+            else:
+                radius = round(agent.comm_range * self.scale * ONE)
+                cv2.circle(image, c, radius, colour, 1, AA, SHIFT)
+        on, index = self.layers.global_layers, {a.name: i for i, a in enumerate(snap.agents)}
+        ends = centres[np.argwhere(np.triu(snap.links, 1))] if "links" in on else []
+        if len(ends):  # one call for all links: 1-pixel AA polylines draw as cv2.line does
+            cv2.polylines(image, list(ends), False, self.style.link, 1, AA, SHIFT)
+        if "hierarchy" in on:
+            parents = [(i, index.get(a.parent)) for i, a in enumerate(snap.agents)]
+            for i, j in ((i, j) for i, j in parents if j is not None):
+                cv2.line(image, centres[i], centres[j], self.style.hierarchy, 2, AA, SHIFT)
+
+    def _draw_plans(
+        self,
+        image: np.ndarray,
+        robot: AgentSnapshot,
+        path: np.ndarray | None,
+        goal: np.ndarray | None,
+        colour: BGR,
+        mine: frozenset[str],
+    ) -> None:
+        """A robot's path, goal and rendezvous points (each when its layer is on)."""
+        if path is not None:
+            cv2.polylines(image, [path], False, colour, 1, AA, SHIFT)
+        if goal is not None:
+            draw_cross(image, goal, 4, colour)
+        points = robot.rendezvous
+        if "rendezvous" in mine and points is not None and len(points):
+            for p in self.px(np.reshape(points, (-1, 2))) >> SHIFT:
+                cv2.drawMarker(image, p, colour, cv2.MARKER_DIAMOND, 8, 2)
+
+    def _paste_legend(self, image: np.ndarray, names: tuple[str, ...]) -> None:
+        if self._legend is None or self._legend[0] != names:
+            self._legend = (names, legend_band(image.shape[1], names, self.layers, self.style))
+        band = self._legend[1][-image.shape[0] :]
+        image[image.shape[0] - band.shape[0] :] = band
+
+
+def robot_triangles(
+    robots: Sequence[AgentSnapshot], centres: np.ndarray, sizes: Sequence[float]
+) -> np.ndarray:
+    """(n, 3, 2) int32 fixed-point corners of every robot's triangle (tip along its heading)."""
+    headings = np.array([robot.heading for robot in robots], dtype=float)
+    angles = headings[:, None] + TRIANGLE_TURNS
+    reach = TRIANGLE_REACH[None, :, None] * np.asarray(sizes, dtype=float)[:, None, None] * ONE
+    units = np.stack((np.cos(angles), np.sin(angles)), axis=-1)
+    return (np.reshape(centres, (-1, 1, 2)) + units * reach).astype(np.int32)
+
+
+def draw_cross(image: np.ndarray, centre: np.ndarray, half: int, colour: BGR) -> None:
+    """An 'x' of half-size ``half`` pixels at a fixed-point ``centre``."""
+    for d in CROSS_ARMS * half:
+        cv2.line(image, centre - d, centre + d, colour, 2, AA, SHIFT)
+
+
+def draw_robot(
+    image: np.ndarray,
+    state: str,
+    pts: np.ndarray,
+    at: np.ndarray,
+    size: float,
+    colour: BGR,
+    style: Style,
+) -> None:
+    """A triangle: filled (active), red outline (error), hollow (done), grey + red X (failed)."""
+    if state == "done":
+        cv2.polylines(image, [pts], True, colour, 2, AA, SHIFT)
+        return
+    cv2.fillPoly(image, [pts], style.failed if state == "failed" else colour, AA, SHIFT)
+    outline, width = (style.error, 2) if state == "error" else ((0, 0, 0), 1)
+    cv2.polylines(image, [pts], True, outline, width, AA, SHIFT)
+    if state == "failed":
+        draw_cross(image, at, max(round(size * 0.8), 3), style.error)
+
+
+def draw_label(
+    image: np.ndarray, text: str, at: np.ndarray, offset: float, colour: BGR, style: Style
+) -> None:
+    """``text`` up and right of the fixed-point point ``at``, on a white halo."""
+    x, y = (int(v) >> SHIFT for v in at)
+    org = (x + int(offset) + 2, y - int(offset) - 1)
+    cv2.putText(image, text, org, FONT, style.font_scale, (255, 255, 255), 3, AA)
+    cv2.putText(image, text, org, FONT, style.font_scale, colour, 1, AA)
+
+
+def draw_header(image: np.ndarray, snap: Snapshot, style: Style) -> None:
+    """Step, explored %, known at base % and alive robots, in a band at the top."""
+    text = f"step {snap.step}   explored {snap.explored:.1%}   at base {snap.known_at_base:.1%}"
+    text += f"   robots {snap.alive}/{len(snap.robots)}"
+    (_, th), base = cv2.getTextSize(text, FONT, style.font_scale, 1)
+    cv2.rectangle(image, (0, 0), (image.shape[1], th + base + 5), style.header_bg, -1)
+    cv2.putText(image, text, (4, th + 3), FONT, style.font_scale, style.header_text, 1, AA)
+
+
+def legend_band(width: int, names: Sequence[str], layers: LayerSpec, style: Style) -> np.ndarray:
+    """A band image with colour swatches for the map classes shown and every robot."""
+    on = layers.global_layers
+    items = [
+        (name.replace("_", " "), getattr(style, name)) for key, name in LEGEND.items() if key in on
+    ]
+    if "frontiers" in set(layers.robot_layers).union(*layers.per_robot.values()):
+        items.append(("frontier", style.frontier))
+    items += [(name, style.robot_colour(i)) for i, name in enumerate(names)]
+    (_, th), base = cv2.getTextSize("Ag", FONT, style.font_scale, 1)
+    line, spots, x, y = th + base + 4, [], 4, 0
+    for text, colour in items:
+        w = cv2.getTextSize(text, FONT, style.font_scale, 1)[0][0] + th + 12
+        x, y = (4, y + line) if x + w > width and x > 4 else (x, y)
+        spots.append((x, y, text, colour))
+        x += w
+    band = np.full((y + line + 2, width, 3), style.legend_bg, dtype=np.uint8)
+    for x, y, text, colour in spots:
+        cv2.rectangle(band, (x, y + 3), (x + th, y + 3 + th), colour, -1)
+        cv2.rectangle(band, (x, y + 3), (x + th, y + 3 + th), (60, 60, 60), 1)
+        org = (x + th + 4, y + 3 + th)
+        cv2.putText(band, text, org, FONT, style.font_scale, (0, 0, 0), 1, AA)
+    return band

@@ -1,0 +1,239 @@
+"""Scenario loading (phase 0, input edge): YAML file -> validated :class:`Scenario`.
+
+Reads the file, validates it against the schema, resolves relative map paths
+against the YAML file's folder and validates every plugin's parameters against
+that plugin's own ``Params`` model, so ``mresim validate`` catches an unknown
+strategy or a misspelt strategy parameter before anything runs. Every failure is
+a :class:`ScenarioError` naming the file, the field path and what was expected.
+"""
+
+from __future__ import annotations
+
+import difflib
+from pathlib import Path
+from typing import Any, TypeVar, get_args
+
+from pydantic import BaseModel, ValidationError
+
+from mresim_phys.agents import BASE_NAME
+from mresim_phys.comms import COMM_MODELS
+from mresim_phys.errors import ScenarioError, UnknownPluginError
+from mresim_phys.planning import PLANNERS
+from mresim_phys.registry import Registry
+from mresim_phys.scenario.readers import read_yaml_mapping
+from mresim_phys.scenario.schema import (
+    BlackoutEvent,
+    CommSpec,
+    FailEvent,
+    PluginSpec,
+    RobotParams,
+    Scenario,
+)
+from mresim_phys.strategies import STRATEGIES
+
+RobotT = TypeVar("RobotT", bound=RobotParams)
+
+
+def load_scenario(path: str | Path, **overrides: Any) -> Scenario:
+    """Read, validate and resolve the scenario at ``path``; ``overrides`` replace top keys."""
+    source = Path(path)
+    data = read_yaml_mapping(source)
+    for key, value in overrides.items():
+        if isinstance(value, dict) and isinstance(data.get(key), dict):
+            data[key] = {**data[key], **value}
+        elif value is not None:
+            data[key] = value
+    scenario = validate_scenario(data, str(source))
+    return resolve_map_path(scenario, source.resolve().parent)
+
+
+def validate_scenario(data: dict[str, Any], source: str = "<scenario>") -> Scenario:
+    """Schema-validate ``data`` and each plugin's params; errors name ``source``."""
+    try:
+        scenario = Scenario.model_validate(data)
+    except ValidationError as exc:
+        raise ScenarioError(describe_errors(source, exc)) from None
+    check_event_robots(scenario, source)
+    team = resolve_robot_plugins(scenario.team, source, "team")
+    robots = [
+        resolve_robot_plugins(r, source, f"robots[{i}]") for i, r in enumerate(scenario.robots)
+    ]
+    comm = resolve_comm(scenario.communication, source)
+    return scenario.model_copy(update={"robots": robots, "team": team, "communication": comm})
+
+
+def check_event_robots(scenario: Scenario, source: str) -> None:
+    """Every event must name robots of the team (a blackout may also name the base)."""
+    names = [r.name for r in scenario.robots]
+    for i, event in enumerate(scenario.events):
+        if isinstance(event, BlackoutEvent):
+            for k, name in enumerate(event.blackout):
+                check_agent_name(name, [BASE_NAME, *names], source, f"events[{i}].blackout[{k}]")
+        else:
+            check_agent_name(event.fail, names, source, f"events[{i}].fail")
+
+
+def check_agent_name(name: str, names: list[str], source: str, where: str) -> None:
+    """``name`` must be one of ``names``; the error suggests the closest."""
+    if name not in names:
+        close = difflib.get_close_matches(name, names, n=1)
+        hint = f" Did you mean {close[0]!r}?" if close else ""
+        raise ScenarioError(
+            f"{source}: {where}: no robot is called {name!r}.{hint} The robots are {names}."
+        )
+
+
+def resolve_comm(comm: CommSpec, source: str) -> CommSpec:
+    """The communication spec with the main and control models' params validated."""
+    params = resolve_params(COMM_MODELS, comm.model, comm.params, source, "communication.model")
+    control = comm.control
+    if control is not None:
+        where = "communication.control.model"
+        control_params = resolve_params(COMM_MODELS, control.model, control.params, source, where)
+        control = control.model_copy(update={"params": control_params})
+    return comm.model_copy(update={"params": params, "control": control})
+
+
+ROBOT_PLUGINS: dict[str, Registry[Any]] = {"strategy": STRATEGIES, "planner": PLANNERS}
+
+
+def resolve_robot_plugins(robot: RobotT, source: str, where: str) -> RobotT:
+    """A robot (or the team) with each plugin spec's params validated and filled in."""
+    update = {
+        key: resolve_plugin(registry, getattr(robot, key), source, f"{where}.{key}")
+        for key, registry in ROBOT_PLUGINS.items()
+    }
+    return robot.model_copy(update=update)
+
+
+def resolve_plugin(
+    registry: Registry[Any], spec: PluginSpec, source: str, where: str
+) -> PluginSpec:
+    """A plugin spec with its params validated and every default filled in."""
+    params = resolve_params(registry, spec.name, spec.params, source, f"{where}.name")
+    return spec.model_copy(update={"params": params})
+
+
+def resolve_params(
+    registry: Registry[Any], name: str, params: dict[str, Any], source: str, where: str
+) -> dict[str, Any]:
+    """``params`` validated (defaults filled) by the ``Params`` model of plugin ``name``."""
+    try:
+        cls = registry.get(name)
+    except UnknownPluginError as exc:
+        raise ScenarioError(f"{source}: {where}: {exc}") from None
+    params_model = getattr(cls, "Params", None)
+    if not (isinstance(params_model, type) and issubclass(params_model, BaseModel)):
+        raise ScenarioError(
+            f"{source}: {where}: {name!r} is not a usable {registry.kind}: its class needs a"
+            " 'Params' attribute that is a pydantic model of its parameters (subclass"
+            " StrategyParams, PlannerParams or CommParams); see docs/writing-a-strategy.md."
+        )
+    prefix = where.rsplit(".", 1)[0] + ".params"
+    try:
+        return params_model.model_validate(params).model_dump()
+    except ValidationError as exc:
+        raise ScenarioError(
+            describe_errors(source, exc, prefix=prefix, keys=list(params_model.model_fields))
+        ) from None
+
+
+def resolve_map_path(scenario: Scenario, folder: Path) -> Scenario:
+    """The scenario with its map path made absolute (relative paths are to the YAML file)."""
+    kind, value = scenario.map.source
+    absolute = str((folder / Path(value).expanduser()).resolve())
+    return scenario.model_copy(update={"map": scenario.map.model_copy(update={kind: absolute})})
+
+
+def describe_errors(
+    source: str, exc: ValidationError, prefix: str = "", keys: list[str] | None = None
+) -> str:
+    """One readable line per problem: ``file: field.path: what was wrong (got value)``.
+
+    ``keys`` are the valid keys for 'did you mean' hints when the errors come from
+    one flat model (a plugin's params); otherwise hints come from the schema model
+    at the error's location.
+    """
+    lines = [
+        describe_error(error, prefix, keys)
+        for error in exc.errors(include_url=False)
+        if not inherited_from_team(error, exc)
+    ]
+    count = len(lines)
+    head = f"{source}: {count} problem{'s' if count > 1 else ''} in the scenario:"
+    return "\n".join([head, *(f"  - {line}" for line in lines)])
+
+
+def describe_error(error: Any, prefix: str, keys: list[str] | None = None) -> str:
+    """One validation error as ``field.path: message``, with a hint for unknown keys."""
+    loc, event_model = untagged(tuple(error["loc"]))
+    path = field_path((*([prefix] if prefix else []), *loc))
+    if error["type"] == "extra_forbidden":
+        key = str(loc[-1])
+        if keys is None and event_model is not None:
+            keys = list(event_model.model_fields)
+        valid = keys if keys is not None else keys_at(Scenario, loc[:-1])
+        close = difflib.get_close_matches(key, valid, n=1)
+        hint = f"; did you mean {close[0]!r}?" if close else "; remove it or check the spelling"
+        return f"{path}: unknown key {key!r}{hint}"
+    message = str(error["msg"]).removeprefix("Value error, ")
+    value = error.get("input")
+    shown = error["type"] != "missing" and not isinstance(value, (dict, list))
+    return f"{path}: {message}" + (f" (got {value!r})" if shown else "")
+
+
+EVENT_KINDS: dict[str, type[BaseModel]] = {"fail": FailEvent, "blackout": BlackoutEvent}
+
+
+def untagged(loc: tuple[Any, ...]) -> tuple[tuple[Any, ...], type[BaseModel] | None]:
+    """``loc`` without the event-kind tag pydantic inserts, and the event model it names.
+
+    >>> untagged(("events", 0, "blackout", "until"))[0]
+    ('events', 0, 'until')
+    """
+    if len(loc) > 2 and loc[0] == "events" and loc[2] in EVENT_KINDS:
+        return (*loc[:2], *loc[3:]), EVENT_KINDS[loc[2]]
+    return loc, None
+
+
+def field_path(loc: tuple[Any, ...]) -> str:
+    """``('robots', 1, 'speed')`` -> ``robots[1].speed``."""
+    text = ""
+    for part in loc:
+        if isinstance(part, int):
+            text += f"[{part}]"
+        elif part not in ("function-before[_from_name(), PluginSpec]",):
+            text += f".{part}" if text else str(part)
+    return text or "<top level>"
+
+
+def inherited_from_team(error: Any, exc: ValidationError) -> bool:
+    """A robot error that only repeats a ``team`` error (same field, same inherited value)."""
+    loc = error["loc"]
+    if len(loc) < 3 or loc[0] != "robots":
+        return False
+    return any(
+        e["loc"] == ("team", *loc[2:]) and e.get("input") == error.get("input")
+        for e in exc.errors(include_url=False)
+    )
+
+
+def keys_at(model: type[BaseModel], loc: tuple[Any, ...]) -> list[str]:
+    """The keys the schema model found by walking ``loc`` from ``model`` accepts."""
+    current: type[BaseModel] = model
+    for part in loc:
+        if isinstance(part, int):
+            continue
+        field = current.model_fields.get(str(part))
+        nested = field and next(
+            (
+                t
+                for t in (field.annotation, *get_args(field.annotation))
+                if isinstance(t, type) and issubclass(t, BaseModel)
+            ),
+            None,
+        )
+        if nested is None:
+            return []
+        current = nested
+    return list(current.model_fields)

@@ -1,0 +1,241 @@
+"""World (phase 1, geometry): the pymunk Space holding the true walls and robot bodies.
+
+The ground-truth grid becomes static pymunk segments lying exactly on the
+boundary between occupied and free cells (``maps.wall_segments``); robots are
+kinematic bodies with circle shapes. Rays (sensing, line of sight) and swept
+circles (motion checks) are pymunk segment queries. This module is the only
+place the Space is mutated: :meth:`World.place_robots`, once per step, after
+every robot has moved.
+
+Queries go through Chipmunk's C function via pymunk's cffi handle with one
+reused result struct: the pymunk wrapper costs ~3 us per ray in allocations,
+the direct call ~0.7 us (performance-notes.md, section 2). Walls live in the
+default bounding-box tree, inserted in a fixed shuffled order (sorted insertion
+builds a degenerate tree). The spatial hash the notes measured as fastest is NOT
+used: its segment query misses hits near the end of a ray (a ray from (60, 30)
+to (1.88, 44.90) passes through the wall x = 2 with ``use_spatial_hash(10, n)``;
+tests/test_sensing.py keeps that case).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+import pymunk
+from pymunk._chipmunk_cffi import ffi, lib
+
+from mresim_phys.types import BoolGrid, FloatArray
+from mresim_phys.world.maps import wall_segments
+
+WALL_CATEGORY = 0b01
+ROBOT_CATEGORY = 0b10
+ALL_BITS = 0xFFFFFFFF
+
+Point = tuple[float, float]
+QueryFilter = tuple[int, int, int]  # Chipmunk shape filter: (group, categories, mask)
+SHUFFLE_SEED = 0x5EED  # fixed: segment insertion order is part of the world, not of the run
+
+
+def is_wall_shape(shape: object) -> bool:
+    """Whether a Chipmunk shape pointer belongs to a wall (not a robot)."""
+    return bool(lib.cpShapeGetFilter(shape).categories & WALL_CATEGORY)
+
+
+@dataclass(frozen=True)
+class Hit:
+    """First thing a query touched: where, the surface normal, and whether it is a wall."""
+
+    point: tuple[float, float]
+    normal: tuple[float, float]
+    alpha: float
+    is_wall: bool
+
+
+@dataclass(frozen=True)
+class Scan:
+    """One laser scan: ranges per ray, their world angles, and the hit surfaces."""
+
+    origin: tuple[float, float]
+    angles: FloatArray  # world angle of every ray, radians
+    ranges: FloatArray  # distance to the first hit, or max range
+    normals: FloatArray  # (n, 2) surface normal at the hit, zeros where nothing was hit
+    wall_hit: np.ndarray  # bool (n,): the ray ended on a wall below max range
+    max_range: float
+
+    @cached_property
+    def dirs(self) -> FloatArray:
+        """Unit direction (n, 2) of every ray."""
+        return np.column_stack((np.cos(self.angles), np.sin(self.angles)))
+
+    @cached_property
+    def ends(self) -> FloatArray:
+        """End point (n, 2) of every ray: the hit, or the point at max range."""
+        return np.asarray(self.origin) + self.ranges[:, None] * self.dirs
+
+    @cached_property
+    def on_wall(self) -> np.ndarray:
+        """Rays (bool, n) that ended on a wall below max range."""
+        return self.wall_hit & (self.ranges < self.max_range)
+
+
+class World:
+    """The true environment: occupancy grid, wall segments and robot bodies in one Space."""
+
+    def __init__(self, occupied: BoolGrid, robot_radii: list[float]) -> None:
+        self.occupied = occupied
+        self.segments = wall_segments(occupied)
+        self.space = pymunk.Space(threaded=False)
+        self._add_walls(self.segments)
+        self.bodies = [self._add_robot(i, r) for i, r in enumerate(robot_radii)]
+        self._info = ffi.new("cpSegmentQueryInfo *")
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(rows, cols) of the map."""
+        return self.occupied.shape  # type: ignore[return-value]
+
+    def _add_walls(self, segments: FloatArray) -> None:
+        order = np.random.default_rng(SHUFFLE_SEED).permutation(len(segments))
+        shapes = []
+        for x0, y0, x1, y1 in segments[order].tolist():
+            shape = pymunk.Segment(self.space.static_body, (x0, y0), (x1, y1), 0.0)
+            shape.filter = pymunk.ShapeFilter(categories=WALL_CATEGORY)
+            shapes.append(shape)
+        self.space.add(*shapes)
+
+    def _add_robot(self, index: int, radius: float) -> pymunk.Body:
+        body = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
+        shape = pymunk.Circle(body, radius)
+        shape.filter = pymunk.ShapeFilter(group=index + 1, categories=ROBOT_CATEGORY)
+        body.position = (-1e6 - 10 * index, -1e6)  # parked off-map until placed
+        self.space.add(body, shape)
+        return body
+
+    def place_robots(self, positions: list[tuple[float, float]]) -> None:
+        """Move every robot body to its position (the one per-step mutation of the Space)."""
+        for body, position in zip(self.bodies, positions, strict=True):
+            body.position = position
+            self.space.reindex_shapes_for_body(body)
+
+    def query_filter(self, robot_index: int | None, robots_block: bool) -> QueryFilter:
+        """The Chipmunk filter for queries by ``robot_index``: walls, plus other robots."""
+        mask = WALL_CATEGORY | (ROBOT_CATEGORY if robots_block else 0)
+        group = 0 if robot_index is None else robot_index + 1
+        return (group, ALL_BITS, mask)
+
+    def first_hit(
+        self,
+        start: Point,
+        end: Point,
+        radius: float,
+        shape_filter: QueryFilter,
+    ) -> Hit | None:
+        """The first shape a segment (swept by ``radius``) from ``start`` to ``end`` touches."""
+        if radius > 0:
+            return self._first_swept_hit(start, end, radius, shape_filter)
+        info, space = self._info, self.space._space  # never keep the cdata beyond the Space
+        if lib.cpSpaceSegmentQueryFirst(space, start, end, radius, shape_filter, info) == ffi.NULL:
+            return None
+        return Hit(
+            (info.point.x, info.point.y),
+            (info.normal.x, info.normal.y),
+            info.alpha,
+            is_wall_shape(info.shape),
+        )
+
+    def _first_swept_hit(
+        self, start: Point, end: Point, radius: float, shape_filter: QueryFilter
+    ) -> Hit | None:
+        """Swept-circle query: candidates from the swept box, then an exact query per shape.
+
+        Chipmunk's own segment query ignores the radius in its broad phase (it
+        walks the tree with the bare segment), so it misses a wall the circle
+        grazes but the centre line does not cross.
+        """
+        box = pymunk.BB(
+            min(start[0], end[0]) - radius,
+            min(start[1], end[1]) - radius,
+            max(start[0], end[0]) + radius,
+            max(start[1], end[1]) + radius,
+        )
+        best = None
+        for shape in self.space.bb_query(box, pymunk.ShapeFilter(*shape_filter)):
+            info = shape.segment_query(start, end, radius)
+            if info is not None and (best is None or info.alpha < best.alpha):
+                best = info
+        if best is None:
+            return None
+        return Hit(
+            (best.point.x, best.point.y),
+            (best.normal.x, best.normal.y),
+            best.alpha,
+            bool(best.shape.filter.categories & WALL_CATEGORY),
+        )
+
+    def cast_rays(
+        self,
+        origin: Point,
+        angles: FloatArray,
+        max_range: float,
+        shape_filter: QueryFilter,
+    ) -> Scan:
+        """Cast one ray per angle from ``origin``; exact distance to the first hit."""
+        ox, oy = origin
+        xs = (ox + max_range * np.cos(angles)).tolist()
+        ys = (oy + max_range * np.sin(angles)).tolist()
+        # cdata structs built once per scan: converting Python tuples on every call
+        # costs as much as Chipmunk's query itself
+        ends = ffi.new("cpVect[]", list(zip(xs, ys, strict=True)))
+        start = ffi.new("cpVect *", origin)[0]
+        query_filter = ffi.new("cpShapeFilter *", shape_filter)[0]
+        hits: list[tuple[int, float, float, float, bool]] = []
+        info, space, query, null = (
+            self._info,
+            self.space._space,
+            lib.cpSpaceSegmentQueryFirst,
+            ffi.NULL,
+        )
+        only_walls = shape_filter[2] == WALL_CATEGORY
+        for i in range(len(xs)):
+            if query(space, start, ends[i], 0.0, query_filter, info) != null:
+                is_wall = only_walls or is_wall_shape(info.shape)
+                hits.append((i, info.alpha, info.normal.x, info.normal.y, is_wall))
+        alphas = np.ones(len(angles))
+        normals = np.zeros((len(angles), 2))
+        wall_hit = np.zeros(len(angles), dtype=bool)
+        if hits:
+            table = np.array(hits)
+            index = table[:, 0].astype(np.intp)
+            alphas[index], normals[index], wall_hit[index] = table[:, 1], table[:, 2:4], table[:, 4]
+        return Scan(origin, angles, alphas * max_range, normals, wall_hit, max_range)
+
+    def blocked(
+        self,
+        start: Point,
+        end: Point,
+        radius: float,
+        shape_filter: QueryFilter,
+    ) -> Hit | None:
+        """The obstacle a circle of ``radius`` moving from ``start`` to ``end`` would hit.
+
+        A contact the circle is moving away from (normal along the motion) does not
+        block, so a robot grazing a wall can always back off.
+        """
+        hit = self.first_hit(start, end, radius, shape_filter)
+        if hit is None:
+            return None
+        dx, dy = end[0] - start[0], end[1] - start[1]
+        if hit.alpha <= 1e-9 and hit.normal[0] * dx + hit.normal[1] * dy >= 0:
+            return None
+        return hit
+
+    def overlaps_wall(self, position: tuple[float, float], radius: float) -> bool:
+        """True if a circle at ``position`` touches a wall or leaves the map."""
+        rows, cols = self.shape
+        x, y = position
+        if not (radius <= x <= cols - radius and radius <= y <= rows - radius):
+            return True
+        hit = self.first_hit(position, position, radius, (0, ALL_BITS, WALL_CATEGORY))
+        return hit is not None or bool(self.occupied[int(y), int(x)])
