@@ -307,9 +307,19 @@ class Coverage:
     def __init__(self, reachable: BoolGrid) -> None:
         self.reachable = reachable
         self.total = int(reachable.sum())
-        self.known = np.zeros_like(reachable)
+        self.known = np.zeros_like(reachable)  # every cell some robot has held FREE
         self.count = 0
         self._pending: list[tuple[BeliefGrid, int, int, int, int]] = []
+
+    def retarget(self, reachable: BoolGrid) -> None:
+        """The world changed: count against the new reachable set from now on.
+
+        Cells already held FREE and still reachable keep counting; cells that left
+        the reachable set stop counting; newly reachable cells count once seen FREE.
+        """
+        self.reachable = reachable
+        self.total = int(reachable.sum())
+        self.count = int(np.count_nonzero(self.known & reachable))
 
     def touch(self, belief: BeliefGrid, update: Update) -> None:
         """Remember that ``update``'s window of ``belief`` changed this step."""
@@ -326,8 +336,8 @@ class Coverage:
         """Count the reachable cells of ``free`` (a window at row0, col0) not seen before."""
         h, w = free.shape
         seen = self.known[row0 : row0 + h, col0 : col0 + w]
-        new = free & self.reachable[row0 : row0 + h, col0 : col0 + w] & ~seen
-        self.count += int(np.count_nonzero(new))
+        new = free & ~seen
+        self.count += int(np.count_nonzero(new & self.reachable[row0 : row0 + h, col0 : col0 + w]))
         seen |= new
 
     @property

@@ -90,6 +90,7 @@ class World:
         self._add_walls(self.segments)
         self.bodies = [self._add_robot(i, r) for i, r in enumerate(robot_radii)]
         self._info = ffi.new("cpSegmentQueryInfo *")
+        self.version = 0  # bumped by every change of the truth after step 0
 
     @property
     def shape(self) -> tuple[int, int]:
