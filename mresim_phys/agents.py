@@ -1,9 +1,11 @@
-"""Agents: what each robot and the base station is and knows.
+"""Agents (the run's state): what each robot and the base station is and knows.
 
 A robot's knowledge is its own belief grid (and safe-space grid) plus the last
-state it heard from each teammate; nothing here reads the ground truth. The
-simulation (``sim.py``) moves robots and feeds them scans; communication
-(``comms/``) merges knowledge between linked agents.
+record it heard from each teammate (:mod:`mresim_phys.knowledge.teammates`);
+nothing here reads the ground truth. Its body (speed, radius, laser) is a plain
+:class:`Body` made by the composition root. The simulation (``sim.py``) moves
+robots and feeds them scans; communication (``comms/``) merges knowledge between
+linked agents.
 """
 
 from __future__ import annotations
@@ -14,30 +16,24 @@ from typing import Literal
 
 import numpy as np
 
+from mresim_phys.knowledge.teammates import Payload, TeammateInfo
 from mresim_phys.planning import Planner
-from mresim_phys.scenario.schema import RobotSpec
 from mresim_phys.strategies.base import Decision, Strategy
 from mresim_phys.types import UNKNOWN, BeliefGrid, BoolGrid, FloatArray
+from mresim_phys.world.sensing import Laser
 
 RobotState = Literal["active", "error", "done", "failed"]
-BASE_NAME = "base"
+Part = Literal["drive", "sensor", "radio"]
 
 
 @dataclass(frozen=True)
-class TeammateInfo:
-    """What one agent last heard about another: where it was, where it was heading, when.
+class Body:
+    """A robot's hardware: how fast it moves, how big it is, what its laser sees."""
 
-    ``step`` is when the record was true (its sender's step); ``learned`` the step at
-    which the holder received it (-1 for an agent's own record, not yet sent).
-    """
-
-    name: str
-    position: tuple[float, float]
-    goal: tuple[float, float] | None
-    state: str
-    role: str
-    step: int
-    learned: int = -1
+    speed: float  # cells per step at most
+    radius: float  # cells
+    wall_margin: float  # extra clearance its planner keeps from known walls
+    laser: Laser
 
 
 def empty_belief(shape: tuple[int, int]) -> tuple[BeliefGrid, BoolGrid]:
@@ -58,11 +54,17 @@ class Agent:
     role: str
     teammates: dict[str, TeammateInfo] = field(default_factory=dict)
     last_base_contact: int = -1
+    links: tuple[str, ...] = ()  # agents linked on the main channel at the last exchange
 
     @property
     def alive(self) -> bool:
         """Whether this agent still senses, moves and communicates."""
         return True
+
+    @property
+    def speaking(self) -> bool:
+        """Whether its radio works (it can send and receive)."""
+        return self.alive
 
     @property
     def state(self) -> str:
@@ -78,9 +80,11 @@ class Agent:
 class Robot(Agent):
     """A mobile robot following its strategy's paths."""
 
-    spec: RobotSpec | None = None
+    body: Body | None = None
     strategy: Strategy | None = None
     planner: Planner | None = None
+    broken: frozenset[Part] = frozenset()  # parts that failed for good
+    payload: Payload | None = None  # what its strategy sends with its record
     heading: float = 0.0
     path: FloatArray = field(default_factory=lambda: np.zeros((0, 2)))
     goal: tuple[float, float] | None = None
@@ -98,6 +102,28 @@ class Robot(Agent):
         return self.status != "failed"
 
     @property
+    def speaking(self) -> bool:
+        """Alive with a working radio."""
+        return self.alive and "radio" not in self.broken
+
+    @property
+    def can_move(self) -> bool:
+        """Alive with a working drive."""
+        return self.alive and "drive" not in self.broken
+
+    @property
+    def can_sense(self) -> bool:
+        """Alive with a working laser."""
+        return self.alive and "sensor" not in self.broken
+
+    def fail(self, part: str) -> None:
+        """Lose ``part`` for good (``robot``: everything, the robot is ``failed``)."""
+        if part == "robot":
+            self.status, self.path = "failed", self.path[:0]
+        else:
+            self.broken = self.broken | {part}  # type: ignore[operator]
+
+    @property
     def state(self) -> str:
         """``failed`` beats ``error`` beats ``done`` beats ``active``."""
         if self.status in ("failed", "error"):
@@ -105,29 +131,34 @@ class Robot(Agent):
         return "done" if self.done else "active"
 
     def own_record(self, step: int) -> TeammateInfo:
-        """Position, goal, state and role, stamped with ``step``."""
-        return TeammateInfo(self.name, self.position, self.goal, self.state, self.role, step)
+        """Position, goal, state, role and payload, stamped with ``step``."""
+        return TeammateInfo(
+            self.name, self.position, self.goal, self.state, self.role, step, payload=self.payload
+        )
 
     def adopt(self, decision: Decision, step: int) -> None:
-        """Take a strategy decision as the path to follow from now on."""
+        """Take a decision (its strategy's or a controller's) as the path to follow from now on."""
         self.path = decision.path
         self.goal = decision.goal
         self.done = decision.done
         self.last_plan_step = step
         self.reached_goal = False
         self.decision = decision
+        if decision.role is not None:
+            self.role = decision.role
+        self.payload = decision.payload
 
     @property
     def speed(self) -> float:
         """Cells moved at most per step."""
-        assert self.spec is not None
-        return self.spec.speed
+        assert self.body is not None
+        return self.body.speed
 
     @property
     def radius(self) -> float:
         """Body radius in cells."""
-        assert self.spec is not None
-        return self.spec.radius
+        assert self.body is not None
+        return self.body.radius
 
     def advance_to(self, point: tuple[float, float]) -> None:
         """Move to ``point`` (already checked against walls), turning to face the motion."""

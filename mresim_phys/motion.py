@@ -1,14 +1,15 @@
 """Motion (phase 5): one robot's step along its path (paper, Algorithms 1 and 2).
 
-While the robot has moved less than its speed this step it takes the next path
-point, replanning through its strategy when the path has run out or the replan
-interval has passed; the move is checked with a swept circle of the robot's
-radius against the true walls. A valid move is made and (by default) followed by
-a scan (at the end of its path a robot turns in place to face what its
-strategy asked it to look at, then scans); an invalid one sets the robot's
-error flag, marks what it bumped into in its own map, and ends its motion for
-this step. The last partial move of a
-step is scaled down to the remaining budget, as in the original.
+The decide phase (``sim.py``) replans a robot whose replan is due
+(:func:`wants_plan`). Then, while the robot has moved less than its speed this
+step, it takes the next path point, replanning through its strategy when the
+path has run out mid-step (the original's ``takeStep``). Each move is checked
+with a swept circle of the robot's radius against the true walls. A valid move
+is made and (by default) followed by a scan (at the end of its path a robot
+turns in place to face what its strategy asked it to look at, then scans); an
+invalid one sets the robot's error flag, marks what it bumped into in its own
+map, and ends its motion for this step. The last partial move of a step is
+scaled down to the remaining budget, as in the original.
 """
 
 from __future__ import annotations
@@ -41,19 +42,18 @@ def wants_plan(robot: Robot, step: int, interval: int) -> bool:
 
 def take_step(
     robot: Robot,
-    step: int,
     world: World,
     rules: MoveRules,
+    planned: bool,
     replan: Callable[[Robot], None],
     sense: Callable[[Robot], None],
 ) -> None:
-    """Move ``robot`` up to its speed along its path, sensing after each path point."""
+    """Move ``robot`` up to its speed along its path, sensing after each path point.
+
+    ``planned``: the robot already decided this step (its strategy is not asked
+    again when the path runs out; the robot waits for the next step).
+    """
     budget = robot.speed
-    planned = False
-    assert robot.strategy is not None
-    if wants_plan(robot, step, robot.strategy.params.replan_interval):
-        replan(robot)
-        planned = True
     moved = False
     while budget > EPS:
         if len(robot.path) == 0:

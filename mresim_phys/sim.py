@@ -1,39 +1,47 @@
 """The simulation cycle (paper, Algorithm 1): one :meth:`Simulation.step` per time step.
 
-Each step: scheduled events; every alive robot moves up to its speed along its
-path, replanning through its strategy when needed, and scans after each path
-point (``motion``); then robot bodies are placed in the world; then links are
-found and knowledge exchanged (``comms``); then the step is measured
-(``metrics``). Robots act as if simultaneously: during the movement phase a
-robot reads and writes only its own state (teammate records change only in the
-communication phase, other robots' bodies stay where the step began), so the
-order in which robots are processed never changes the result.
+Each step runs the phases in order::
+
+    events -> decide -> move and sense -> place -> communicate -> measure
+
+Events (``world/events.py`` plugins) act first; then every robot that can move
+decides: it takes a decision a caller supplied (``step(actions=...)``: a viewer,
+a learning agent) or asks its strategy when a replan is due. Then each robot
+moves up to its speed along its path, scanning after each path point and
+replanning mid-step when its path runs out (``motion``); then robot bodies are
+placed in the world; then links are found and knowledge exchanged (``comms``);
+then the step is measured (``metrics``). Robots act as if simultaneously: during
+the movement phase a robot reads and writes only its own state (teammate records
+change only in the communication phase, other robots' bodies stay where the step
+began), so the order in which robots are processed never changes the result.
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from time import perf_counter
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from mresim_phys.agents import Agent, Robot
-from mresim_phys.build import Parts, build_parts
+from mresim_phys.build import Setup, build_setup
 from mresim_phys.comms.ledger import box_around
-from mresim_phys.comms.network import Network, build_network
 from mresim_phys.errors import ScenarioError
+from mresim_phys.event_context import RunEventContext
 from mresim_phys.knowledge.mapping import integrate_scan
+from mresim_phys.knowledge.teammates import presumed_lost
 from mresim_phys.metrics import CommTotals, Milestones, RobotRecord, StepRecord, base_latency
-from mresim_phys.motion import MoveRules, take_step
-from mresim_phys.rng import named_stream
+from mresim_phys.motion import MoveRules, take_step, wants_plan
 from mresim_phys.scenario.load import load_scenario
-from mresim_phys.scenario.schema import BlackoutEvent, Scenario
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
-from mresim_phys.strategies import RobotView
+from mresim_phys.strategies import Decision, RobotView
 from mresim_phys.types import FREE
 from mresim_phys.world.sensing import scan
+
+if TYPE_CHECKING:
+    from mresim_phys.scenario.schema import Scenario
 
 PHASES = ("sensing", "mapping", "planning", "communication", "metrics")
 
@@ -41,27 +49,31 @@ PHASES = ("sensing", "mapping", "planning", "communication", "metrics")
 class Simulation:
     """A running scenario: the world, the agents and the per-step records.
 
-    ``phase_times`` accumulates the wall time spent in each phase (seconds): what
-    ``mresim bench`` reports as the cost split; it never enters the metrics.
+    Built from a validated, picklable :class:`~mresim_phys.scenario.schema.Scenario`
+    alone (so another process can rebuild it). ``phase_times`` accumulates the wall
+    time spent in each phase (seconds): what ``mresim bench`` reports as the cost
+    split; it never enters the metrics.
     """
 
-    def __init__(self, scenario: Scenario, parts: Parts | None = None) -> None:
+    def __init__(self, scenario: Scenario) -> None:
         self.scenario = scenario
-        self.parts = parts or build_parts(scenario)
-        self.world, self.base, self.robots = self.parts.world, self.parts.base, self.parts.robots
-        self.coverage = self.parts.coverage
+        self.setup: Setup = build_setup(scenario)
+        s = self.setup
+        self.world, self.base, self.robots = s.world, s.base, s.robots
+        self.coverage, self.network, self.rules = s.coverage, s.network, s.rules
         self.t = 0
         self.phase_times: dict[str, float] = dict.fromkeys(PHASES, 0.0)
         self.events_now: list[str] = []
-        self.network: Network = build_network(
-            scenario, self.parts.comm, self.parts.truth.occupied.shape
-        )
         self.comm = self.network.idle(len(self.agents))
         self.known_at_base = 0.0
         self.milestones = Milestones()
         self.comm_totals = CommTotals()
-        self._sensing_rngs = [named_stream(scenario.seed, "sensing", r.index) for r in self.robots]
-        self.rules = MoveRules(scenario.simulation.scan == "point", self.robot_filter)
+        self._sensing_rngs = s.sensing_streams()
+        self._events = RunEventContext(
+            self.agents, s.network, s.world, s.coverage, s.starts, s.event_streams()
+        )
+        self.move_rules = MoveRules(s.rules.scan_every_point, self.robot_filter)
+        self.apply_events()
         for robot in self.robots:
             self.sense(robot)
         self.communicate()
@@ -69,7 +81,8 @@ class Simulation:
 
     @classmethod
     def from_yaml(cls, path: str | Path, **overrides: Any) -> Simulation:
-        """Load, validate and build the scenario at ``path`` (``seed=``, ``steps=`` override)."""
+        """Load, validate and build the scenario at ``path`` (overrides merge deeply:
+        ``seed=``, ``steps=``, ``team=``, ``robots={"B": {...}}``, ``**{"team.speed": 5}``)."""
         scenario = load_scenario(path, **overrides)
         try:
             return cls(scenario)
@@ -85,13 +98,16 @@ class Simulation:
         """The robot called ``name``."""
         return next(r for r in self.robots if r.name == name)
 
-    def step(self) -> StepRecord:
-        """Advance one time step and return its measurements."""
+    def step(self, actions: Mapping[str, Decision] | None = None) -> StepRecord:
+        """Advance one time step and return its measurements.
+
+        ``actions`` maps robot names to decisions that replace their strategies' for
+        this step (the robot follows the given path; its strategy is not asked).
+        """
         self.t += 1
         self.apply_events()
-        for robot in self.robots:
-            if robot.alive:
-                take_step(robot, self.t, self.world, self.rules, self.replan, self.sense)
+        planned = self.decide(actions or {})
+        self.move_and_sense(planned)
         self.world.place_robots([r.position for r in self.robots])
         self.communicate()
         self.record = self.measure()
@@ -116,57 +132,79 @@ class Simulation:
 
     def stop_reason(self) -> str | None:
         """Why the run stops now (``steps``, ``explored``, ``known_at_base``, ``all_done``)."""
-        stop = self.scenario.stop
-        if stop.explored is not None and self.record.explored >= stop.explored:
+        rules = self.rules
+        if rules.stop_explored is not None and self.record.explored >= rules.stop_explored:
             return "explored"
-        if stop.known_at_base is not None and self.record.known_at_base >= stop.known_at_base:
+        known = self.record.known_at_base
+        if rules.stop_known_at_base is not None and known >= rules.stop_known_at_base:
             return "known_at_base"
-        if stop.all_done and self.all_idle():
+        if rules.stop_all_done and self.all_idle():
             return "all_done"
-        return "steps" if self.t >= self.scenario.steps else None
+        return "steps" if self.t >= rules.steps else None
 
     def all_idle(self) -> bool:
         """Every robot has failed, or is done and has arrived where it was going."""
         return all(not r.alive or (r.done and len(r.path) == 0) for r in self.robots)
 
     def apply_events(self) -> None:
-        """Events scheduled for this step: failures now, blackouts starting or ending."""
-        self.events_now = []
-        for event in self.scenario.events:
-            if isinstance(event, BlackoutEvent):
-                self.note_blackout(event)
-            elif event.step == self.t:
-                failed = self.robot(event.fail)
-                failed.status, failed.path = "failed", failed.path[:0]
-                self.events_now.append(f"fail {event.fail}")
+        """Events phase: every scheduled event acts through the run's event context."""
+        self.events_now = self._events.run(self.setup.events, self.t)
 
-    def note_blackout(self, event: BlackoutEvent) -> None:
-        """Log a blackout's start and end (the network applies it)."""
-        who = f"{','.join(event.blackout)} ({event.channel})"
-        if event.step == self.t:
-            self.events_now.append(f"blackout {who} until {event.until}")
-        elif event.until == self.t:
-            self.events_now.append(f"blackout over {who}")
+    def decide(self, actions: Mapping[str, Decision]) -> set[str]:
+        """Decide phase: supplied decisions are adopted, due replans asked of strategies.
+
+        Returns the robots that decided this step (their strategies are not asked again
+        before they move; a robot given an action is not asked at all this step).
+        """
+        unknown = sorted(set(actions) - {r.name for r in self.robots})
+        if unknown:
+            raise ValueError(f"actions name robots the team does not have: {unknown}")
+        planned = set(actions)
+        for robot in self.robots:
+            if not robot.can_move:
+                continue
+            assert robot.strategy is not None
+            if robot.name in actions:
+                robot.adopt(actions[robot.name], self.t)
+            elif wants_plan(robot, self.t, robot.strategy.params.replan_interval):
+                self.replan(robot)
+                planned.add(robot.name)
+        return planned
+
+    def move_and_sense(self, planned: set[str]) -> None:
+        """Move phase: each robot moves up to its speed, scanning (and replanning) on the way."""
+        for robot in self.robots:
+            if robot.can_move:
+                take_step(
+                    robot,
+                    self.world,
+                    self.move_rules,
+                    robot.name in planned,
+                    self.replan,
+                    self.sense,
+                )
 
     def robot_filter(self, robot: Robot) -> tuple[int, int, int]:
         """What ``robot``'s rays and motion collide with."""
-        return self.world.query_filter(robot.index - 1, self.scenario.simulation.robots_block)
+        return self.world.query_filter(robot.index - 1, self.rules.robots_block)
 
     def sense(self, robot: Robot) -> None:
         """Scan at the robot's pose and fold the scan into its map and the team coverage."""
-        assert robot.spec is not None
-        sensor = robot.spec.sensor
+        if not robot.can_sense:
+            return
+        assert robot.body is not None
+        laser = robot.body.laser
         started = perf_counter()
         result = scan(
             self.world,
             robot.position,
             robot.heading,
-            sensor,
+            laser,
             self.robot_filter(robot),
             self._sensing_rngs[robot.index - 1],
         )
         scanned = perf_counter()
-        update = integrate_scan(robot.belief, robot.safe, result, sensor.safe_fraction)
+        update = integrate_scan(robot.belief, robot.safe, result, laser.safe_fraction)
         self.phase_times["sensing"] += scanned - started
         self.phase_times["mapping"] += perf_counter() - scanned
         if update is not None:
@@ -178,14 +216,14 @@ class Simulation:
 
     def replan(self, robot: Robot) -> None:
         """Ask the robot's strategy for a new path from what the robot knows."""
-        assert robot.strategy is not None and robot.spec is not None
+        assert robot.strategy is not None
         started = perf_counter()
         robot.adopt(robot.strategy.decide(self.view_of(robot)), self.t)
         self.phase_times["planning"] += perf_counter() - started
 
     def view_of(self, robot: Robot) -> RobotView:
         """The robot's knowledge, read-only, as its strategy may see it."""
-        assert robot.spec is not None
+        assert robot.body is not None
         belief = robot.belief.view()
         belief.flags.writeable = False
         return RobotView(
@@ -195,9 +233,9 @@ class Simulation:
             heading=robot.heading,
             belief=belief,
             radius=robot.radius,
-            clearance=robot.radius + robot.spec.wall_margin,
+            clearance=robot.radius + robot.body.wall_margin,
             speed=robot.speed,
-            sensor_range=robot.spec.sensor.range,
+            sensor_range=robot.body.laser.range,
             role=robot.role,
             base_position=self.base.position,
             teammates=dict(robot.teammates),
@@ -205,12 +243,21 @@ class Simulation:
             bumped=robot.status == "error",
             reached_goal=robot.reached_goal,
             planner=robot.planner,
+            comm_range=robot.comm_range,
+            links=robot.links,
+            base_contact=robot.last_base_contact,
+            lost=presumed_lost(robot.teammates, self.t, self.rules.presume_lost_after),
         )
 
     @property
     def links(self) -> np.ndarray:
         """This step's main-channel links (index 0 = base)."""
         return self.comm.links
+
+    @property
+    def parts(self) -> Setup:
+        """The run's runtime values (older name of :attr:`setup`)."""
+        return self.setup
 
     def communicate(self) -> None:
         """Find links among alive agents and exchange knowledge along them."""
@@ -220,11 +267,18 @@ class Simulation:
                 robot.index, box_around(robot.position, robot.radius + 2, self.world.shape)
             )
         self.comm = self.network.communicate(self.agents, self.world, self.t)
+        self.note_links()
         if self.links[0].any() or self.t == 0:
             known = np.count_nonzero((self.base.belief == FREE) & self.coverage.reachable)
             fraction = known / self.coverage.total if self.coverage.total else 1.0
             self.known_at_base = float(max(self.known_at_base, min(fraction, 1.0)))
         self.phase_times["communication"] += perf_counter() - started
+
+    def note_links(self) -> None:
+        """Tell every agent whom it is linked with on the main channel now."""
+        agents = self.agents
+        for agent, row in zip(agents, self.links, strict=True):
+            agent.links = tuple(agents[j].name for j in np.flatnonzero(row))
 
     def snapshot(self) -> Snapshot:
         """The run at the end of the current step (views of the live grids, not copies)."""

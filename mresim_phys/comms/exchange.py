@@ -9,7 +9,8 @@ seen as obstacle by either stays obstacle), safe space (OR) and teammate records
   byte of state); ``full`` exchange sends the whole grid every time, one byte
   per cell, for comparison;
 * teammate records the receiver does not hold in a newer version, ``RECORD_BYTES``
-  each (name, position, goal, state, role and step).
+  each (name, position, goal, state, role and step) plus the size of the payload a
+  strategy put in the record (:mod:`mresim_phys.knowledge.teammates`).
 
 With ``multi_hop`` (the default, as the original closes its link table over
 chains) each connected group gathers along a breadth-first spanning tree (from
@@ -29,12 +30,12 @@ import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import breadth_first_order, connected_components
 
-from mresim_phys.agents import Agent, TeammateInfo
+from mresim_phys.agents import Agent
 from mresim_phys.comms.deltas import select_cells
 from mresim_phys.comms.ledger import Ledger, received_tick, sensed_tick
+from mresim_phys.knowledge.teammates import TeammateInfo
 
 CELL_BYTES = 5
-RECORD_BYTES = 40
 
 # The map part of one transmission: flat cell indices and their codes
 # (the occupancy value, plus 4 where the cell is safe space).
@@ -59,11 +60,14 @@ class Traffic:
         """All bytes sent this step."""
         return int(self.sent.sum())
 
-    def add(self, sender: int, receiver: int, cells: int, records: int, cell_bytes: int) -> None:
-        """Count one transmission."""
+    def add(
+        self, sender: int, receiver: int, cells: int, records: list[TeammateInfo], cell_bytes: int
+    ) -> None:
+        """Count one transmission: its map cells and the records the receiver took."""
         self.cells += cells
-        self.records += records
-        self.sent[sender, receiver] += cells * cell_bytes + records * RECORD_BYTES
+        self.records += len(records)
+        record_bytes = sum(r.nbytes() for r in records)
+        self.sent[sender, receiver] += cells * cell_bytes + record_bytes
 
 
 def linked_groups(links: np.ndarray) -> list[list[int]]:
@@ -92,14 +96,16 @@ def held_records(agent: Agent, step: int) -> list[TeammateInfo]:
     return [*agent.teammates.values(), agent.own_record(step)]
 
 
-def learn_records(receiver: Agent, records: Sequence[TeammateInfo], step: int) -> int:
-    """Keep the records newer than the receiver's, stamped as learned at ``step``."""
-    learned = 0
+def learn_records(
+    receiver: Agent, records: Sequence[TeammateInfo], step: int
+) -> list[TeammateInfo]:
+    """Keep the records newer than the receiver's, stamped as learned at ``step``; return them."""
+    learned = []
     for record in records:
         held = receiver.teammates.get(record.name)
         if record.name != receiver.name and (held is None or record.step > held.step):
             receiver.teammates[record.name] = replace(record, learned=step)
-            learned += 1
+            learned.append(record)
     return learned
 
 

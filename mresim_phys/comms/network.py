@@ -21,12 +21,10 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mresim_phys.agents import BASE_NAME, Agent
-from mresim_phys.comms.base import COMM_MODELS, CommModel, Radios
+from mresim_phys.agents import Agent
+from mresim_phys.comms.base import CommModel, Radios
 from mresim_phys.comms.exchange import Exchange, Traffic, hop_groups, stamp_base_contacts
 from mresim_phys.comms.ledger import Box, Ledger
-from mresim_phys.rng import named_stream
-from mresim_phys.scenario.schema import BlackoutEvent, Scenario
 from mresim_phys.types import FloatArray
 from mresim_phys.world.space import World
 
@@ -62,7 +60,7 @@ class Channel:
 
     def links(self, agents: Sequence[Agent], world: World, silent: np.ndarray) -> np.ndarray:
         """This step's links: the model's, among alive and unsilenced agents, minus dropouts."""
-        speaking = np.array([a.alive for a in agents]) & ~silent
+        speaking = np.array([a.speaking for a in agents]) & ~silent
         links = self.model.links(self.radios(agents), world) & np.outer(speaking, speaking)
         return links & ~self.dropped(len(agents))
 
@@ -112,6 +110,10 @@ class Network:
         none = np.zeros((n, n), dtype=bool)
         return CommRecord(none, none.copy(), Traffic.empty(n), Traffic.empty(n))
 
+    def add_blackout(self, blackout: Blackout) -> None:
+        """Silence ``blackout.members`` on its channels from its start until before its end."""
+        self.blackouts = (*self.blackouts, blackout)
+
     def note_scan(self, index: int, box: Box) -> None:
         """Agent ``index``'s own map may have changed inside ``box``."""
         self.ledger.note(index, box)
@@ -140,51 +142,3 @@ class Network:
             control_groups = hop_groups(control_links, self.multi_hop)
             control_traffic = self.records.run(agents, control_links, step, control_groups)
         return CommRecord(links, control_links, traffic, control_traffic)
-
-
-def channel_stream(seed: int, channel: str) -> np.random.Generator:
-    """The named random stream of one channel's link losses."""
-    return named_stream(seed, f"dropout-{channel}", 0)
-
-
-def blackouts_of(scenario: Scenario) -> list[Blackout]:
-    """The scenario's blackout events with agent names turned into indices."""
-    index = {BASE_NAME: 0} | {r.name: i + 1 for i, r in enumerate(scenario.robots)}
-    return [
-        Blackout(
-            e.step,
-            e.until,
-            tuple(index[name] for name in e.blackout),
-            ("main", "control") if e.channel == "both" else (e.channel,),
-        )
-        for e in scenario.events
-        if isinstance(e, BlackoutEvent)
-    ]
-
-
-def build_network(scenario: Scenario, model: CommModel, shape: tuple[int, int]) -> Network:
-    """The communication phase of ``scenario`` (its main model already built)."""
-    spec, seed = scenario.communication, scenario.seed
-    radios = [scenario.base_station, *scenario.robots]
-    ranges = np.array([r.comm_range for r in radios], dtype=float)
-    powers = np.array([np.nan if r.comm_power_dbm is None else r.comm_power_dbm for r in radios])
-    main = Channel("main", model, ranges, powers, spec.dropout, channel_stream(seed, "main"))
-    control = None
-    if spec.control is not None:
-        c = spec.control
-        control = Channel(
-            "control",
-            COMM_MODELS.make(c.model, c.params),
-            np.full(len(radios), c.range),
-            powers,
-            c.dropout,
-            channel_stream(seed, "control"),
-        )
-    return Network(
-        main,
-        Ledger(shape, len(radios)),
-        control=control,
-        blackouts=blackouts_of(scenario),
-        multi_hop=scenario.simulation.multi_hop,
-        full_maps=spec.maps == "full",
-    )

@@ -15,34 +15,33 @@ from typing import Any, TypeVar, get_args
 
 from pydantic import BaseModel, ValidationError
 
-from mresim_phys.agents import BASE_NAME
 from mresim_phys.comms import COMM_MODELS
 from mresim_phys.errors import ScenarioError, UnknownPluginError
+from mresim_phys.knowledge.teammates import BASE_NAME
 from mresim_phys.planning import PLANNERS
 from mresim_phys.registry import Registry
+from mresim_phys.scenario.overrides import apply_overrides
 from mresim_phys.scenario.readers import read_yaml_mapping
 from mresim_phys.scenario.schema import (
-    BlackoutEvent,
     CommSpec,
-    FailEvent,
     PluginSpec,
     RobotParams,
     Scenario,
 )
 from mresim_phys.strategies import STRATEGIES
+from mresim_phys.world.events import EVENTS
 
 RobotT = TypeVar("RobotT", bound=RobotParams)
 
 
 def load_scenario(path: str | Path, **overrides: Any) -> Scenario:
-    """Read, validate and resolve the scenario at ``path``; ``overrides`` replace top keys."""
+    """Read, validate and resolve the scenario at ``path`` with ``overrides`` applied.
+
+    Overrides merge deeply (see :mod:`mresim_phys.scenario.overrides`): ``team=`` changes
+    every robot, ``robots={"B": {...}}`` one robot, ``**{"team.sensor.range": 80}`` one field.
+    """
     source = Path(path)
-    data = read_yaml_mapping(source)
-    for key, value in overrides.items():
-        if isinstance(value, dict) and isinstance(data.get(key), dict):
-            data[key] = {**data[key], **value}
-        elif value is not None:
-            data[key] = value
+    data = apply_overrides(read_yaml_mapping(source), overrides, str(source))
     scenario = validate_scenario(data, str(source))
     return resolve_map_path(scenario, source.resolve().parent)
 
@@ -63,14 +62,12 @@ def validate_scenario(data: dict[str, Any], source: str = "<scenario>") -> Scena
 
 
 def check_event_robots(scenario: Scenario, source: str) -> None:
-    """Every event must name robots of the team (a blackout may also name the base)."""
+    """Every agent an event names must be in the team (some events may also name the base)."""
     names = [r.name for r in scenario.robots]
     for i, event in enumerate(scenario.events):
-        if isinstance(event, BlackoutEvent):
-            for k, name in enumerate(event.blackout):
-                check_agent_name(name, [BASE_NAME, *names], source, f"events[{i}].blackout[{k}]")
-        else:
-            check_agent_name(event.fail, names, source, f"events[{i}].fail")
+        for where, name, base_allowed in event.agent_names():
+            known = [BASE_NAME, *names] if base_allowed else names
+            check_agent_name(name, known, source, f"events[{i}].{where}")
 
 
 def check_agent_name(name: str, names: list[str], source: str, where: str) -> None:
@@ -182,17 +179,14 @@ def describe_error(error: Any, prefix: str, keys: list[str] | None = None) -> st
     return f"{path}: {message}" + (f" (got {value!r})" if shown else "")
 
 
-EVENT_KINDS: dict[str, type[BaseModel]] = {"fail": FailEvent, "blackout": BlackoutEvent}
-
-
 def untagged(loc: tuple[Any, ...]) -> tuple[tuple[Any, ...], type[BaseModel] | None]:
     """``loc`` without the event-kind tag pydantic inserts, and the event model it names.
 
     >>> untagged(("events", 0, "blackout", "until"))[0]
     ('events', 0, 'until')
     """
-    if len(loc) > 2 and loc[0] == "events" and loc[2] in EVENT_KINDS:
-        return (*loc[:2], *loc[3:]), EVENT_KINDS[loc[2]]
+    if len(loc) > 2 and loc[0] == "events" and loc[2] in EVENTS.names():
+        return (*loc[:2], *loc[3:]), EVENTS.get(str(loc[2])).Params
     return loc, None
 
 

@@ -1,6 +1,6 @@
 """Scenario schema (phase 0, input): the pydantic models behind the YAML contract.
 
-Pure: no file I/O here (``io.py`` reads files, ``load.py`` turns a file into a
+Pure: no file I/O here (``readers.py`` reads files, ``load.py`` turns a file into a
 validated :class:`Scenario`). Every model forbids unknown keys, so a typo at any
 depth is an error naming its field path. ``team`` holds the defaults every robot
 inherits; a robot entry may override any of them (nested ``sensor`` keys merge).
@@ -8,17 +8,20 @@ inherits; a robot entry may override any of them (nested ``sensor`` keys merge).
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, Literal, Union
 
 from pydantic import (
     BaseModel,
     ConfigDict,
     Discriminator,
     Field,
+    SerializeAsAny,
     Tag,
     field_validator,
     model_validator,
 )
+
+from mresim_phys.world.events import EVENTS, EventParams
 
 Point = tuple[float, float]
 
@@ -191,6 +194,11 @@ class SimulationSpec(Strict):
     multi_hop: bool = Field(
         True, description="Information flows along chains of linked agents within a step."
     )
+    presume_lost_after: int = Field(
+        200,
+        ge=1,
+        description="Steps without news after which a strategy sees a teammate as presumed lost.",
+    )
 
 
 class RenderSpec(Strict):
@@ -213,41 +221,30 @@ class RenderSpec(Strict):
     plots: bool = Field(True, description="Write plots at the end (needs the plot extra).")
 
 
-class FailEvent(Strict):
-    """At ``step``, robot ``fail`` stops for good: no motion, sensing or communication."""
-
-    step: int = Field(ge=0, description="Step at which the event happens.")
-    fail: str = Field(description="Name of the robot that fails for good.")
-
-
-class BlackoutEvent(Strict):
-    """From ``step`` until before ``until``, the named agents can neither send nor receive."""
-
-    step: int = Field(ge=0, description="First step of the blackout.")
-    until: int = Field(ge=1, description="First step after the blackout.")
-    blackout: list[str] = Field(min_length=1, description="Robot names (or 'base') that go silent.")
-    channel: Literal["main", "control", "both"] = Field(
-        "both", description="Which channel goes silent."
-    )
-
-    @model_validator(mode="after")
-    def _ordered(self) -> BlackoutEvent:
-        if self.until <= self.step:
-            raise ValueError(f"'until' ({self.until}) must be after 'step' ({self.step})")
-        return self
-
-
 def event_kind(value: Any) -> str | None:
-    """Which event a YAML entry is: a failure or a blackout (None: neither key given)."""
+    """Which registered event a YAML entry is: the first event name among its keys."""
+    if isinstance(value, EventParams):
+        return next((n for n in EVENTS.names() if isinstance(value, EVENTS.get(n).Params)), None)
     if isinstance(value, dict):
-        return "blackout" if "blackout" in value else "fail"
-    return "blackout" if isinstance(value, BlackoutEvent) else "fail"
+        return next((n for n in EVENTS.names() if n in value), None)
+    return None
 
 
-Event = Annotated[
-    Annotated[FailEvent, Tag("fail")] | Annotated[BlackoutEvent, Tag("blackout")],
-    Discriminator(event_kind),
-]
+def event_union() -> Any:
+    """The ``events[i]`` type: one tagged member per registered event's ``Params``."""
+    members = tuple(Annotated[EVENTS.get(n).Params, Tag(n)] for n in EVENTS.names())
+    return Annotated[
+        Union[members],  # noqa: UP007 (a union built from a tuple of types)
+        Discriminator(
+            event_kind,
+            custom_error_type="unknown_event",
+            custom_error_message="an event needs one of the keys "
+            + ", ".join(repr(n) for n in EVENTS.names()),
+        ),
+    ]
+
+
+Event = event_union()
 
 
 class Scenario(Strict):
@@ -270,8 +267,9 @@ class Scenario(Strict):
     render: RenderSpec = Field(
         default_factory=RenderSpec, description="Video, pictures, run log and plots."
     )
-    events: list[Event] = Field(
-        default_factory=list, description="Scheduled events: robot failures and blackouts."
+    events: list[SerializeAsAny[Event]] = Field(  # type: ignore[valid-type]
+        default_factory=list,
+        description="Scheduled events (robot failures, blackouts, ...): see 'events' below.",
     )
 
     @model_validator(mode="before")

@@ -1,10 +1,13 @@
-"""Strategy contract (phase 4): what a robot may know, and what it must decide.
+"""Strategy contract (phase 4, decide): what a robot may know, and what it must decide.
 
 A strategy sees ONLY a :class:`RobotView`: its robot's own belief grid (read
 only), its pose and body, the base station position (known before the mission,
-as in the original) and the last communicated state of each teammate. It never
-sees the true map. It returns a :class:`Decision`: a path of world points to
-follow, the goal it is heading for, and whether it has nothing left to explore.
+as in the original), the last communicated record of each teammate (with the
+payload that teammate's strategy sent), whom it is linked with now, when its data
+last reached the base and which teammates it presumes lost. It never sees the
+true map. It returns a :class:`Decision`: a path of world points to follow, the
+goal it is heading for, whether it has nothing left to explore, optionally a new
+role, and the payload to send its teammates with its record from now on.
 
 :func:`plan_context` gives a strategy the configuration space and one distance
 field from the robot, computed once per decision, plans the path to a chosen
@@ -17,19 +20,17 @@ from __future__ import annotations
 from collections.abc import Iterator, Mapping
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import TYPE_CHECKING, Any, ClassVar, Protocol, runtime_checkable
+from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
+from mresim_phys.knowledge.teammates import Payload, TeammateInfo
 from mresim_phys.planning import Planner, TopologicalMap, shared_map
 from mresim_phys.planning.fields import DistanceField, distance_field, traversable
 from mresim_phys.planning.topological import TopologicalPlanner
 from mresim_phys.plugin import PluginParams
 from mresim_phys.registry import Registry
 from mresim_phys.types import BeliefGrid, FloatArray
-
-if TYPE_CHECKING:
-    from mresim_phys.agents import TeammateInfo
 
 
 class StrategyParams(PluginParams):
@@ -58,6 +59,10 @@ class RobotView:
     bumped: bool = False
     reached_goal: bool = False
     planner: Planner | None = None  # the robot's path planner (None: distance-field paths)
+    comm_range: float = 0.0  # its main-channel range (cells)
+    links: tuple[str, ...] = ()  # agents it was linked with at the last exchange ('base' too)
+    base_contact: int = -1  # last step its data reached the base (-1: never)
+    lost: frozenset[str] = frozenset()  # teammates silent for longer than the run's limit
 
 
 @dataclass(frozen=True)
@@ -69,6 +74,8 @@ class Decision:
     done: bool = False
     look_at: tuple[float, float] | None = None  # turn to face this point when the path ends
     info: Mapping[str, Any] = field(default_factory=dict)
+    role: str | None = None  # the robot's new role (None: keep it)
+    payload: Payload | None = None  # sent with the robot's record until its next decision
 
 
 @runtime_checkable

@@ -9,14 +9,24 @@ Noise-free unless the sensor has ``noise_std``; noise comes from the robot's own
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
 
-from mresim_phys.scenario.schema import SensorSpec
 from mresim_phys.types import FloatArray
 from mresim_phys.world.space import Scan, World
+
+
+@dataclass(frozen=True)
+class Laser:
+    """A planar laser scanner: ``rays`` rays evenly over ``fov_deg`` centred on the heading."""
+
+    range: float  # cells
+    fov_deg: float = 180.0
+    rays: int = 181
+    noise_std: float = 0.0  # Gaussian range noise (cells) on rays that hit something
+    safe_fraction: float = 0.1  # safe space: rays clipped to this fraction of the range
 
 
 @lru_cache(maxsize=64)
@@ -36,7 +46,7 @@ def scan(
     world: World,
     origin: tuple[float, float],
     heading: float,
-    sensor: SensorSpec,
+    sensor: Laser,
     shape_filter: tuple[int, int, int],
     rng: np.random.Generator | None = None,
 ) -> Scan:

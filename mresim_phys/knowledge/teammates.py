@@ -1,0 +1,98 @@
+"""Knowledge (phase 3c): what one agent last heard about another, and what strategies send.
+
+A :class:`TeammateInfo` is the record agents exchange about themselves and pass
+on about others (newest wins). Besides the fixed fields (where, heading for
+what, state, role, when) it carries an optional :class:`Payload`: typed data a
+strategy fills through its ``Decision`` (a rendezvous agreement, a relay
+request, a role offer) that travels only along links, hop by hop with the
+record, and is counted in bytes like everything else that is sent.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+BASE_NAME = "base"
+RECORD_BYTES = 40  # name, position, goal, state, role and step of one record
+SCALAR_BYTES = 8  # a number (int, float, bool) in a payload
+POINT_BYTES = 16  # an (x, y) pair of floats
+
+
+def value_bytes(value: Any) -> int:
+    """Bytes a payload value takes on the radio: numbers 8, points 16, text its UTF-8 length.
+
+    >>> value_bytes((1.0, 2.0)), value_bytes("abc"), value_bytes([(0.0, 0.0)] * 3)
+    (16, 3, 48)
+    """
+    if value is None:
+        return 0
+    if isinstance(value, (bool, int, float, np.number)):
+        return SCALAR_BYTES
+    if isinstance(value, str):
+        return len(value.encode("utf-8"))
+    if isinstance(value, np.ndarray):
+        return int(value.nbytes)
+    if isinstance(value, Payload):
+        return value.nbytes()
+    if isinstance(value, (tuple, list)):
+        if len(value) == 2 and all(isinstance(v, (int, float)) for v in value):
+            return POINT_BYTES
+        return sum(value_bytes(v) for v in value)
+    if isinstance(value, dict):
+        return sum(value_bytes(k) + value_bytes(v) for k, v in value.items())
+    raise TypeError(f"a payload cannot carry a {type(value).__name__}")
+
+
+@dataclass(frozen=True)
+class Payload:
+    """Base for what a strategy sends its teammates: subclass it as a frozen dataclass.
+
+    Its size on the radio is the sum of its fields' sizes (:func:`value_bytes`);
+    override :meth:`nbytes` for a tighter encoding.
+    """
+
+    def nbytes(self) -> int:
+        """Bytes this payload adds to a teammate record."""
+        return sum(value_bytes(getattr(self, f.name)) for f in dataclasses.fields(self))
+
+
+@dataclass(frozen=True)
+class TeammateInfo:
+    """What one agent last heard about another: where it was, where it was heading, when.
+
+    ``step`` is when the record was true (its sender's step); ``learned`` the step at
+    which the holder received it (-1 for an agent's own record, not yet sent).
+    ``payload`` is what the teammate's strategy asked to send with it.
+    """
+
+    name: str
+    position: tuple[float, float]
+    goal: tuple[float, float] | None
+    state: str
+    role: str
+    step: int
+    learned: int = -1
+    payload: Payload | None = None
+
+    def nbytes(self) -> int:
+        """Bytes this record takes on the radio."""
+        extra = self.payload.nbytes() if self.payload is not None else 0
+        return RECORD_BYTES + extra
+
+
+def presumed_lost(teammates: dict[str, TeammateInfo], step: int, silence: int) -> frozenset[str]:
+    """Teammates whose newest record is older than ``silence`` steps (the base never counts).
+
+    >>> old = TeammateInfo("B", (0.0, 0.0), None, "active", "explorer", step=1)
+    >>> sorted(presumed_lost({"B": old}, step=500, silence=100))
+    ['B']
+    """
+    return frozenset(
+        name
+        for name, record in teammates.items()
+        if name != BASE_NAME and step - record.step > silence
+    )

@@ -1,0 +1,170 @@
+"""Events (phase 0 of every step): scheduled changes to the team, the radio and the world.
+
+Events are a plugin family like strategies, comm models and planners: a
+:class:`Event` Protocol, the :data:`EVENTS` registry keyed by the YAML key that
+marks an entry (``{step: 300, fail: B}`` is a ``fail`` event), and a ``Params``
+model per event that the scenario schema validates each entry against (the
+schema's event union and the scenario reference are generated from the
+registry). Each step the simulation calls every event's :meth:`Event.apply`
+with an :class:`EventContext`: the small surface through which an event acts
+(fail a robot or part of one, silence agents, change the world, log a line,
+draw from the event's own named random stream).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import ClassVar, Literal, Protocol, runtime_checkable
+
+import numpy as np
+from pydantic import Field, model_validator
+
+from mresim_phys.plugin import Plugin, PluginParams
+from mresim_phys.registry import Registry
+from mresim_phys.types import BoolGrid
+
+RobotPart = Literal["robot", "drive", "sensor", "radio"]
+Channels = Literal["main", "control", "both"]
+Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)
+
+
+class EventParams(PluginParams):
+    """Base for every event's parameters: the step at which it happens."""
+
+    step: int = Field(ge=0, description="Step at which the event happens.")
+
+    def agent_names(self) -> list[tuple[str, str, bool]]:
+        """(field, agent name, whether 'base' may be named) for every agent the event names.
+
+        Loading checks each against the team, so a misspelt name is an error before
+        anything runs.
+        """
+        return []
+
+
+class EventContext(Protocol):
+    """What an event may do to the running simulation (and nothing more)."""
+
+    @property
+    def step(self) -> int:
+        """The step now starting."""
+        ...
+
+    @property
+    def rng(self) -> np.random.Generator:
+        """The applying event's own named random stream (same seed, same draws)."""
+        ...
+
+    def fail(self, robot: str, part: RobotPart = "robot") -> None:
+        """Robot ``robot`` loses ``part`` for good (``robot``: everything)."""
+        ...
+
+    def silence(self, agents: Sequence[str], until: int, channels: Channels) -> None:
+        """``agents`` (robot names or 'base') neither send nor receive until before ``until``."""
+        ...
+
+    def change_world(self, box: Box, occupied: BoolGrid | bool) -> None:
+        """Set the true occupancy of ``box`` (walls appear or clear; rays and radio follow)."""
+        ...
+
+    def log(self, line: str) -> None:
+        """Note what happened this step (run log, videos' event line)."""
+        ...
+
+
+@runtime_checkable
+class Event(Protocol):
+    """A scheduled event: built from its validated params, asked to act every step."""
+
+    name: ClassVar[str]
+    Params: ClassVar[type[EventParams]]
+    params: EventParams
+
+    def apply(self, context: EventContext) -> None:
+        """Act if this event has anything to do at ``context.step``."""
+        ...
+
+
+EVENTS: Registry[Event] = Registry("event", "mresim_phys.events")
+
+
+class FailParams(EventParams):
+    """At ``step``, robot ``fail`` stops for good (or loses one ``part``)."""
+
+    fail: str = Field(description="Name of the robot that fails.")
+    part: RobotPart = Field(
+        "robot",
+        description="What fails: 'robot' (no motion, sensing or communication), 'drive'"
+        " (cannot move), 'sensor' (no scans) or 'radio' (cannot communicate).",
+    )
+
+    def agent_names(self) -> list[tuple[str, str, bool]]:
+        """The failing robot."""
+        return [("fail", self.fail, False)]
+
+
+@EVENTS.register
+class Failure(Plugin):
+    """A robot, or one of its parts, fails for good."""
+
+    name = "fail"
+    Params = FailParams
+
+    def __init__(self, params: FailParams) -> None:
+        self.params: FailParams = params
+
+    def apply(self, context: EventContext) -> None:
+        """Fail the robot (or part) at its step."""
+        if context.step == self.params.step:
+            context.fail(self.params.fail, self.params.part)
+            suffix = "" if self.params.part == "robot" else f" {self.params.part}"
+            context.log(f"fail {self.params.fail}{suffix}")
+
+
+class BlackoutParams(EventParams):
+    """From ``step`` until before ``until``, the named agents can neither send nor receive."""
+
+    step: int = Field(ge=0, description="First step of the blackout.")
+    until: int = Field(ge=1, description="First step after the blackout.")
+    blackout: list[str] = Field(min_length=1, description="Robot names (or 'base') that go silent.")
+    channel: Channels = Field("both", description="Which channel goes silent.")
+
+    def agent_names(self) -> list[tuple[str, str, bool]]:
+        """The silenced agents (the base may be one)."""
+        return [(f"blackout[{k}]", name, True) for k, name in enumerate(self.blackout)]
+
+    @model_validator(mode="after")
+    def _ordered(self) -> BlackoutParams:
+        if self.until <= self.step:
+            raise ValueError(f"'until' ({self.until}) must be after 'step' ({self.step})")
+        return self
+
+
+@EVENTS.register
+class Blackout(Plugin):
+    """Agents go silent on a channel for a while (jamming, a dead zone, a radio reset)."""
+
+    name = "blackout"
+    Params = BlackoutParams
+
+    def __init__(self, params: BlackoutParams) -> None:
+        self.params: BlackoutParams = params
+
+    def apply(self, context: EventContext) -> None:
+        """Silence the agents at ``step``; note the end at ``until``."""
+        p = self.params
+        who = f"{','.join(p.blackout)} ({p.channel})"
+        if context.step == p.step:
+            context.silence(p.blackout, p.until, p.channel)
+            context.log(f"blackout {who} until {p.until}")
+        elif context.step == p.until:
+            context.log(f"blackout over {who}")
+
+
+def make_event(params: EventParams) -> Event:
+    """The event a validated entry describes (its registry entry is the one whose Params it is)."""
+    for name in EVENTS.names():
+        cls = EVENTS.get(name)
+        if type(params) is cls.Params:
+            return EVENTS.make(name, params.model_dump())
+    raise ValueError(f"no registered event takes {type(params).__name__}")
