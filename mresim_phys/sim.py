@@ -21,12 +21,12 @@ from __future__ import annotations
 from collections.abc import Callable, Iterator, Mapping
 from pathlib import Path
 from time import perf_counter
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from mresim_phys.agents import Agent, Robot
-from mresim_phys.build import Setup, build_setup
+from mresim_phys.build import Scenario, Setup, build_setup, load_scenario
 from mresim_phys.comms.ledger import box_around
 from mresim_phys.errors import ScenarioError
 from mresim_phys.event_context import RunEventContext
@@ -34,14 +34,10 @@ from mresim_phys.knowledge.mapping import integrate_scan
 from mresim_phys.knowledge.teammates import presumed_lost
 from mresim_phys.metrics import CommTotals, Milestones, RobotRecord, StepRecord, base_latency
 from mresim_phys.motion import MoveRules, take_step, wants_plan
-from mresim_phys.scenario.load import load_scenario
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
 from mresim_phys.strategies import Decision, RobotView
 from mresim_phys.types import FREE
 from mresim_phys.world.sensing import scan
-
-if TYPE_CHECKING:
-    from mresim_phys.scenario.schema import Scenario
 
 PHASES = ("sensing", "mapping", "planning", "communication", "metrics")
 

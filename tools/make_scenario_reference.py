@@ -19,6 +19,7 @@ sys.path.insert(0, str(ROOT))
 from mresim_phys import COMM_MODELS, STRATEGIES  # noqa: E402
 from mresim_phys.planning import PLANNERS  # noqa: E402
 from mresim_phys.scenario import schema  # noqa: E402
+from mresim_phys.world.events import EVENTS  # noqa: E402
 
 SECTIONS: list[tuple[str, type[BaseModel]]] = [
     ("Scenario (top level)", schema.Scenario),
@@ -32,7 +33,6 @@ SECTIONS: list[tuple[str, type[BaseModel]]] = [
     ("stop", schema.StopSpec),
     ("simulation", schema.SimulationSpec),
     ("render", schema.RenderSpec),
-    ("events[i]", schema.FailEvent),
 ]
 
 
@@ -83,18 +83,33 @@ def render() -> str:
     ]
     for title, model in SECTIONS:
         lines += [f"## {title}", "", *table(model, own_only=model is schema.RobotSpec), ""]
+    lines += [
+        "## events[i]",
+        "",
+        "Each entry is one event; the key that names its kind (below) marks which:",
+        "`{step: 300, fail: B}` is a `fail` event. Events act in list order at the start",
+        "of their step (step 0: before the first scans).",
+        "",
+        *plugin_tables(EVENTS),
+    ]
     registries = (
         ("Strategies", STRATEGIES),
         ("Planners", PLANNERS),
         ("Communication models", COMM_MODELS),
     )
     for kind, registry in registries:
-        lines += [f"## {kind}", ""]
-        for name in registry.names():
-            cls = registry.get(name)
-            doc = (cls.__doc__ or "").strip().splitlines()[0]
-            lines += [f"### `{name}`", "", doc, "", *table(cls.Params), ""]
+        lines += [f"## {kind}", "", *plugin_tables(registry)]
     return "\n".join(lines).rstrip() + "\n"
+
+
+def plugin_tables(registry: Any) -> list[str]:
+    """One section per registered plugin: its docstring's first line and its params."""
+    lines: list[str] = []
+    for name in registry.names():
+        cls = registry.get(name)
+        doc = (cls.__doc__ or "").strip().splitlines()[0]
+        lines += [f"### `{name}`", "", doc, "", *table(cls.Params), ""]
+    return lines
 
 
 if __name__ == "__main__":

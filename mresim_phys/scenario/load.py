@@ -27,6 +27,7 @@ from mresim_phys.scenario.schema import (
     PluginSpec,
     RobotParams,
     Scenario,
+    refresh_event_union,
 )
 from mresim_phys.strategies import STRATEGIES
 from mresim_phys.world.events import EVENTS
@@ -48,6 +49,7 @@ def load_scenario(path: str | Path, **overrides: Any) -> Scenario:
 
 def validate_scenario(data: dict[str, Any], source: str = "<scenario>") -> Scenario:
     """Schema-validate ``data`` and each plugin's params; errors name ``source``."""
+    refresh_event_union()
     try:
         scenario = Scenario.model_validate(data)
     except ValidationError as exc:

@@ -302,3 +302,21 @@ def _inherit(team: dict[str, Any], robot: dict[str, Any]) -> dict[str, Any]:
     if isinstance(team_sensor, dict) and isinstance(robot_sensor, dict):
         merged["sensor"] = {**team_sensor, **robot_sensor}
     return merged
+
+
+_EVENT_NAMES = tuple(EVENTS.names())
+
+
+def refresh_event_union() -> None:
+    """Rebuild ``Scenario.events`` if events were registered after this module was imported.
+
+    The event union is generated from the registry; a third-party event registered
+    in code (``EVENTS.register(MyEvent)``) joins it the next time a scenario is loaded.
+    """
+    global _EVENT_NAMES
+    names = tuple(EVENTS.names())
+    if names != _EVENT_NAMES:
+        _EVENT_NAMES = names
+        Scenario.model_fields["events"].annotation = list[SerializeAsAny[event_union()]]
+        Scenario.model_rebuild(force=True)
+
