@@ -44,7 +44,9 @@ def test_the_runtime_never_imports_the_scenario_schema() -> None:
     files = [p for entry in RUNTIME for p in sorted((PACKAGE / entry).rglob("*.py"))]
     files += [PACKAGE / entry for entry in RUNTIME if entry.endswith(".py")]
     offenders = {
-        str(f.relative_to(PACKAGE)): sorted(m for m in imported_modules(f) if m.startswith("mresim_phys.scenario"))
+        str(f.relative_to(PACKAGE)): sorted(
+            m for m in imported_modules(f) if m.startswith("mresim_phys.scenario")
+        )
         for f in files
     }
     assert {f: m for f, m in offenders.items() if m} == {}

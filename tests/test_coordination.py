@@ -78,7 +78,9 @@ def test_payloads_travel_along_links_only_and_are_counted(
 
 
 def test_a_decision_can_change_the_role(scenario_file: ScenarioFile, proposer: object) -> None:
-    path = scenario_file(team={"strategy": "test_proposer", "speed": 2, "radius": 1.0, "comm_range": 20})
+    path = scenario_file(
+        team={"strategy": "test_proposer", "speed": 2, "radius": 1.0, "comm_range": 20}
+    )
     sim = Simulation.from_yaml(path)
     for _ in range(20):
         sim.step()
@@ -89,7 +91,9 @@ def test_a_decision_can_change_the_role(scenario_file: ScenarioFile, proposer: o
 def test_a_view_tells_links_base_contact_comm_range_and_lost_teammates(
     scenario_file: ScenarioFile, proposer: object
 ) -> None:
-    path = scenario_file(team={"strategy": "test_proposer", "speed": 2, "radius": 1.0, "comm_range": 20})
+    path = scenario_file(
+        team={"strategy": "test_proposer", "speed": 2, "radius": 1.0, "comm_range": 20}
+    )
     sim = Simulation.from_yaml(path)
     for _ in range(16):
         sim.step()
@@ -126,7 +130,11 @@ def test_controlled_and_uncontrolled_runs_agree_when_the_controller_copies_the_s
         robot = driven.robot("A")
         assert robot.strategy is not None
         actions = {}
-        if robot.status == "error" or robot.reached_goal or driven.t + 1 - robot.last_plan_step >= 15:
+        if (
+            robot.status == "error"
+            or robot.reached_goal
+            or driven.t + 1 - robot.last_plan_step >= 15
+        ):
             view = replace(driven.view_of(robot), step=driven.t + 1)
             actions = {"A": robot.strategy.decide(view)}
         driven.step(actions=actions)

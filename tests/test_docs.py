@@ -49,3 +49,55 @@ def test_readme_commands_are_the_ones_ci_runs() -> None:
     assert "pip install -e . && mresim run scenarios/01_quickstart.yaml" in readme
     assert (ROOT / "scenarios/01_quickstart.yaml").exists()
     assert 'pip install -e ".[test]" && pytest' in (ROOT / ".ci/run").read_text()
+
+
+def test_coordination_example_runs(
+    tmp_path: Path, scenario_file: Callable[..., Path], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    (tmp_path / "meet_strategies.py").write_text(
+        python_blocks(ROOT / "docs/writing-a-strategy.md")[1]
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.delitem(sys.modules, "meet_strategies", raising=False)
+    team = {"speed": 2, "radius": 1.0, "sensor": {"range": 30}, "comm_range": 20}
+    strategy = {"name": "meet_strategies:MeetAtBase"}
+    sim = Simulation.from_yaml(scenario_file(team={**team, "strategy": strategy}, steps=20))
+    sim.run()
+    heard = sim.robot("A").teammates["B"]
+    assert heard.payload is not None and heard.payload.point == sim.base.position
+
+
+def documented_names(path: Path) -> set[str]:
+    return set(re.findall(r"`(\w+)`", path.read_text(encoding="utf-8")))
+
+
+def test_the_strategy_guide_documents_every_view_and_decision_field() -> None:
+    from dataclasses import fields
+
+    from mresim_phys.strategies import Decision, RobotView
+
+    names = documented_names(ROOT / "docs/writing-a-strategy.md")
+    missing = [f.name for cls in (RobotView, Decision) for f in fields(cls) if f.name not in names]
+    assert missing == [], f"docs/writing-a-strategy.md does not mention {missing}"
+
+
+def test_the_plugin_contracts_in_the_guide_match_the_protocols() -> None:
+    import inspect
+
+    from mresim_phys.comms import CommModel
+    from mresim_phys.planning import Planner
+    from mresim_phys.strategies import Strategy
+    from mresim_phys.world.events import Event
+
+    text = (ROOT / "docs/writing-a-strategy.md").read_text(encoding="utf-8")
+    for protocol, methods in (
+        (Strategy, ["decide"]),
+        (CommModel, ["links", "reach"]),
+        (Planner, ["plan", "info"]),
+        (Event, ["apply"]),
+    ):
+        for method in methods:
+            params = list(inspect.signature(getattr(protocol, method)).parameters)[1:]
+            call = f"{method}({', '.join(params)})"
+            with_self = f"{method}({', '.join(['self', *params])})"
+            assert call in text or with_self in text, f"the guide lacks {call}"
