@@ -19,7 +19,13 @@ from scipy import ndimage
 
 from mresim_phys.errors import MapError
 from mresim_phys.scenario.readers import load_map
-from mresim_phys.world.maps import free_components_mask, wall_segments
+from mresim_phys.world.maps import (
+    connected_to,
+    edge_segments,
+    free_components_mask,
+    padded_kinds,
+    wall_segments,
+)
 
 Grid = NDArray[np.bool_]
 VERTEX_TOL = 1e-9
@@ -197,6 +203,34 @@ def test_collinear_runs_are_merged_maximally(grid: Grid) -> None:
     starts = {(*start, *d) for start, d in zip(segments[:, :2].tolist(), direction, strict=True)}
     for end, d in zip(segments[:, 2:].tolist(), direction, strict=True):
         assert (*end, *d) not in starts, "a collinear continuation was not merged"
+
+
+@settings(max_examples=150, deadline=None)
+@given(small_grids)
+def test_edge_segments_of_the_whole_grid_are_wall_segments(grid: Grid) -> None:
+    kinds = padded_kinds(grid)
+    rows, cols = grid.shape
+    horizontal, h_kinds = edge_segments(kinds, 0, (0, rows), (0, cols))
+    vertical, v_kinds = edge_segments(kinds, 1, (0, cols), (0, rows))
+    np.testing.assert_array_equal(np.concatenate((horizontal, vertical)), wall_segments(grid))
+    assert (np.concatenate((h_kinds, v_kinds)) == 1).all()
+
+
+def test_edge_segments_break_runs_where_the_occupied_kind_changes() -> None:
+    kinds = padded_kinds(grid_of("......\n......"))
+    kinds[2, 2:6] = [1, 1, 2, 2]  # row 1: two wall cells, then two movable cells
+    segments, kind = edge_segments(kinds, 0, (1, 1), (0, 6))  # the line y = 1 above them
+    assert segments.tolist() == [[1.0, 1.0, 3.0, 1.0], [3.0, 1.0, 5.0, 1.0]]
+    assert kind.tolist() == [1, 2]
+    segments, kind = edge_segments(kinds, 0, (1, 1), (2, 4))  # a window cuts the run
+    assert segments.tolist() == [[2.0, 1.0, 3.0, 1.0], [3.0, 1.0, 4.0, 1.0]]
+
+
+def test_connected_to_ignores_seeds_on_occupied_cells() -> None:
+    free = ~grid_of("..#..")
+    cells = np.array([[0, 2], [0, 4]])
+    assert connected_to(free, cells).tolist() == [[False, False, False, True, True]]
+    assert not connected_to(free, cells[:1]).any()
 
 
 @pytest.mark.parametrize(

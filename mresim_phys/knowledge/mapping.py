@@ -301,7 +301,10 @@ class Coverage:
     The numerator of ``explored``. Scans report the windows they touched
     (:meth:`touch`); at the end of the step only those windows are examined
     (:meth:`settle`), so the metric never needs a full-grid pass and never
-    decreases. A run log's map deltas give exactly the same count on replay.
+    decreases while the world stays as it is. A run log's map deltas give exactly
+    the same count on replay. When the world changes, :meth:`retarget` (called by
+    ``world.reach.follow_changes``) counts against the new reachable set: cells
+    walled off leave both the count and the total, newly opened ones join the total.
     """
 
     def __init__(self, reachable: BoolGrid) -> None:
@@ -311,15 +314,27 @@ class Coverage:
         self.count = 0
         self._pending: list[tuple[BeliefGrid, int, int, int, int]] = []
 
-    def retarget(self, reachable: BoolGrid) -> None:
+    def retarget(
+        self, reachable: BoolGrid, window: tuple[int, int, int, int] | None = None
+    ) -> None:
         """The world changed: count against the new reachable set from now on.
 
         Cells already held FREE and still reachable keep counting; cells that left
         the reachable set stop counting; newly reachable cells count once seen FREE.
+        ``window`` (row0, row1, col0, col1), if given, is where ``reachable`` may differ
+        from the set counted so far (which must not have been changed in place): only
+        that window is recounted.
         """
+        if window is None:
+            self.total = int(np.count_nonzero(reachable))
+            self.count = int(np.count_nonzero(self.known & reachable))
+        else:
+            r0, r1, c0, c1 = window
+            old, new = self.reachable[r0:r1, c0:c1], reachable[r0:r1, c0:c1]
+            known = self.known[r0:r1, c0:c1]
+            self.total += int(np.count_nonzero(new)) - int(np.count_nonzero(old))
+            self.count += int(np.count_nonzero(known & new)) - int(np.count_nonzero(known & old))
         self.reachable = reachable
-        self.total = int(reachable.sum())
-        self.count = int(np.count_nonzero(self.known & reachable))
 
     def touch(self, belief: BeliefGrid, update: Update) -> None:
         """Remember that ``update``'s window of ``belief`` changed this step."""

@@ -12,6 +12,11 @@ so no ray slips through the diagonal gap.
 points (4-connected, so a diagonal squeeze between two corner-touching obstacles is not
 a passage): the denominator of the explored-area metric.
 
+:func:`edge_segments` rebuilds the segments of a window of lines when the world changes
+(``world/wallset.py``): the same run-length merge over a *kinds* grid (0 free, 1 static
+wall, 2 movable obstacle), so runs also break where the kind of the occupied side changes.
+On a grid of kinds 0/1 it gives exactly the rows :func:`wall_segments` gives.
+
 Grid convention (see :mod:`mresim_phys.types`): cell (r, c) covers x in [c, c+1) and
 y in [r, r+1); cells outside the grid count as occupied.
 """
@@ -25,9 +30,21 @@ from scipy import ndimage
 from mresim_phys.errors import MapError
 from mresim_phys.types import BoolGrid, FloatArray
 
-__all__ = ["free_components_mask", "wall_segments"]
+__all__ = [
+    "FOUR_CONNECTED",
+    "KindGrid",
+    "connected_to",
+    "edge_segments",
+    "free_components_mask",
+    "padded_kinds",
+    "seed_cells",
+    "wall_segments",
+]
 
-_FOUR_CONNECTED = ndimage.generate_binary_structure(2, 1)
+KindGrid = NDArray[np.int8]  # 0 free, 1 static wall, 2 movable obstacle; padded by one wall cell
+KindArray = NDArray[np.int8]
+
+FOUR_CONNECTED = ndimage.generate_binary_structure(2, 1)
 
 
 def _runs(steps: NDArray[np.int8]) -> tuple[NDArray[np.intp], ...]:
@@ -122,7 +139,67 @@ def wall_segments(occupied: BoolGrid) -> FloatArray:
     return np.concatenate((_horizontal(padded), _vertical(padded)))
 
 
-def _seed_cells(seeds_xy: ArrayLike, shape: tuple[int, int]) -> NDArray[np.intp]:
+def padded_kinds(occupied: BoolGrid) -> KindGrid:
+    """The kinds grid of a world without movable obstacles: 1 on walls and on a border ring.
+
+    Cell (r, c) is at ``[r + 1, c + 1]``; the ring stands for the outside of the map,
+    which counts as a static wall.
+    """
+    return np.pad(_check_grid(occupied), 1, constant_values=True).astype(np.int8)
+
+
+def _kind_steps(low: KindArray, high: KindArray) -> KindArray:
+    """Signed kind of every unit edge between ``low`` and ``high`` cells (see :func:`_runs`).
+
+    ``+k`` where only the ``high`` cell is occupied (kind ``k``), ``-k`` where only the
+    ``low`` one is, 0 between two free or two occupied cells; for kinds 0/1 this is
+    ``high - low``, as :func:`_edge_steps` computes it.
+    """
+    out = np.zeros((low.shape[0], low.shape[1] + 1), dtype=np.int8)
+    np.subtract(high * (low == 0), low * (high == 0), out=out[:, :-1])
+    return out
+
+
+def edge_segments(
+    kinds: KindGrid, axis: int, lines: tuple[int, int], span: tuple[int, int]
+) -> tuple[FloatArray, KindArray]:
+    """Merged wall segments on a window of grid lines, with the kind of their occupied side.
+
+    Args:
+        kinds: padded kinds grid (see :func:`padded_kinds`).
+        axis: 0 for the horizontal lines ``y = line`` (edges along x), 1 for the vertical
+            lines ``x = line`` (edges along y).
+        lines: first and last line, both included (0 .. rows for horizontal lines).
+        span: the unit edges ``span[0] .. span[1] - 1`` along each line.
+
+    Returns:
+        ``(n, 4)`` segments directed as :func:`wall_segments` directs them (horizontal ones
+        sorted by (y, x), vertical ones by (x, y)) and the ``(n,)`` int8 kind of each.
+        A run stops at the window's ends, so a caller must widen ``span`` until no
+        boundary edge continues a run past it.
+
+    >>> kinds = padded_kinds(np.array([[False, False]]))
+    >>> edge_segments(kinds, 0, (0, 1), (0, 2))[0].tolist()
+    [[2.0, 0.0, 0.0, 0.0], [0.0, 1.0, 2.0, 1.0]]
+    """
+    grid = kinds if axis == 0 else kinds.T
+    (first, last), (lo, hi) = lines, span
+    steps = _kind_steps(
+        grid[first : last + 1, lo + 1 : hi + 1], grid[first + 1 : last + 2, lo + 1 : hi + 1]
+    )
+    line, start, end, value = _runs(steps)
+    line, start, end = line + first, start + lo, end + lo
+    forward = value > 0
+    if axis == 0:
+        x0, x1 = np.where(forward, start, end), np.where(forward, end, start)
+        segments = np.column_stack((x0, line, x1, line))
+    else:
+        y0, y1 = np.where(forward, end, start), np.where(forward, start, end)
+        segments = np.column_stack((line, y0, line, y1))
+    return segments.astype(np.float64), np.abs(value).astype(np.int8)
+
+
+def seed_cells(seeds_xy: ArrayLike, shape: tuple[int, int]) -> NDArray[np.intp]:
     """Convert world seed points ``(x, y)`` into ``(n, 2)`` (row, col) cells, checked in range."""
     points = np.asarray(seeds_xy, dtype=np.float64).reshape(-1, 2)
     cells = np.floor(points[:, ::-1]).astype(np.intp)
@@ -157,7 +234,7 @@ def free_components_mask(occupied: BoolGrid, seeds_xy: ArrayLike) -> BoolGrid:
     [[True, False, False]]
     """
     grid = _check_grid(occupied)
-    cells = _seed_cells(seeds_xy, grid.shape)
+    cells = seed_cells(seeds_xy, grid.shape)
     blocked = grid[cells[:, 0], cells[:, 1]]
     if blocked.any():
         row, col = cells[np.argmax(blocked)]
@@ -165,5 +242,16 @@ def free_components_mask(occupied: BoolGrid, seeds_xy: ArrayLike) -> BoolGrid:
             f"Start point in cell (x={col}, y={row}) is on an obstacle. "
             "Choose start positions on free cells of the map."
         )
-    labels, _ = ndimage.label(~grid, structure=_FOUR_CONNECTED)
-    return np.isin(labels, np.unique(labels[cells[:, 0], cells[:, 1]]))
+    return connected_to(~grid, cells)
+
+
+def connected_to(free: BoolGrid, cells: NDArray[np.intp]) -> BoolGrid:
+    """The cells of ``free`` 4-connected to any of ``cells`` (``(n, 2)`` row, col; a cell
+    that is not free joins nothing).
+
+    >>> connected_to(np.array([[True, False, True]]), np.array([[0, 2]])).tolist()
+    [[False, False, True]]
+    """
+    labels, _ = ndimage.label(free, structure=FOUR_CONNECTED)
+    ids = np.unique(labels[cells[:, 0], cells[:, 1]])
+    return np.isin(labels, ids[ids > 0])

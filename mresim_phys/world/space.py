@@ -3,9 +3,21 @@
 The ground-truth grid becomes static pymunk segments lying exactly on the
 boundary between occupied and free cells (``maps.wall_segments``); robots are
 kinematic bodies with circle shapes. Rays (sensing, line of sight) and swept
-circles (motion checks) are pymunk segment queries. This module is the only
-place the Space is mutated: :meth:`World.place_robots`, once per step, after
-every robot has moved.
+circles (motion checks) are pymunk segment queries. Only :class:`World` (through
+the :class:`~mresim_phys.world.wallset.WallSet` it owns) mutates the Space:
+:meth:`World.place_robots`, once per step, after every robot has moved, and the
+changes of the world below.
+
+A world can change (``world/changes.py``): :meth:`World.set_cells` turns cells
+into walls or free space, and movable obstacles (:meth:`World.add_movable`,
+:meth:`World.move_movable`, :meth:`World.remove_movable`) are footprints of whole
+cells. Every change writes the truth grid in place (``occupied`` stays the array
+renderers and snapshots hold), rebuilds only the wall segments around the cells
+whose kind changed (``world/wallset.py``), so the Space always holds exactly the
+segments ``maps.wall_segments`` builds from the grid, bumps :attr:`World.version`
+and returns a :class:`~mresim_phys.world.changes.Change`. Movable obstacles'
+segments have their own category and every obstacle filter includes it: rays,
+line of sight and motion see them exactly where the grid has them.
 
 Queries go through Chipmunk's C function via pymunk's cffi handle with one
 reused result struct: the pymunk wrapper costs ~3 us per ray in allocations,
@@ -19,38 +31,75 @@ tests/test_sensing.py keeps that case).
 
 from __future__ import annotations
 
+import math
+from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cached_property
+from types import MappingProxyType
 
 import numpy as np
 import pymunk
+from numpy.typing import ArrayLike
 from pymunk._chipmunk_cffi import ffi, lib
 
 from mresim_phys.types import BoolGrid, FloatArray
+from mresim_phys.world.changes import (
+    Change,
+    Layers,
+    Movable,
+    cells_of,
+    check_box,
+    circles_on_cells,
+    join_boxes,
+)
 from mresim_phys.world.maps import wall_segments
+from mresim_phys.world.wallset import (
+    MOVABLE_CATEGORY,
+    OBSTACLE_CATEGORIES,
+    ROBOT_CATEGORY,
+    SHUFFLE_SEED,
+    WALL_CATEGORY,
+    Box,
+    WallSet,
+)
 
-WALL_CATEGORY = 0b01
-ROBOT_CATEGORY = 0b10
+__all__ = [
+    "MOVABLE_CATEGORY",
+    "ROBOT_CATEGORY",
+    "SHUFFLE_SEED",
+    "WALL_CATEGORY",
+    "Box",
+    "Change",
+    "Hit",
+    "Movable",
+    "Scan",
+    "World",
+]
+
 ALL_BITS = 0xFFFFFFFF
 
 Point = tuple[float, float]
 QueryFilter = tuple[int, int, int]  # Chipmunk shape filter: (group, categories, mask)
-SHUFFLE_SEED = 0x5EED  # fixed: segment insertion order is part of the world, not of the run
 
 
 def is_wall_shape(shape: object) -> bool:
-    """Whether a Chipmunk shape pointer belongs to a wall (not a robot)."""
-    return bool(lib.cpShapeGetFilter(shape).categories & WALL_CATEGORY)
+    """Whether a Chipmunk shape pointer is an obstacle of the truth grid (not a robot)."""
+    return bool(lib.cpShapeGetFilter(shape).categories & OBSTACLE_CATEGORIES)
 
 
 @dataclass(frozen=True)
 class Hit:
-    """First thing a query touched: where, the surface normal, and whether it is a wall."""
+    """First thing a query touched: where, the surface normal, and whether it is a wall.
+
+    ``is_wall``: an obstacle of the truth grid (a wall or a movable obstacle), not a
+    robot; ``is_movable``: a movable obstacle's face.
+    """
 
     point: tuple[float, float]
     normal: tuple[float, float]
     alpha: float
     is_wall: bool
+    is_movable: bool = False
 
 
 @dataclass(frozen=True)
@@ -84,27 +133,106 @@ class World:
     """The true environment: occupancy grid, wall segments and robot bodies in one Space."""
 
     def __init__(self, occupied: BoolGrid, robot_radii: list[float]) -> None:
-        self.occupied = occupied
-        self.segments = wall_segments(occupied)
+        self.occupied = occupied  # the truth; changes write it in place
         self.space = pymunk.Space(threaded=False)
-        self._add_walls(self.segments)
+        self._walls = WallSet(self.space, wall_segments(occupied))
         self.bodies = [self._add_robot(i, r) for i, r in enumerate(robot_radii)]
+        self._radii = np.asarray(robot_radii, dtype=np.float64)
         self._info = ffi.new("cpSegmentQueryInfo *")
         self.version = 0  # bumped by every change of the truth after step 0
+        self._layers: Layers | None = None  # built by the first change
+        self._movables: dict[str, Movable] = {}
 
     @property
     def shape(self) -> tuple[int, int]:
         """(rows, cols) of the map."""
         return self.occupied.shape  # type: ignore[return-value]
 
-    def _add_walls(self, segments: FloatArray) -> None:
-        order = np.random.default_rng(SHUFFLE_SEED).permutation(len(segments))
-        shapes = []
-        for x0, y0, x1, y1 in segments[order].tolist():
-            shape = pymunk.Segment(self.space.static_body, (x0, y0), (x1, y1), 0.0)
-            shape.filter = pymunk.ShapeFilter(categories=WALL_CATEGORY)
-            shapes.append(shape)
-        self.space.add(*shapes)
+    @property
+    def segments(self) -> FloatArray:
+        """``(n, 4)`` wall segments now in the Space (``maps.wall_segments``'s rows until
+        the first change)."""
+        return self._walls.segments
+
+    @property
+    def movables(self) -> Mapping[str, Movable]:
+        """The movable obstacles by name (read-only)."""
+        return MappingProxyType(self._movables)
+
+    def set_cells(self, box: Box, occupied: ArrayLike) -> Change:
+        """Make the cells of ``box`` walls (True) or free (False): a bool, or a bool array
+        of the box's shape. This sets the static layer: a movable obstacle standing on a
+        cleared cell keeps it occupied."""
+        box = check_box(box, self.shape)
+        self._truth_layers().set_static(box, cells_of(occupied, box))
+        return self._commit([box])
+
+    def add_movable(
+        self, name: str, footprint: BoolGrid | tuple[int, int], at: tuple[int, int]
+    ) -> Change:
+        """Put a movable obstacle called ``name`` on the map: ``footprint`` is a bool mask
+        or (height, width) of a solid box, ``at`` the (row, col) of its top-left cell."""
+        if name in self._movables:
+            raise ValueError(f"a movable obstacle called {name!r} is already on the map")
+        movable = Movable.make(name, footprint, at, self.shape)
+        self._truth_layers().add_cover(movable, +1)
+        self._movables[name] = movable
+        return self._commit([movable.box])
+
+    def move_movable(
+        self, name: str, at: tuple[int, int], footprint: BoolGrid | tuple[int, int] | None = None
+    ) -> Change:
+        """Move ``name`` so its top-left cell is ``at`` (whole cells), optionally with a new
+        footprint (a door leaf swinging from one position to the next)."""
+        old = self._movable(name)
+        new = Movable.make(name, old.footprint if footprint is None else footprint, at, self.shape)
+        layers = self._truth_layers()
+        layers.add_cover(old, -1)
+        layers.add_cover(new, +1)
+        self._movables[name] = new
+        return self._commit(join_boxes(old.box, new.box))
+
+    def remove_movable(self, name: str) -> Change:
+        """Take ``name`` off the map."""
+        old = self._movable(name)
+        self._truth_layers().add_cover(old, -1)
+        del self._movables[name]
+        return self._commit([old.box])
+
+    def _movable(self, name: str) -> Movable:
+        if name not in self._movables:
+            known = ", ".join(sorted(self._movables)) or "none"
+            raise KeyError(f"no movable obstacle called {name!r} (on the map: {known})")
+        return self._movables[name]
+
+    def _truth_layers(self) -> Layers:
+        if self._layers is None:
+            self._layers = Layers(self.occupied)
+        return self._layers
+
+    def _commit(self, boxes: list[Box]) -> Change:
+        """Fold the changed layers of ``boxes`` into the truth and the Space."""
+        layers = self._truth_layers()
+        patches = []
+        for box in boxes:
+            rebuild, patch = layers.refresh(box)
+            if rebuild is not None:
+                self._walls.rebuild(layers.kinds, rebuild)
+            if patch is not None:
+                patches.append(patch)
+        if not patches:
+            return Change(self.version)
+        self.version += 1
+        centres = np.array([tuple(b.position) for b in self.bodies], dtype=np.float64)
+        centres = centres.reshape(-1, 2)
+        hit = {int(i) for p in patches for i in circles_on_cells(centres, self._radii, p)}
+        return Change(self.version, tuple(patches), tuple(sorted(hit)))
+
+    def buried(self, position: Point) -> bool:
+        """Whether ``position`` lies in an occupied cell (or off the map)."""
+        rows, cols = self.shape
+        row, col = math.floor(position[1]), math.floor(position[0])
+        return not (0 <= row < rows and 0 <= col < cols) or bool(self.occupied[row, col])
 
     def _add_robot(self, index: int, radius: float) -> pymunk.Body:
         body = pymunk.Body(body_type=pymunk.Body.KINEMATIC)
@@ -121,8 +249,9 @@ class World:
             self.space.reindex_shapes_for_body(body)
 
     def query_filter(self, robot_index: int | None, robots_block: bool) -> QueryFilter:
-        """The Chipmunk filter for queries by ``robot_index``: walls, plus other robots."""
-        mask = WALL_CATEGORY | (ROBOT_CATEGORY if robots_block else 0)
+        """The Chipmunk filter for queries by ``robot_index``: walls and movable obstacles
+        (always: the truth grid holds both), plus other robots if they block."""
+        mask = OBSTACLE_CATEGORIES | (ROBOT_CATEGORY if robots_block else 0)
         group = 0 if robot_index is None else robot_index + 1
         return (group, ALL_BITS, mask)
 
@@ -139,11 +268,13 @@ class World:
         info, space = self._info, self.space._space  # never keep the cdata beyond the Space
         if lib.cpSpaceSegmentQueryFirst(space, start, end, radius, shape_filter, info) == ffi.NULL:
             return None
+        categories = lib.cpShapeGetFilter(info.shape).categories
         return Hit(
             (info.point.x, info.point.y),
             (info.normal.x, info.normal.y),
             info.alpha,
-            is_wall_shape(info.shape),
+            bool(categories & OBSTACLE_CATEGORIES),
+            bool(categories & MOVABLE_CATEGORY),
         )
 
     def _first_swept_hit(
@@ -172,7 +303,8 @@ class World:
             (best.point.x, best.point.y),
             (best.normal.x, best.normal.y),
             best.alpha,
-            bool(best.shape.filter.categories & WALL_CATEGORY),
+            bool(best.shape.filter.categories & OBSTACLE_CATEGORIES),
+            bool(best.shape.filter.categories & MOVABLE_CATEGORY),
         )
 
     def cast_rays(
@@ -198,7 +330,7 @@ class World:
             lib.cpSpaceSegmentQueryFirst,
             ffi.NULL,
         )
-        only_walls = shape_filter[2] == WALL_CATEGORY
+        only_walls = not shape_filter[2] & ROBOT_CATEGORY
         for i in range(len(xs)):
             if query(space, start, ends[i], 0.0, query_filter, info) != null:
                 is_wall = only_walls or is_wall_shape(info.shape)
@@ -222,8 +354,12 @@ class World:
         """The obstacle a circle of ``radius`` moving from ``start`` to ``end`` would hit.
 
         A contact the circle is moving away from (normal along the motion) does not
-        block, so a robot grazing a wall can always back off.
+        block, so a robot grazing a wall can always back off, also when a change of the
+        world put an obstacle into its body. A circle whose centre lies in an occupied
+        cell (buried by a change) cannot move at all: every move is blocked where it is.
         """
+        if self.buried(start):
+            return Hit(start, (0.0, 0.0), 0.0, True)
         hit = self.first_hit(start, end, radius, shape_filter)
         if hit is None:
             return None
@@ -238,5 +374,5 @@ class World:
         x, y = position
         if not (radius <= x <= cols - radius and radius <= y <= rows - radius):
             return True
-        hit = self.first_hit(position, position, radius, (0, ALL_BITS, WALL_CATEGORY))
+        hit = self.first_hit(position, position, radius, (0, ALL_BITS, OBSTACLE_CATEGORIES))
         return hit is not None or bool(self.occupied[int(y), int(x)])

@@ -1,0 +1,224 @@
+"""World (phase 1, geometry): the layers a changing truth is made of, and what a change reports.
+
+The truth grid is ``static | movable footprints``: the static layer holds walls and
+rubble (changed by ``World.set_cells``), and every movable obstacle adds its
+footprint, a set of whole cells at a whole-cell offset, to a cover count (so
+footprints may overlap each other and the walls). :class:`Layers` keeps both and a
+padded *kinds* grid (0 free, 1 static wall, 2 cell covered only by movables; see
+``maps.edge_segments``), and :meth:`Layers.refresh` folds a window of them into the
+truth grid in place, reporting which cells' truth flipped (a :class:`Patch`) and
+which cells' kind changed (the window whose wall segments must be rebuilt).
+
+A :class:`Change` is what every mutation of the world returns: the world's new
+version, the patches of flipped cells, and the robots whose bodies now overlap a
+newly occupied cell. Callers use it to retarget coverage and to log the truth.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from mresim_phys.types import BoolGrid, FloatArray, IntArray
+from mresim_phys.world.maps import KindGrid, padded_kinds
+from mresim_phys.world.wallset import Box
+
+
+def check_box(box: Box, shape: tuple[int, int]) -> Box:
+    """``box`` as ints if it is a non-empty window inside a map of ``shape``, else ValueError."""
+    row0, row1, col0, col1 = (int(v) for v in box)
+    rows, cols = shape
+    if not (0 <= row0 < row1 <= rows and 0 <= col0 < col1 <= cols):
+        raise ValueError(
+            f"box {tuple(box)} (row0, row1, col0, col1; half-open) must be a non-empty window"
+            f" inside the {rows} x {cols} map"
+        )
+    return row0, row1, col0, col1
+
+
+def cells_of(value: ArrayLike, box: Box) -> BoolGrid:
+    """``value`` (a bool, or a bool array of the box's shape) as a grid of the box's shape."""
+    shape = (box[1] - box[0], box[3] - box[2])
+    cells = np.asarray(value)
+    if cells.dtype != np.bool_:
+        raise ValueError(f"cell values must be bool, got {cells.dtype}")
+    if cells.ndim == 0:
+        return np.full(shape, bool(cells))
+    if cells.shape != shape:
+        raise ValueError(f"cell values of shape {cells.shape} do not fit the box {shape}")
+    return cells
+
+
+def bounding_box(mask: BoolGrid, row0: int = 0, col0: int = 0) -> Box | None:
+    """Smallest box holding every True cell of ``mask`` (offset by row0, col0), or None."""
+    rows, cols = np.flatnonzero(mask.any(axis=1)), np.flatnonzero(mask.any(axis=0))
+    if rows.size == 0:
+        return None
+    return (
+        row0 + int(rows[0]),
+        row0 + int(rows[-1]) + 1,
+        col0 + int(cols[0]),
+        col0 + int(cols[-1]) + 1,
+    )
+
+
+def join_boxes(a: Box, b: Box) -> list[Box]:
+    """One box around both if they overlap or touch (their rebuilds would share edges)."""
+    apart = a[1] < b[0] or b[1] < a[0] or a[3] < b[2] or b[3] < a[2]
+    if apart:
+        return [a, b]
+    return [(min(a[0], b[0]), max(a[1], b[1]), min(a[2], b[2]), max(a[3], b[3]))]
+
+
+@dataclass(frozen=True)
+class Patch:
+    """Cells whose truth flipped in one window: where (``flipped``) and what they are now."""
+
+    row0: int
+    col0: int
+    flipped: BoolGrid  # True where the truth changed
+    occupied: BoolGrid  # the truth of the whole window after the change
+
+    @property
+    def box(self) -> Box:
+        """The window, (row0, row1, col0, col1)."""
+        h, w = self.flipped.shape
+        return self.row0, self.row0 + h, self.col0, self.col0 + w
+
+    def cells(self) -> IntArray:
+        """``(n, 2)`` (row, col) of every flipped cell."""
+        return np.argwhere(self.flipped) + np.array([self.row0, self.col0])
+
+    def closed(self) -> IntArray:
+        """``(n, 2)`` (row, col) of every cell that became occupied."""
+        return np.argwhere(self.flipped & self.occupied) + np.array([self.row0, self.col0])
+
+
+@dataclass(frozen=True)
+class Change:
+    """What one mutation of the world did (empty if the truth did not change)."""
+
+    version: int  # the world's version after the change
+    patches: tuple[Patch, ...] = ()
+    robots: tuple[int, ...] = ()  # bodies (World's order) overlapping a newly occupied cell
+
+    def __bool__(self) -> bool:
+        return bool(self.patches)
+
+    @property
+    def count(self) -> int:
+        """Number of cells whose truth flipped."""
+        return sum(int(np.count_nonzero(p.flipped)) for p in self.patches)
+
+    @property
+    def box(self) -> Box | None:
+        """Bounding box of every patch, or None if nothing changed."""
+        if not self.patches:
+            return None
+        boxes = np.array([p.box for p in self.patches])
+        return (
+            int(boxes[:, 0].min()),
+            int(boxes[:, 1].max()),
+            int(boxes[:, 2].min()),
+            int(boxes[:, 3].max()),
+        )
+
+
+@dataclass(frozen=True)
+class Movable:
+    """A movable obstacle: a footprint of whole cells whose top-left cell is (row, col)."""
+
+    name: str
+    footprint: BoolGrid  # read-only
+    row: int
+    col: int
+
+    @classmethod
+    def make(
+        cls,
+        name: str,
+        footprint: BoolGrid | tuple[int, int],
+        at: tuple[int, int],
+        shape: tuple[int, int],
+    ) -> Movable:
+        """A checked movable: ``footprint`` is a bool mask or (height, width) of a solid box."""
+        cells = np.array(footprint, copy=True)
+        if isinstance(footprint, tuple):
+            cells = np.ones(footprint, dtype=bool)
+        if cells.dtype != np.bool_ or cells.ndim != 2 or not cells.any():
+            raise ValueError(
+                f"movable {name!r}: the footprint must be a 2-D bool mask with a True cell"
+            )
+        cells.flags.writeable = False
+        row, col = int(at[0]), int(at[1])
+        check_box((row, row + cells.shape[0], col, col + cells.shape[1]), shape)
+        return cls(name, cells, row, col)
+
+    @property
+    def box(self) -> Box:
+        """The footprint's window, (row0, row1, col0, col1)."""
+        h, w = self.footprint.shape
+        return self.row, self.row + h, self.col, self.col + w
+
+
+class Layers:
+    """Static walls, movable cover counts and the kinds grid behind the truth grid."""
+
+    def __init__(self, occupied: BoolGrid) -> None:
+        self.occupied = occupied  # the world's truth grid, written in place
+        self.static = occupied.copy()
+        self.cover = np.zeros(occupied.shape, dtype=np.uint16)
+        self.kinds: KindGrid = padded_kinds(occupied)
+
+    def set_static(self, box: Box, cells: BoolGrid) -> None:
+        """Walls (True) or free space (False) in the static layer of ``box``."""
+        row0, row1, col0, col1 = box
+        self.static[row0:row1, col0:col1] = cells
+
+    def add_cover(self, movable: Movable, sign: int) -> None:
+        """Add (sign +1) or take away (-1) a movable's footprint from the cover count."""
+        row0, row1, col0, col1 = movable.box
+        window = self.cover[row0:row1, col0:col1]
+        if sign > 0:
+            window += movable.footprint
+        else:
+            window -= movable.footprint
+
+    def refresh(self, box: Box) -> tuple[Box | None, Patch | None]:
+        """Fold the layers of ``box`` into the kinds and truth grids.
+
+        Returns the box of cells whose kind changed (their segments must be rebuilt)
+        and the patch of cells whose truth flipped (None for either if there are none).
+        """
+        row0, row1, col0, col1 = box
+        static = self.static[row0:row1, col0:col1]
+        covered = self.cover[row0:row1, col0:col1] > 0
+        kinds = np.where(static, 1, np.where(covered, 2, 0)).astype(np.int8)
+        old = self.kinds[row0 + 1 : row1 + 1, col0 + 1 : col1 + 1]
+        flipped = (kinds > 0) != (old > 0)
+        rebuild = bounding_box(kinds != old, row0, col0)
+        old[...] = kinds
+        self.occupied[row0:row1, col0:col1] = kinds > 0
+        flip_box = bounding_box(flipped, row0, col0)
+        if flip_box is None:
+            return rebuild, None
+        r0, r1, c0, c1 = flip_box
+        local = (slice(r0 - row0, r1 - row0), slice(c0 - col0, c1 - col0))
+        patch = Patch(r0, c0, flipped[local], self.occupied[r0:r1, c0:c1].copy())
+        return rebuild, patch
+
+
+def circles_on_cells(centres: FloatArray, radii: FloatArray, patch: Patch) -> IntArray:
+    """Indices of the circles that overlap (not just touch) a newly occupied cell of ``patch``."""
+    row0, row1, col0, col1 = patch.box
+    x, y, r = centres[:, 0], centres[:, 1], radii
+    near = np.flatnonzero((x + r > col0) & (x - r < col1) & (y + r > row0) & (y - r < row1))
+    cells = patch.closed()
+    if len(cells) == 0 or len(near) == 0:
+        return np.zeros(0, dtype=np.intp)
+    x, y, r = x[near, None], y[near, None], r[near, None]
+    dx = np.maximum(np.maximum(cells[:, 1] - x, 0.0), x - (cells[:, 1] + 1))
+    dy = np.maximum(np.maximum(cells[:, 0] - y, 0.0), y - (cells[:, 0] + 1))
+    return near[(dx * dx + dy * dy < r * r).any(axis=1)]
