@@ -18,7 +18,7 @@ from mresim_phys.comms.network import Blackout, Network
 from mresim_phys.knowledge.mapping import Coverage
 from mresim_phys.types import BoolGrid
 from mresim_phys.world.events import Box, Channels, Event, RobotPart
-from mresim_phys.world.maps import free_components_mask
+from mresim_phys.world.reach import Reachable, follow_changes
 from mresim_phys.world.space import World
 
 CHANNELS: dict[str, tuple[str, ...]] = {
@@ -37,12 +37,12 @@ class RunEventContext:
         network: Network,
         world: World,
         coverage: Coverage,
-        starts: Sequence[tuple[float, float]],
+        reachable: Reachable,
         streams: Sequence[np.random.Generator],
     ) -> None:
         self.agents = {a.name: a for a in agents}
         self.network, self.world, self.coverage = network, world, coverage
-        self.starts = list(starts)
+        self.reachable = reachable
         self.streams = list(streams)
         self.lines: list[str] = []
         self._step = 0
@@ -80,8 +80,9 @@ class RunEventContext:
 
     def change_world(self, box: Box, occupied: BoolGrid | bool) -> None:
         """Set the true occupancy of ``box``; the explored metric's reachable set follows."""
-        self.world.set_cells(box, occupied)
-        self.coverage.retarget(free_components_mask(self.world.occupied, self.starts))
+        change = self.world.set_cells(box, occupied)
+        if change:
+            follow_changes(self.coverage, self.reachable, self.world.occupied, [change])
 
     def log(self, line: str) -> None:
         """Note what happened this step."""

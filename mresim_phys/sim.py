@@ -32,9 +32,23 @@ from mresim_phys.errors import ScenarioError
 from mresim_phys.event_context import RunEventContext
 from mresim_phys.knowledge.mapping import integrate_scan
 from mresim_phys.knowledge.teammates import presumed_lost
-from mresim_phys.metrics import CommTotals, Milestones, RobotRecord, StepRecord, base_latency
+from mresim_phys.metrics import (
+    CommTotals,
+    Milestones,
+    RobotRecord,
+    StepRecord,
+    base_latency,
+    measure_step,
+)
 from mresim_phys.motion import MoveRules, take_step, wants_plan
-from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
+from mresim_phys.snapshot import (
+    AgentSnapshot,
+    CommSummary,
+    Snapshot,
+    bool_view,
+    points_or_none,
+    read_only,
+)
 from mresim_phys.strategies import Decision, RobotView
 from mresim_phys.types import FREE
 from mresim_phys.world.sensing import scan
@@ -66,7 +80,7 @@ class Simulation:
         self.comm_totals = CommTotals()
         self._sensing_rngs = s.sensing_streams()
         self._events = RunEventContext(
-            self.agents, s.network, s.world, s.coverage, s.starts, s.event_streams()
+            self.agents, s.network, s.world, s.coverage, s.reachable, s.event_streams()
         )
         self.move_rules = MoveRules(s.rules.scan_every_point, self.robot_filter)
         self.apply_events()
@@ -186,7 +200,7 @@ class Simulation:
 
     def sense(self, robot: Robot) -> None:
         """Scan at the robot's pose and fold the scan into its map and the team coverage."""
-        if not robot.can_sense:
+        if not robot.can_sense or self.world.buried(robot.position):
             return
         assert robot.body is not None
         laser = robot.body.laser
@@ -284,7 +298,7 @@ class Simulation:
             explored=self.record.explored,
             known_at_base=self.record.known_at_base,
             alive=self.record.alive,
-            truth=self.parts.truth.occupied,
+            truth=read_only(self.world.occupied),
             agents=tuple(agents),
             links=self.links.copy(),
             events=tuple(self.events_now),
@@ -297,6 +311,7 @@ class Simulation:
                 self.record.latency_mean,
                 self.comm.traffic.sent.copy(),
             ),
+            world_version=self.world.version,
         )
 
     def measure(self) -> StepRecord:
@@ -308,19 +323,16 @@ class Simulation:
         )
         heard = {name: info.step for name, info in self.base.teammates.items()}
         latency = base_latency(self.t, heard, [r.name for r in self.robots if r.alive])
-        record = StepRecord(
-            step=self.t,
-            explored=min(self.coverage.fraction, 1.0),
-            known_at_base=self.known_at_base,
-            distance=sum(r.distance for r in robots),
-            alive=sum(r.alive for r in self.robots),
-            links=int(np.triu(self.links).sum()),
-            robots=robots,
+        record = measure_step(
+            self.t,
+            self.coverage,
+            self.known_at_base,
+            robots,
+            self.links,
+            control_links=self.comm.control_links,
             comm_bytes=self.comm.traffic.total,
-            control_links=int(np.triu(self.comm.control_links).sum()),
             control_bytes=self.comm.control_traffic.total,
-            latency_max=latency[0],
-            latency_mean=latency[1],
+            latency=latency,
         )
         self.milestones.update(record)
         self.comm_totals.update(record)
@@ -332,7 +344,8 @@ def agent_snapshot(agent: Agent) -> AgentSnapshot:
     """One agent as a snapshot (grids as read-only views).
 
     A strategy exposes extra views through its decision's ``info``: ``skeleton``
-    (a bool grid) and ``rendezvous`` ((k, 2) points) are passed on to renderers.
+    (a bool grid, read-only) and ``rendezvous`` ((k, 2) float points) are passed on to
+    renderers and the run log.
     """
     robot = agent if isinstance(agent, Robot) else None
     info = robot.decision.info if robot is not None and robot.decision is not None else {}
@@ -350,7 +363,7 @@ def agent_snapshot(agent: Agent) -> AgentSnapshot:
         path=robot.path.copy() if robot else np.zeros((0, 2)),
         goal=robot.goal if robot else None,
         distance=robot.distance if robot else 0.0,
-        skeleton=info.get("skeleton"),
-        rendezvous=info.get("rendezvous"),
+        skeleton=bool_view(info.get("skeleton")),
+        rendezvous=points_or_none(info.get("rendezvous")),
         base_contact=agent.last_base_contact,
     )

@@ -16,6 +16,7 @@ from mresim_phys.cli import main
 from mresim_phys.errors import ScenarioError
 from mresim_phys.plugin import Plugin
 from mresim_phys.scenario.load import load_scenario
+from mresim_phys.strategies import Decision
 from mresim_phys.types import FREE
 from mresim_phys.world.events import EVENTS, EventContext, EventParams
 
@@ -153,3 +154,33 @@ def test_an_event_draws_only_from_its_own_named_stream(scenario_file: ScenarioFi
     finally:
         EVENTS._classes.pop("coin")
     assert CoinFlip.draws[0] == CoinFlip.draws[1] != CoinFlip.draws[2]
+
+
+def test_a_cells_event_closes_a_door_for_rays_radio_and_the_explored_metric(
+    scenario_file: ScenarioFile,
+) -> None:
+    """The rooms map's door is x 40..41, y 25..36; closing it cuts the line-of-sight link."""
+    path = scenario_file(
+        robots=[{"name": "A", "start": [30, 31]}, {"name": "B", "start": [52, 31]}],
+        base_station={"position": [8, 30], "comm_range": 5},
+        communication={"model": "line_of_sight"},
+        events=[{"step": 2, "cells": [40, 25, 42, 37]}],
+    )
+    sim = Simulation.from_yaml(path)
+    stay = {"A": Decision(), "B": Decision()}
+    total = sim.coverage.total
+    sim.step(actions=stay)
+    assert sim.links[1, 2]
+    sim.step(actions=stay)
+    assert sim.events_now == ["cells [40, 25, 42, 37] walls"]
+    assert sim.world.version == 1 and sim.world.occupied[25:37, 40:42].all()
+    assert not sim.links[1, 2]
+    assert sim.coverage.total == total - 24  # the 12 x 2 door cells left the free space
+    scan_east = sim.world.cast_rays((30.0, 31.0), np.array([0.0]), 100.0, (0, 0xFFFFFFFF, 1))
+    assert scan_east.ranges[0] == pytest.approx(10.0)  # the new wall face at x = 40
+
+
+def test_a_cells_window_outside_the_map_is_a_clear_error(scenario_file: ScenarioFile) -> None:
+    path = scenario_file(events=[{"step": 2, "cells": [70, 50, 90, 70]}])
+    with pytest.raises(ScenarioError, match=r"events\[0\]\.cells.*80x60 map"):
+        Simulation.from_yaml(path)

@@ -20,12 +20,13 @@ from mresim_phys.agents import Agent, Robot
 from mresim_phys.build.network import build_network
 from mresim_phys.build.robots import check_base, make_base, make_team
 from mresim_phys.comms.network import Network
+from mresim_phys.errors import ScenarioError
 from mresim_phys.knowledge.mapping import Coverage
 from mresim_phys.rng import Streams
 from mresim_phys.scenario.readers import LoadedMap, load_image_map, load_ros_map, load_text_map
 from mresim_phys.scenario.schema import MapSpec, Scenario
 from mresim_phys.world.events import Event, make_event
-from mresim_phys.world.maps import free_components_mask
+from mresim_phys.world.reach import Reachable
 from mresim_phys.world.space import World
 
 
@@ -52,6 +53,7 @@ class Setup:
     robots: list[Robot]
     network: Network
     coverage: Coverage
+    reachable: Reachable  # free space connected to the starts, followed across world changes
     events: list[Event]
     streams: Streams
     rules: RunRules
@@ -77,6 +79,19 @@ def load_map(spec: MapSpec) -> LoadedMap:
     return load_ros_map(Path(path))
 
 
+def check_event_boxes(scenario: Scenario, world: World) -> None:
+    """Every map window an event names must lie inside the map."""
+    rows, cols = world.shape
+    for i, event in enumerate(scenario.events):
+        for where, (row0, row1, col0, col1) in event.boxes():
+            if not (0 <= row0 < row1 <= rows and 0 <= col0 < col1 <= cols):
+                raise ScenarioError(
+                    f"events[{i}].{where}: the window x {col0}..{col1}, y {row0}..{row1} is not"
+                    f" inside the {cols}x{rows} map; give 0 <= x0 < x1 <= {cols} and"
+                    f" 0 <= y0 < y1 <= {rows}."
+                )
+
+
 def run_rules(scenario: Scenario) -> RunRules:
     """The scenario's cycle and stop rules as plain values."""
     sim, stop = scenario.simulation, scenario.stop
@@ -99,14 +114,18 @@ def build_setup(scenario: Scenario) -> Setup:
     robots = make_team(scenario.robots, streams, world)
     check_base(world, scenario.base_station)
     starts = [(float(r.start[0]), float(r.start[1])) for r in scenario.robots]
+    events = [make_event(e) for e in scenario.events]
+    check_event_boxes(scenario, world)
+    reachable = Reachable(truth.occupied, starts)
     return Setup(
         truth=truth,
         world=world,
         base=make_base(scenario.base_station, world.shape),
         robots=robots,
         network=build_network(scenario, streams, world.shape),
-        coverage=Coverage(free_components_mask(truth.occupied, starts)),
-        events=[make_event(e) for e in scenario.events],
+        coverage=Coverage(reachable.mask),
+        reachable=reachable,
+        events=events,
         streams=streams,
         rules=run_rules(scenario),
         starts=starts,

@@ -41,6 +41,13 @@ class EventParams(PluginParams):
         """
         return []
 
+    def boxes(self) -> list[tuple[str, Box]]:
+        """(field, (row0, row1, col0, col1)) for every map window the event names.
+
+        Building the run checks each against the map.
+        """
+        return []
+
 
 class EventContext(Protocol):
     """What an event may do to the running simulation (and nothing more)."""
@@ -159,6 +166,46 @@ class Blackout(Plugin):
             context.log(f"blackout {who} until {p.until}")
         elif context.step == p.until:
             context.log(f"blackout over {who}")
+
+
+class CellsParams(EventParams):
+    """At ``step``, the cells of a window become walls (a collapse) or free (rubble cleared)."""
+
+    cells: tuple[int, int, int, int] = Field(
+        description="The window [x0, y0, x1, y1] in cells: columns x0..x1-1, rows y0..y1-1."
+    )
+    occupied: bool = Field(True, description="True: the cells become walls; false: free.")
+
+    @model_validator(mode="after")
+    def _non_empty(self) -> CellsParams:
+        x0, y0, x1, y1 = self.cells
+        if not (0 <= x0 < x1 and 0 <= y0 < y1):
+            raise ValueError(f"'cells' {list(self.cells)} must have 0 <= x0 < x1 and 0 <= y0 < y1")
+        return self
+
+    def boxes(self) -> list[tuple[str, Box]]:
+        """The window, as (row0, row1, col0, col1)."""
+        x0, y0, x1, y1 = self.cells
+        return [("cells", (y0, y1, x0, x1))]
+
+
+@EVENTS.register
+class Cells(Plugin):
+    """Part of the building changes: a window of cells becomes wall or free space."""
+
+    name = "cells"
+    Params = CellsParams
+
+    def __init__(self, params: CellsParams) -> None:
+        self.params: CellsParams = params
+
+    def apply(self, context: EventContext) -> None:
+        """Change the cells at the event's step."""
+        p = self.params
+        if context.step == p.step:
+            context.change_world(p.boxes()[0][1], p.occupied)
+            what = "walls" if p.occupied else "free"
+            context.log(f"cells {list(p.cells)} {what}")
 
 
 def make_event(params: EventParams) -> Event:
