@@ -42,7 +42,7 @@ from bench_step import team_scenario  # noqa: E402
 
 from mresim_phys import Simulation  # noqa: E402
 from mresim_phys.output.session import run_session  # noqa: E402
-from mresim_phys.render.frame import LayerSpec, Renderer  # noqa: E402
+from mresim_phys.render import LayerSpec, Renderer  # noqa: E402
 from mresim_phys.scenario.load import validate_scenario  # noqa: E402
 
 OFFICE_RUN = ROOT / "scenarios" / "02_office_frontier.yaml"

@@ -9,13 +9,20 @@ all links), ``control_bytes`` the same for the control channel; the information
 latency at the base is the age of each alive robot's newest report the base
 holds (its max and mean over robots, as the original logs it), and each robot's
 ``base_contact`` is the last step its data reached the base (-1: never).
-A :class:`StepRecord` is one row of ``metrics.csv``;
+A :class:`StepRecord` is one row of ``metrics.csv``, made by :func:`measure_step` for
+live runs (``Simulation.measure``) and replays (``output.runlog.Replay``) alike;
 :class:`Milestones` remembers the first step each fraction crossed 0.5/0.9/0.95.
 """
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass, field
+
+import numpy as np
+
+from mresim_phys.knowledge.mapping import Coverage
+from mresim_phys.types import FREE, BeliefGrid
 
 THRESHOLDS = (0.5, 0.9, 0.95)
 
@@ -77,6 +84,55 @@ def csv_header(robot_names: list[str]) -> list[str]:
         + [f"state_{n}" for n in robot_names]
         + [f"base_contact_{n}" for n in robot_names]
     )
+
+
+def measure_step(
+    step: int,
+    coverage: Coverage,
+    known_at_base: float,
+    robots: Sequence[RobotRecord],
+    links: np.ndarray,
+    *,
+    control_links: np.ndarray | None,
+    comm_bytes: int,
+    control_bytes: int,
+    latency: tuple[float, float],
+) -> StepRecord:
+    """The step's row of metrics, for a live run and a replay alike.
+
+    Args:
+        step: The step number.
+        coverage: The team coverage, settled for this step (``explored``).
+        known_at_base: The running share of reachable free cells the base holds FREE.
+        robots: Every robot's record, in scenario order (a ``failed`` one is not alive).
+        links: (n, n) bool main-channel links (index 0 = base).
+        control_links: (n, n) bool control-channel links, or None without that channel.
+        comm_bytes: Main-channel bytes sent this step.
+        control_bytes: Control-channel bytes sent this step.
+        latency: (max, mean) age of the robots' newest reports at the base.
+    """
+    return StepRecord(
+        step=step,
+        explored=min(coverage.fraction, 1.0),
+        known_at_base=known_at_base,
+        distance=sum(r.distance for r in robots),
+        alive=sum(r.state != "failed" for r in robots),
+        links=int(np.triu(links).sum()),
+        robots=tuple(robots),
+        comm_bytes=comm_bytes,
+        control_links=0 if control_links is None else int(np.triu(control_links).sum()),
+        control_bytes=control_bytes,
+        latency_max=latency[0],
+        latency_mean=latency[1],
+    )
+
+
+def update_known_at_base(previous: float, base_belief: BeliefGrid, coverage: Coverage) -> float:
+    """``known_at_base`` once the base heard news: the share of ``coverage``'s reachable
+    cells FREE in ``base_belief``, never below ``previous``."""
+    known = np.count_nonzero((base_belief == FREE) & coverage.reachable)
+    fraction = known / coverage.total if coverage.total else 1.0
+    return float(max(previous, min(fraction, 1.0)))
 
 
 def base_latency(step: int, heard: dict[str, int], robots: list[str]) -> tuple[float, float]:

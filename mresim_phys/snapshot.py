@@ -2,9 +2,11 @@
 
 A :class:`Snapshot` is everything the renderer, the video recorder and the run
 log need, and nothing they must not touch: positions, headings, states, paths,
-goals, links and every agent's belief grid (read-only views, not copies).
-``Simulation.snapshot()`` builds one from a live run; ``runlog`` rebuilds the
-same snapshots from a log, so a replayed frame equals the live one.
+goals, links, the truth and its version, and every agent's belief grid
+(read-only views, not copies). ``Simulation.snapshot()`` builds one from a live
+run; ``output.runlog`` logs every field of it and rebuilds equal snapshots from
+the log (``output.logformat`` says how each field is stored), so a replayed frame
+equals the live one.
 """
 
 from __future__ import annotations
@@ -22,6 +24,16 @@ def read_only(array: np.ndarray) -> np.ndarray:
     view = array.view()
     view.flags.writeable = False
     return view
+
+
+def bool_view(grid: Any) -> BoolGrid | None:
+    """``grid`` as a read-only bool grid (no copy if it is one already); None stays None."""
+    return None if grid is None else read_only(np.asarray(grid, dtype=bool))
+
+
+def points_or_none(points: Any) -> FloatArray | None:
+    """``points`` as a (k, 2) float64 array; None stays None."""
+    return None if points is None else np.asarray(points, dtype=np.float64).reshape(-1, 2)
 
 
 @dataclass(frozen=True)
@@ -86,7 +98,11 @@ class CommSummary:
 
 @dataclass(frozen=True)
 class Snapshot:
-    """A whole run at the end of step ``step``; ``agents[0]`` is the base station."""
+    """A whole run at the end of step ``step``; ``agents[0]`` is the base station.
+
+    ``truth`` is a view of the world's occupancy grid, which may change during a run
+    (``world_version`` tells which truth it is).
+    """
 
     step: int
     explored: float
@@ -98,6 +114,7 @@ class Snapshot:
     events: tuple[str, ...] = ()
     resolution: float | None = None
     comm: CommSummary = field(default_factory=CommSummary)
+    world_version: int = 0  # World.version: bumped by every change of the truth
 
     @property
     def base(self) -> AgentSnapshot:

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from mresim_phys import Simulation
-from mresim_phys.render.frame import (
+from mresim_phys.render import (
     DEFAULT_GLOBAL,
     DEFAULT_ROBOT,
     GLOBAL_LAYERS,

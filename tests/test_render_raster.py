@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from mresim_phys.knowledge.frontiers import frontier_mask
-from mresim_phys.render.frame import ROBOT_LAYERS, LayerSpec, Renderer, Style
+from mresim_phys.render import ROBOT_LAYERS, LayerSpec, Renderer, Style
 from mresim_phys.render.raster import LabelGrids, colour_labels, known_box, packed_colours
 from mresim_phys.snapshot import AgentSnapshot, Snapshot, read_only
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN

@@ -11,8 +11,10 @@ import numpy as np
 import pytest
 
 from mresim_phys.cli import main
+from mresim_phys.output.runlog import RunLog
 
 ScenarioFile = Callable[..., Path]
+ROOT = Path(__file__).resolve().parent.parent
 
 
 def run(path: Path, out: Path, *flags: str) -> None:
@@ -58,6 +60,18 @@ def test_replayed_frames_equal_live_frames(
         live = read_png(out / f"step-{step:05d}.png")
         replayed = read_png(out / f"replay-step-{step:05d}.png")
         assert np.array_equal(live, replayed)
+
+
+def test_replayed_planner_views_equal_live_frames(tmp_path: Path) -> None:
+    """Skeletons (topological planners) and every other layer replay pixel for pixel."""
+    out, flags = tmp_path / "run", ["--snapshot", "30", "--layers", "all"]
+    run(ROOT / "scenarios" / "09_planners.yaml", out, "--steps", "30", *flags)
+    assert main(["replay", str(out), *flags]) == 0
+    live = read_png(out / "step-00030.png")
+    assert np.array_equal(live, read_png(out / "replay-step-00030.png"))
+    last = list(RunLog.open(out / "log").snapshots())[-1]  # the views of the last step
+    skeletons = [r.name for r in last.robots if r.skeleton is not None and r.skeleton.any()]
+    assert skeletons == ["C", "D"]  # the topological planners' views were logged
 
 
 def test_path_loss_regions_are_drawn_where_circles_would_be(

@@ -2,18 +2,33 @@
 
 from __future__ import annotations
 
+import copy
 import dataclasses
 import json
 import re
-from collections.abc import Callable
+from collections.abc import Callable, Collection
 from pathlib import Path
+from typing import Any
 
+import cv2
 import numpy as np
 import pytest
 
 from mresim_phys import MresimError, Simulation
-from mresim_phys.output.runlog import RunLog, RunLogWriter, chunk_file, recompute_metrics
-from mresim_phys.snapshot import Snapshot
+from mresim_phys.output import logformat
+from mresim_phys.output.replay import replay_frames
+from mresim_phys.output.runlog import (
+    Replay,
+    RunLog,
+    RunLogWriter,
+    chunk_file,
+    reachable_from,
+    recompute_metrics,
+)
+from mresim_phys.render import LayerSpec, Renderer
+from mresim_phys.scenario.schema import RenderSpec
+from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot
+from mresim_phys.world.maps import free_components_mask
 
 ScenarioFile = Callable[..., Path]
 THREE_ROBOTS = [
@@ -24,11 +39,8 @@ THREE_ROBOTS = [
 
 
 def kept(snap: Snapshot) -> Snapshot:
-    """A snapshot whose grids are copies (live snapshots are views of changing grids)."""
-    agents = tuple(
-        dataclasses.replace(a, belief=a.belief.copy(), safe=a.safe.copy()) for a in snap.agents
-    )
-    return dataclasses.replace(snap, agents=agents)
+    """A snapshot whose arrays are copies (live snapshots are views of changing grids)."""
+    return copy.deepcopy(snap)
 
 
 def record_run(
@@ -49,27 +61,33 @@ def record_run(
     return snaps, rows, writer
 
 
-def assert_same_snapshot(got: Snapshot, want: Snapshot) -> None:
-    assert got.step == want.step
-    assert got.events == want.events
-    assert np.array_equal(got.links, want.links)
-    assert np.array_equal(got.truth, want.truth)
-    assert got.resolution == want.resolution
-    assert (got.explored, got.known_at_base, got.alive) == (
-        want.explored,
-        want.known_at_base,
-        want.alive,
-    )
-    assert len(got.agents) == len(want.agents)
-    for a, b in zip(got.agents, want.agents, strict=True):
-        for name in ("name", "kind", "position", "heading", "radius", "state", "role"):
-            assert getattr(a, name) == getattr(b, name), (got.step, a.name, name)
-        for name in ("comm_range", "goal", "distance", "parent"):
-            assert getattr(a, name) == getattr(b, name), (got.step, a.name, name)
-        assert a.path.shape == b.path.shape and np.array_equal(a.path, b.path)
-        assert a.belief.dtype == b.belief.dtype and np.array_equal(a.belief, b.belief)
-        assert a.safe.dtype == b.safe.dtype and np.array_equal(a.safe, b.safe)
-        assert not a.belief.flags.writeable and not a.safe.flags.writeable
+def assert_same(got: Any, want: Any, where: str, skip: Collection[str] = ()) -> None:
+    """``got`` equals ``want``: dataclasses field by field (every field but ``skip``),
+    arrays in dtype, shape and values, sequences item by item, anything else by ``==``."""
+    if dataclasses.is_dataclass(want):
+        assert type(got) is type(want), where
+        for f in dataclasses.fields(want):
+            if f.name not in skip:
+                assert_same(getattr(got, f.name), getattr(want, f.name), f"{where}.{f.name}", skip)
+    elif isinstance(want, np.ndarray) or isinstance(got, np.ndarray):
+        assert isinstance(got, np.ndarray) and isinstance(want, np.ndarray), where
+        assert (got.dtype, got.shape) == (want.dtype, want.shape), where
+        assert np.array_equal(got, want), where
+    elif isinstance(want, tuple | list):
+        assert type(got) is type(want) and len(got) == len(want), where
+        for i, (a, b) in enumerate(zip(got, want, strict=True)):
+            assert_same(a, b, f"{where}[{i}]", skip)
+    else:
+        assert got == want, (where, got, want)
+
+
+def assert_same_snapshot(got: Snapshot, want: Snapshot, skip: Collection[str] = ()) -> None:
+    """Every field of every snapshot and agent equal; the replayed grids read-only."""
+    assert_same(got, want, f"step {want.step}", skip)
+    assert not got.truth.flags.writeable
+    for agent in got.agents:
+        grids = [agent.belief, agent.safe] + ([] if agent.skeleton is None else [agent.skeleton])
+        assert not any(grid.flags.writeable for grid in grids), agent.name
 
 
 @pytest.fixture
@@ -88,6 +106,19 @@ def test_replayed_snapshots_equal_the_live_ones(failing: Path, tmp_path: Path) -
         assert_same_snapshot(got, want)
     assert any(len(s.robots[0].path) for s in snaps)  # paths were exercised
     assert any(s.links.any() for s in snaps)
+    assert any(s.base.base_contact > 0 for s in snaps)  # the base's own contact step too
+
+
+def test_planner_views_replay(scenario_file: ScenarioFile, tmp_path: Path) -> None:
+    """Views a planner puts in Decision.info (the topological skeleton) replay too."""
+    robots = [{**r, "planner": "topological"} for r in THREE_ROBOTS]
+    robots[1]["planner"] = {"name": "topological", "params": {"smooth": True}}
+    snaps, rows, _ = record_run(scenario_file(robots=robots), tmp_path / "log", 30)
+    log = RunLog.open(tmp_path / "log")
+    for got, want in zip(log.snapshots(), snaps, strict=True):
+        assert_same_snapshot(got, want)
+    assert sum(r.skeleton is not None and r.skeleton.any() for r in snaps[-1].robots) == 3
+    assert [record.csv_row() for record in recompute_metrics(log)] == rows
 
 
 @pytest.mark.parametrize(
@@ -217,3 +248,175 @@ def test_the_log_keeps_bytes_per_link_and_blackouts(
         if 3 <= snap.step < 6:
             assert not sent[2].any() and not sent[:, 2].any()  # B (agent 2) is silent
     assert snaps[0].comm.comm_bytes > 0
+
+
+def hand_agent(name: str, step: int, rng: np.random.Generator, **fields: Any) -> AgentSnapshot:
+    """An agent with random grids on a 6x10 map and values that change with ``step``."""
+    values: dict[str, Any] = {"kind": "robot", "position": (1.5 + step, 2.25), "radius": 1.5}
+    values |= {"heading": 0.1 * step, "state": "active", "role": "explorer", "comm_range": 7.0}
+    values |= {"goal": (8.0, 4.5) if step % 2 else None, "distance": 0.75 * step}
+    values |= {"base_contact": step - 1}
+    belief = rng.integers(0, 3, (6, 10)).astype(np.uint8)
+    return AgentSnapshot(
+        name=name, belief=belief, safe=rng.random((6, 10)) < 0.3, **values | fields
+    )
+
+
+def hand_snapshots() -> list[Snapshot]:
+    """Five steps in which every optional field goes from None to a value and back, paths
+    are followed and replaced, and the world changes twice."""
+    rng, truth = np.random.default_rng(5), np.zeros((6, 10), dtype=bool)
+    truth[0, :] = True
+    skeleton = rng.random((6, 10)) < 0.2
+    plans = [[[1, 1], [2, 2], [3, 3]], [[2, 2], [3, 3]], [[9, 1.5]], [], [[0.5, 0.25]]]
+    points = [None, [[1, 2], [3.5, 4]], [[3.5, 4]], None, np.zeros((0, 2))]
+    skeletons = [None, skeleton, skeleton, ~skeleton, None]
+    closed = truth | (np.arange(10) == 7)  # a wall appears in column 7
+    truths = [(0, truth), (0, truth), (1, closed), (1, closed), (2, ~truth)]
+    truths[4][1][2, 1] = False  # the robot's start stays free
+    snaps = []
+    for step in range(5):
+        version, grid = truths[step]
+        base = hand_agent("base", step, rng, kind="base", state="base", role="base", radius=0.0)
+        rendezvous = None if points[step] is None else np.array(points[step], float)
+        path = np.array(plans[step], float).reshape(-1, 2)
+        parent = "base" if step in (1, 2) else None
+        robot = hand_agent("R", step, rng, path=path, rendezvous=rendezvous, parent=parent)
+        robot = dataclasses.replace(robot, skeleton=skeletons[step])
+        links = np.array([[False, step % 2 == 1], [step % 2 == 1, False]])
+        sent = np.array([[0, 3 * step], [step, 0]], dtype=np.int64)
+        comm = CommSummary(4 * step, links.copy(), step, 2.0 * step, 0.5 * step, sent)
+        snaps.append(
+            Snapshot(
+                step=step,
+                explored=0.0,
+                known_at_base=0.0,
+                alive=1,
+                truth=grid.copy(),
+                agents=(base, robot),
+                links=links,
+                events=(f"event {step}",) * (step % 2),
+                resolution=0.05,
+                comm=comm,
+                world_version=version,
+            )
+        )
+    return snaps
+
+
+def test_every_field_of_hand_built_snapshots_replays(tmp_path: Path) -> None:
+    snaps = hand_snapshots()
+    with RunLogWriter(tmp_path / "log", snaps[0], name="hand", seed=1, chunk_steps=2) as writer:
+        for snap in snaps[1:]:
+            writer.write(snap)
+    replayed = RunLog.open(tmp_path / "log").snapshots()
+    for got, want in zip(replayed, snaps, strict=True):
+        assert_same_snapshot(got, want, skip=logformat.RECOMPUTED)  # those: from the deltas
+        assert got.alive == 1 and 0 < got.explored <= 1
+
+
+def test_a_snapshot_field_without_a_codec_is_refused(monkeypatch: pytest.MonkeyPatch) -> None:
+    logformat.check_codecs()  # as shipped: every field has one
+
+    @dataclasses.dataclass(frozen=True)
+    class WithBattery(AgentSnapshot):
+        battery: float = 1.0  # a field someone adds to AgentSnapshot
+
+    stored = logformat.stored_fields()[AgentSnapshot]
+    monkeypatch.setattr(logformat, "stored_fields", lambda: {WithBattery: stored})
+    with pytest.raises(TypeError, match=re.escape("fields without a codec ['battery']")):
+        logformat.check_codecs()
+    monkeypatch.undo()
+    monkeypatch.setitem(logformat.AGENT_LINE, "skeleton", logformat.AGENT_LINE["heading"])
+    with pytest.raises(TypeError, match=re.escape("with two codecs ['skeleton']")):
+        logformat.check_codecs()
+
+
+def downgrade_to_version_1(log_dir: Path) -> None:
+    """Rewrite a log as version 1 wrote it: no skeletons, rendezvous points, truth changes,
+    world versions or base contact of the base."""
+    meta = json.loads((log_dir / "meta.json").read_text())
+    (log_dir / "meta.json").write_text(json.dumps(meta | {"version": 1}))
+    lines = [json.loads(line) for line in (log_dir / "steps.jsonl").read_text().splitlines()]
+    for line in lines:
+        del line["world_version"], line["agents"][0]["base_contact"]
+    (log_dir / "steps.jsonl").write_text("".join(json.dumps(line) + "\n" for line in lines))
+    for path in log_dir.glob("deltas-*.npz"):
+        with np.load(path) as data:
+            kept_arrays = {k: data[k] for k in data.files if k.split("_")[0] in ("belief", "safe")}
+            kept_arrays |= {k: data[k] for k in data.files if k.split("_")[0] == "path"}
+        np.savez_compressed(path, **kept_arrays)
+
+
+def test_version_1_logs_still_replay(scenario_file: ScenarioFile, tmp_path: Path) -> None:
+    robots = [THREE_ROBOTS[0], {**THREE_ROBOTS[1], "planner": "topological"}]
+    snaps, rows, _ = record_run(scenario_file(robots=robots), tmp_path / "log", 25, chunk_steps=8)
+    downgrade_to_version_1(tmp_path / "log")
+    log = RunLog.open(tmp_path / "log")
+    for got, want in zip(log.snapshots(), snaps, strict=True):
+        base = dataclasses.replace(want.base, base_contact=-1)  # version 1 did not log these
+        robots_then = [dataclasses.replace(r, skeleton=None, rendezvous=None) for r in want.robots]
+        assert_same_snapshot(got, dataclasses.replace(want, agents=(base, *robots_then)))
+    assert any(r.skeleton is not None for r in snaps[-1].robots)
+    assert [record.csv_row() for record in recompute_metrics(log)] == rows
+
+
+DOOR = (slice(25, 37), slice(40, 42))  # the door between the two rooms of the tiny map
+CHANGES = {8: (DOOR, True), 20: ((slice(25, 31), DOOR[1]), False)}  # closed, then half open
+
+
+def change_world(sim: Simulation, cells: tuple[slice, slice], occupied: bool) -> None:
+    """Change the truth in place, as World.set_cells will, and retarget the coverage."""
+    sim.world.occupied[cells] = occupied
+    sim.world.version += 1
+    starts = [robot.start for robot in sim.scenario.robots]
+    sim.coverage.retarget(free_components_mask(sim.world.occupied, starts))
+
+
+def test_replay_follows_truth_changes(scenario_file: ScenarioFile, tmp_path: Path) -> None:
+    sim = Simulation.from_yaml(scenario_file(robots=THREE_ROBOTS), steps=30)
+    renderer = Renderer(sim.world.shape, LayerSpec.all(), 2.0)
+    snap = sim.snapshot()
+    writer = RunLogWriter(tmp_path / "log", snap, name="tiny", seed=3, chunk_steps=8)
+    snaps, rows, frames = [kept(snap)], [sim.record.csv_row()], [renderer.render(snap)]
+    totals = [sim.coverage.total]
+    for step in range(1, 31):
+        if step in CHANGES:
+            change_world(sim, *CHANGES[step])
+        rows.append(sim.step().csv_row())
+        snap = sim.snapshot()
+        writer.write(snap)
+        snaps.append(kept(snap))
+        frames.append(renderer.render(snap))
+        totals.append(sim.coverage.total)
+    writer.close()
+    assert len(set(totals)) == 3  # each change moved the reachable set
+    log = RunLog.open(tmp_path / "log")
+    replay = Replay(log)
+    for (got, _), want, frame, total in zip(replay.run(), snaps, frames, totals, strict=True):
+        assert_same_snapshot(got, want)
+        assert replay.coverage.total == total
+        assert np.array_equal(renderer.render(got), frame)
+        assert got.truth[33, 40] == (got.step >= 8)
+        assert got.truth[27, 40] == (8 <= got.step < 20)
+    assert [record.csv_row() for record in recompute_metrics(log)] == rows
+    for n in range(31):  # the truth is logged only where it changed
+        chunk = log.read_chunk(n // 8)
+        cells = logformat.segment(chunk, "truth", n % 8)
+        assert (cells.stop > cells.start) == (n in CHANGES), n
+    spec = RenderSpec(layers="all", scale=2.0, snapshots=[9, 25])
+    replay_frames(log, spec, tmp_path)  # as `mresim replay --snapshot 9,25` does
+    for step in (9, 25):
+        picture = cv2.imread(str(tmp_path / f"replay-step-{step:05d}.png"), cv2.IMREAD_COLOR)
+        assert np.array_equal(picture, frames[step])
+
+
+def test_a_start_buried_by_a_change_stops_seeding() -> None:
+    truth = np.zeros((4, 9), dtype=bool)
+    truth[:, 4] = True  # two rooms, a start in each
+    starts = [[1.5, 1.5], [7.5, 2.5]]
+    assert np.array_equal(reachable_from(truth, starts), free_components_mask(truth, starts))
+    truth[2, 7] = True  # the right room's start is buried: only the left room is reachable
+    assert np.array_equal(reachable_from(truth, starts), free_components_mask(truth, starts[0]))
+    truth[1, 1] = True
+    assert not reachable_from(truth, starts).any()

@@ -1,4 +1,4 @@
-"""``mresim bench``: median milliseconds per step, and where they go.
+"""Benchmark (output edge): ``mresim bench``, median milliseconds per step and where they go.
 
 Builds a frontier-exploration team of 4, 8 and 16 robots (speed 3, radius 2,
 range 100, disk comm 150) on an 800x600 floor plan, runs warm-up steps, then times

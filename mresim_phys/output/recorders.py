@@ -1,23 +1,51 @@
-"""Recorders (output edge): what a run leaves on disk.
+"""Recorders (output edge): everything that consumes a run's steps and what it leaves on disk.
 
-:class:`RunWriter` writes, into the run folder (default
-``runs/<name>/seed-<seed>/``): ``scenario.yaml`` (the fully resolved scenario,
-every default filled in), ``metrics.csv`` (one row per step, written as the run
-goes) and ``summary.json`` at the end. ``metrics.csv`` holds no wall-clock
-values, so the same scenario and seed give a byte-identical file.
+A :class:`Recorder` sees every step: its metrics record and, built on demand, its
+snapshot. :class:`MetricsRecorder` streams ``metrics.csv`` (through :class:`RunWriter`,
+which also writes ``scenario.yaml``, the fully resolved scenario, and ``summary.json`` at
+the end); :class:`LogRecorder` the run log (``output.runlog``); :class:`FrameRecorder`
+video frames and PNGs, for live runs (``output.session``) and replays
+(``output.replay``) alike. ``metrics.csv`` holds no wall-clock values, so the same
+scenario and seed give a byte-identical file.
 """
 
 from __future__ import annotations
 
 import csv
 import json
+from collections.abc import Callable, Sequence
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any, Protocol
 
+import numpy as np
 import yaml
 
+from mresim_phys.build import region_probe
+from mresim_phys.comms.regions import RegionProbe
+from mresim_phys.errors import ScenarioError
 from mresim_phys.metrics import CommTotals, Milestones, StepRecord, csv_header
-from mresim_phys.scenario.schema import Scenario
+from mresim_phys.output.runlog import RunLogWriter
+from mresim_phys.output.video import VideoRecorder, default_video_path, write_png
+from mresim_phys.render import LayerSpec, Renderer, parse_layers
+from mresim_phys.scenario.schema import RenderSpec, Scenario
+from mresim_phys.snapshot import Snapshot
+
+if TYPE_CHECKING:
+    from mresim_phys.sim import Simulation
+
+SnapshotSource = Callable[[], Snapshot]
+
+
+class Recorder(Protocol):
+    """Something that consumes every step of a run."""
+
+    def on_step(self, record: StepRecord, snapshot: SnapshotSource) -> None:
+        """Consume one step (``snapshot()`` builds the step's snapshot on demand)."""
+        ...
+
+    def close(self) -> None:
+        """Flush and release files."""
+        ...
 
 
 def default_run_dir(scenario: Scenario) -> Path:
@@ -84,3 +112,162 @@ def summarise(
         },
         "communication": (comm or CommTotals()).summary(),
     }
+
+
+class MetricsRecorder:
+    """metrics.csv as the run goes (wraps :class:`RunWriter`)."""
+
+    def __init__(self, writer: RunWriter) -> None:
+        self.writer = writer
+
+    def on_step(self, record: StepRecord, snapshot: SnapshotSource) -> None:
+        """Append the step's row."""
+        self.writer.on_step(record)
+
+    def close(self) -> None:
+        """Close metrics.csv."""
+        self.writer.close()
+
+
+class LogRecorder:
+    """The run log (every snapshot field, as map deltas and JSON lines) for replay."""
+
+    def __init__(self, log_dir: Path, name: str, seed: int) -> None:
+        self.log_dir, self.name, self.seed = log_dir, name, seed
+        self.writer: RunLogWriter | None = None
+
+    def on_step(self, record: StepRecord, snapshot: SnapshotSource) -> None:
+        """Log the step (the first call writes the static data and step 0)."""
+        if self.writer is None:
+            self.writer = RunLogWriter(self.log_dir, snapshot(), name=self.name, seed=self.seed)
+        else:
+            self.writer.write(snapshot())
+
+    def close(self) -> None:
+        """Flush the last chunk."""
+        if self.writer is not None:
+            self.writer.close()
+
+
+class FrameRecorder:
+    """Video frames every ``every`` steps, PNGs at chosen steps and of the last step.
+
+    PNGs are ``<png_dir>/<png_prefix>step-<step:05d>.png`` (and ``final.png``);
+    ``pictures`` lists those written so far.
+    """
+
+    def __init__(
+        self,
+        renderer: Renderer,
+        video: VideoRecorder | None,
+        every: int,
+        png_steps: Sequence[int],
+        png_dir: Path,
+        final_png: bool,
+        png_prefix: str = "",
+    ) -> None:
+        self.renderer, self.video, self.every = renderer, video, every
+        self.png_steps, self.png_dir, self.final_png = set(png_steps), png_dir, final_png
+        self.png_prefix = png_prefix
+        self.last: Snapshot | None = None
+        self.pictures: list[Path] = []
+
+    def on_step(self, record: StepRecord, snapshot: SnapshotSource) -> None:
+        """Render when a frame or a PNG is due."""
+        video_due = self.video is not None and record.step % self.every == 0
+        png_due = record.step in self.png_steps
+        if self.final_png:
+            self.last = snapshot()
+        if not (video_due or png_due):
+            return
+        frame = self.renderer.render(snapshot())
+        if video_due and self.video is not None:
+            self.video.write(frame)
+        if png_due:
+            self._png(f"{self.png_prefix}step-{record.step:05d}.png", frame)
+
+    def close(self) -> None:
+        """Close the video and write the final picture."""
+        if self.video is not None:
+            self.video.close()
+        if self.final_png and self.last is not None:
+            self._png("final.png", self.renderer.render(self.last))
+
+    def _png(self, name: str, frame: np.ndarray) -> None:
+        path = self.png_dir / name
+        write_png(path, frame)
+        self.pictures.append(path)
+
+
+def given(snapshot: Snapshot) -> SnapshotSource:
+    """A snapshot source that gives ``snapshot`` (one already built, as in a replay)."""
+    return lambda: snapshot
+
+
+def checked_layers(text: str, names: Sequence[str]) -> LayerSpec:
+    """``text`` parsed as layers whose per-robot overrides name agents in ``names``.
+
+    Raises:
+        ValueError: On an unknown layer, a malformed token or an unknown robot.
+    """
+    layers = parse_layers(text)
+    layers.check_agents(names)
+    return layers
+
+
+def frame_recorder(
+    spec: RenderSpec,
+    layers: LayerSpec,
+    shape: tuple[int, int],
+    regions: RegionProbe | None,
+    video: Path | None,
+    png_dir: Path,
+    *,
+    final_png: bool,
+    png_prefix: str = "",
+) -> FrameRecorder:
+    """A FrameRecorder of maps of ``shape`` with ``spec``'s scale, fps, every and PNG steps."""
+    renderer = Renderer(shape, layers, spec.scale, regions=regions)
+    writer = VideoRecorder(video, spec.fps, renderer.size) if video is not None else None
+    steps = spec.snapshots
+    return FrameRecorder(renderer, writer, spec.every, steps, png_dir, final_png, png_prefix)
+
+
+def video_path(spec: RenderSpec, name: str, seed: int) -> Path | None:
+    """Where a run's video goes, or None for no video."""
+    if spec.video is False:
+        return None
+    return default_video_path(name, seed) if spec.video is True else Path(str(spec.video))
+
+
+def run_frames(sim: Simulation, out_dir: Path) -> FrameRecorder | None:
+    """The FrameRecorder a live run's render block asks for, if any."""
+    spec = sim.scenario.render
+    path = video_path(spec, sim.scenario.name, sim.scenario.seed)
+    if path is None and not spec.snapshots and not spec.final_png:
+        return None
+    try:
+        layers = checked_layers(spec.layers, [r.name for r in sim.robots])
+    except ValueError as exc:
+        raise ScenarioError(f"render.layers: {exc}") from None
+    regions = region_probe(sim.scenario, sim.world)
+    shape = sim.world.shape
+    return frame_recorder(spec, layers, shape, regions, path, out_dir, final_png=spec.final_png)
+
+
+def make_recorders(sim: Simulation, out_dir: Path) -> tuple[RunWriter, list[Recorder], Path | None]:
+    """Metrics writer, every recorder the scenario's render block asks for, the video path."""
+    spec, scenario = sim.scenario.render, sim.scenario
+    frames = run_frames(sim, out_dir)  # first: it checks the layers
+    try:
+        writer = RunWriter(out_dir, scenario)
+    except OSError:
+        if frames is not None:
+            frames.close()
+        raise
+    recorders: list[Recorder] = [MetricsRecorder(writer)]
+    if spec.log:
+        recorders.append(LogRecorder(out_dir / "log", scenario.name, scenario.seed))
+    if frames is not None:
+        recorders.append(frames)
+    return writer, recorders, video_path(spec, scenario.name, scenario.seed)

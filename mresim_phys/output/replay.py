@@ -2,8 +2,9 @@
 
 ``mresim replay RUN_DIR`` reads ``RUN_DIR/log`` (see docs/run-log-format.md) and
 ``RUN_DIR/scenario.yaml`` (for the run's render settings), rebuilds every step's
-snapshot from the logged poses and map deltas, and renders frames with any layers,
-without re-simulating: frame for frame what live rendering of that run gives.
+snapshot from the log (``output.runlog.Replay``), and renders frames with any layers
+through the live runs' ``FrameRecorder``, without re-simulating: frame for frame what
+live rendering of that run gives.
 With ``--metrics`` it recomputes ``metrics.csv`` from the log into
 ``metrics-replayed.csv`` and compares the two.
 """
@@ -15,15 +16,18 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+import numpy as np
+
+from mresim_phys.build import region_probe
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.errors import MresimError, ScenarioError
 from mresim_phys.metrics import csv_header
-from mresim_phys.output.runlog import RunLog, recompute_metrics
-from mresim_phys.output.video import VideoRecorder, write_png
-from mresim_phys.render.frame import Renderer, parse_layers
+from mresim_phys.output.recorders import checked_layers, frame_recorder, given
+from mresim_phys.output.runlog import Replay, RunLog, recompute_metrics
 from mresim_phys.scenario.load import validate_scenario
 from mresim_phys.scenario.readers import read_yaml_mapping
-from mresim_phys.scenario.schema import RenderSpec
+from mresim_phys.scenario.schema import RenderSpec, Scenario
+from mresim_phys.types import BoolGrid
 from mresim_phys.world.space import World
 
 
@@ -61,48 +65,49 @@ def replay_video_path(spec: RenderSpec, log: RunLog) -> Path | None:
     return Path(str(spec.video))
 
 
-def region_probe(run_dir: Path, log: RunLog) -> RegionProbe | None:
-    """The run's communication regions, from its resolved scenario and the logged truth."""
+def run_scenario(run_dir: Path) -> Scenario | None:
+    """The run's resolved scenario, or None if it is missing or of another version."""
     resolved = run_dir / "scenario.yaml"
     if not resolved.is_file():
         return None
     try:
-        scenario = validate_scenario(read_yaml_mapping(resolved), str(resolved))
+        return validate_scenario(read_yaml_mapping(resolved), str(resolved))
     except ScenarioError:
         return None  # a run of another version: draw range circles
-    return RegionProbe.of(scenario, World(log.truth, []))
+
+
+def replay_regions(scenario: Scenario | None, truth: BoolGrid) -> RegionProbe | None:
+    """The run's communication regions through the walls of ``truth`` (copied)."""
+    return None if scenario is None else region_probe(scenario, World(np.array(truth), []))
 
 
 def replay_frames(
-    log: RunLog, spec: RenderSpec, png_dir: Path, regions: RegionProbe | None = None
+    log: RunLog, spec: RenderSpec, png_dir: Path, scenario: Scenario | None = None
 ) -> list[str]:
-    """Render the logged run into a video and/or PNGs; return what was written."""
+    """Render the logged run into a video and/or PNGs through a FrameRecorder, as live;
+    return what was written. Region polygons follow the truth when the world changes."""
     try:
-        layers = parse_layers(spec.layers)
-        layers.check_agents(log.names)
+        layers = checked_layers(spec.layers, log.names)
     except ValueError as exc:
         raise MresimError(f"--layers: {exc}") from None
-    renderer = Renderer(log.truth.shape, layers, spec.scale, regions=regions)
     path = replay_video_path(spec, log)
-    wanted = set(spec.snapshots)
-    written: list[str] = []
-    video = VideoRecorder(path, spec.fps, renderer.size) if path else None
+    regions = replay_regions(scenario, log.truth)
+    frames = frame_recorder(
+        spec, layers, log.truth.shape, regions, path, png_dir, final_png=False, png_prefix="replay-"
+    )
+    version = None
     try:
-        for snap in log.snapshots():
-            due = video is not None and snap.step % spec.every == 0
-            if not (due or snap.step in wanted):
-                continue
-            frame = renderer.render(snap)
-            if due and video is not None:
-                video.write(frame)
-            if snap.step in wanted:
-                png = png_dir / f"replay-step-{snap.step:05d}.png"
-                write_png(png, frame)
-                written.append(f"picture {png}")
+        for snap, record in Replay(log).run():
+            polygons = frames.renderer.regions is not None and not frames.renderer.regions.circles
+            if polygons and version is not None and snap.world_version != version:
+                frames.renderer.regions = replay_regions(scenario, snap.truth)  # walls moved
+            version = snap.world_version
+            frames.on_step(record, given(snap))
     finally:
-        if video is not None:
-            video.close()
-            written.append(f"video {path} ({video.frames_written} frames)")
+        frames.close()
+    written = [f"picture {png}" for png in frames.pictures]
+    if frames.video is not None:
+        written.append(f"video {path} ({frames.video.frames_written} frames)")
     return written
 
 
@@ -128,7 +133,7 @@ def replay_run(run_dir: Path, overrides: dict[str, Any], metrics: bool) -> Repla
     result = ReplayResult()
     spec = render_spec(run_dir, overrides, default_video=not metrics)
     if spec.video is not False or spec.snapshots:
-        result.lines += replay_frames(log, spec, run_dir, region_probe(run_dir, log))
+        result.lines += replay_frames(log, spec, run_dir, run_scenario(run_dir))
     if metrics:
         lines, result.ok = replay_metrics(log, run_dir)
         result.lines += lines

@@ -1,13 +1,15 @@
-"""Run logs (output edge: run logs): replay a run without re-simulating it.
+"""Run logs (output edge): write every snapshot of a run, replay it without re-simulating.
 
-:class:`RunLogWriter` streams every step's :class:`~mresim_phys.snapshot.Snapshot`
-into a ``log/`` folder: poses, states, goals, distances, links and events as one
-JSON line per step (``steps.jsonl``); map changes as deltas (cells whose belief
-value or safe flag changed since the previous logged step) and paths in
+:class:`RunLogWriter` streams every step's :class:`~mresim_phys.snapshot.Snapshot` into a
+``log/`` folder, every field of it as :mod:`~mresim_phys.output.logformat` says: one JSON
+line per step (``steps.jsonl``: poses, states, goals, distances, links, events, the
+world's version); grids (beliefs, safe space, skeletons, and the truth when the world
+changed) as deltas since the previous logged step and paths and rendezvous points in
 compressed chunks of ``chunk_steps`` steps (``deltas-NNNNN.npz``); static data
-(``meta.json``, ``truth.npz``) once. :class:`RunLog` reads a log and rebuilds
-every snapshot in order; :func:`recompute_metrics` recomputes the rows of
-``metrics.csv`` from the log alone. Layout: ``docs/run-log-format.md``.
+(``meta.json``, ``truth.npz``) once. :class:`RunLog` opens a log; :class:`Replay` rebuilds
+every snapshot in order, equal to the live one field by field, with each step's metrics
+recomputed by the live code (``metrics.measure_step``); :func:`recompute_metrics` gives
+the rows of ``metrics.csv`` from the log alone. Layout: ``docs/run-log-format.md``.
 """
 
 from __future__ import annotations
@@ -23,36 +25,33 @@ import numpy as np
 
 from mresim_phys.errors import MresimError
 from mresim_phys.knowledge.mapping import Coverage
-from mresim_phys.metrics import RobotRecord, StepRecord
+from mresim_phys.metrics import RobotRecord, StepRecord, measure_step, update_known_at_base
+from mresim_phys.output.logformat import (
+    AGENT_LINE,
+    FORMAT,
+    READABLE,
+    SNAPSHOT_LINE,
+    STATIC_AGENT,
+    TRUTH,
+    VERSION,
+    Chunk,
+    Track,
+    chunk_arrays,
+    decode_line,
+    encode_line,
+    new_parts,
+    point,
+)
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
 from mresim_phys.types import FREE, BoolGrid, IntArray
 from mresim_phys.world.maps import free_components_mask
 
-FORMAT, VERSION = "mresim-runlog", 1
-META, TRUTH, STEPS = "meta.json", "truth.npz", "steps.jsonl"
-NEW_PATH = -1  # path_keep value: the path's points are stored in the chunk
-Chunk = dict[str, np.ndarray]
-PARTS = {"belief_idx": np.int32, "belief_val": np.uint8, "safe_idx": np.int32}
-PARTS |= {"path_keep": np.int32, "path_xy": np.float64}
-OFFSETS = ("belief_idx", "safe_idx", "path_xy")  # belief_val shares belief_off
+META, TRUTH_FILE, STEPS = "meta.json", "truth.npz", "steps.jsonl"
 
 
 def chunk_file(index: int) -> str:
     """File name of delta chunk ``index`` (logged steps index*K .. index*K + K-1)."""
     return f"deltas-{index:05d}.npz"
-
-
-def diff_into(copy: np.ndarray, grid: np.ndarray) -> IntArray:
-    """Sorted flat indices where ``grid`` (uint8 or bool) differs from ``copy``; ``copy`` is
-    then updated to match. Compares 8 bytes at a time, then the bytes of differing words."""
-    cur = np.ascontiguousarray(grid).reshape(-1).view(np.uint8)
-    n = copy.size - copy.size % 8
-    words = np.flatnonzero(copy[:n].view(np.uint64) != cur[:n].view(np.uint64))
-    candidates = (words[:, None] * 8 + np.arange(8)).ravel()
-    hits = candidates[copy[candidates] != cur[candidates]]
-    idx = np.concatenate((hits, n + np.flatnonzero(copy[n:] != cur[n:])))
-    copy[idx] = cur[idx]
-    return idx
 
 
 def new_meta(first: Snapshot, name: str, seed: int, chunk_steps: int) -> dict[str, Any]:
@@ -65,52 +64,16 @@ def new_meta(first: Snapshot, name: str, seed: int, chunk_steps: int) -> dict[st
         "shape": list(first.truth.shape),
         "resolution": first.resolution,
         "chunk_steps": chunk_steps,
-        "agents": [static_row(a) for a in first.agents],
+        "agents": [encode_line(STATIC_AGENT, a) for a in first.agents],
         "starts": [point(a.position) for a in first.robots],
         "steps": 0,
         "closed": False,
     }
 
 
-def static_row(agent: AgentSnapshot) -> dict[str, Any]:
-    """The part of an agent that never changes during a run."""
-    sizes = {"radius": float(agent.radius), "comm_range": float(agent.comm_range)}
-    return {"name": agent.name, "kind": agent.kind, **sizes}
-
-
-def point(value: Any) -> list[float] | None:
-    """An (x, y) pair as a JSON list of full-precision floats."""
-    return None if value is None else [float(value[0]), float(value[1])]
-
-
-def agent_line(agent: AgentSnapshot) -> dict[str, Any]:
-    """The per-step part of an agent, keyed by AgentSnapshot field (path and grids: chunk)."""
-    pose = {"position": point(agent.position), "heading": float(agent.heading)}
-    row = {**pose, "state": agent.state, "role": agent.role, "goal": point(agent.goal)}
-    row["distance"] = float(agent.distance)
-    if agent.kind == "robot":
-        row["base_contact"] = int(agent.base_contact)
-    if agent.parent is not None:
-        row["parent"] = agent.parent
-    return row
-
-
-def path_keep(prev: np.ndarray, cur: np.ndarray) -> int:
-    """``len(cur)`` if ``cur`` is the tail of ``prev`` (a path being followed), else NEW_PATH."""
-    keep = len(cur)
-    same = keep <= len(prev) and np.array_equal(prev[len(prev) - keep :], cur)
-    return keep if same else NEW_PATH
-
-
-def offsets(parts: list[np.ndarray]) -> np.ndarray:
-    """Where each part starts in the concatenation, then the total length."""
-    return np.concatenate(([0], np.cumsum([len(p) for p in parts], dtype=np.int64)))
-
-
-def chunk_arrays(parts: dict[str, list[np.ndarray]]) -> Chunk:
-    """The parts gathered for a chunk as the arrays of its ``.npz`` file, with offsets."""
-    arrays = {k: np.concatenate(v).astype(PARTS[k]) for k, v in parts.items()}
-    return arrays | {f"{k.split('_')[0]}_off": offsets(parts[k]) for k in OFFSETS}
+def flat_cells(grid: np.ndarray) -> np.ndarray:
+    """A flat uint8 copy of a bool or uint8 grid."""
+    return np.ascontiguousarray(grid).reshape(-1).view(np.uint8).copy()
 
 
 def write_json(path: Path, data: dict[str, Any]) -> None:
@@ -136,12 +99,13 @@ class RunLogWriter:
         for stale in self.log_dir.glob("deltas-*.npz"):
             stale.unlink()
         self.meta = new_meta(first, name, seed, chunk_steps)
-        np.savez_compressed(self.log_dir / TRUTH, occupied=np.packbits(first.truth, axis=None))
-        self._belief = [np.zeros(cells, np.uint8) for _ in first.agents]
-        self._safe = [np.zeros(cells, np.uint8) for _ in first.agents]
-        self._paths = [np.zeros((0, 2)) for _ in first.agents]
+        truth = np.packbits(first.truth, axis=None)
+        np.savez_compressed(self.log_dir / TRUTH_FILE, occupied=truth)
+        self._tracks = [Track(cells) for _ in first.agents]
+        self._truth = flat_cells(np.asarray(first.truth, dtype=bool))
+        self._version = first.world_version
         self._lines: list[str] = []
-        self._parts: dict[str, list[np.ndarray]] = {k: [] for k in PARTS}
+        self._parts = new_parts()
         self._last_step: int | None = None
         self._steps = (self.log_dir / STEPS).open("w", encoding="utf-8")
         self._closed = False
@@ -152,20 +116,13 @@ class RunLogWriter:
         """Log one step (steps must come in increasing order)."""
         if self._last_step is not None and snap.step <= self._last_step:
             raise ValueError(f"step {snap.step} logged after step {self._last_step}")
-        for i, agent in enumerate(snap.agents):
-            idx = diff_into(self._belief[i], agent.belief)
-            flips = diff_into(self._safe[i], agent.safe)
-            path = np.array(agent.path, dtype=np.float64).reshape(-1, 2)
-            keep = path_keep(self._paths[i], path)
-            self._paths[i] = path
-            parts = (np.diff(idx, prepend=0), self._belief[i][idx], np.diff(flips, prepend=0))
-            parts += (np.array([keep]), path if keep == NEW_PATH else path[:0])
-            for name, part in zip(PARTS, parts, strict=True):  # indices as gaps: compress well
-                self._parts[name].append(part)
-        line = {"step": snap.step, "events": list(snap.events)}
-        line["links"] = np.flatnonzero(snap.links).tolist()
-        line["comm"] = snap.comm.to_json()
-        line["agents"] = [agent_line(a) for a in snap.agents]
+        changed = snap.world_version != self._version
+        TRUTH.write(self._truth, snap.truth if changed else None, self._parts)
+        self._version = snap.world_version
+        for track, agent in zip(self._tracks, snap.agents, strict=True):
+            track.write(agent, self._parts)
+        line = encode_line(SNAPSHOT_LINE, snap)
+        line["agents"] = [encode_line(AGENT_LINE, a) for a in snap.agents]
         self._lines.append(json.dumps(line, separators=(",", ":")))
         self._last_step = snap.step
         if len(self._lines) == self.chunk_steps:
@@ -181,7 +138,7 @@ class RunLogWriter:
         self._steps.flush()
         self.meta["steps"] += len(self._lines)
         write_json(self.log_dir / META, self.meta)
-        self._lines, self._parts = [], {k: [] for k in PARTS}
+        self._lines, self._parts = [], new_parts()
 
     def close(self) -> None:
         """Flush the last chunk and mark the log closed (idempotent)."""
@@ -207,7 +164,7 @@ class RunLog:
     """A run log opened for reading: static data at once, steps streamed by :meth:`snapshots`."""
 
     def __init__(self, log_dir: Path, meta: dict[str, Any], truth: BoolGrid) -> None:
-        self.log_dir, self.meta, self.truth = log_dir, meta, truth
+        self.log_dir, self.meta, self.truth = log_dir, meta, truth  # truth: at step 0
         self.names: list[str] = [a["name"] for a in meta["agents"]]  # base first, as in snapshots
         self.robot_names = [a["name"] for a in meta["agents"] if a["kind"] == "robot"]
         self.steps: int = meta["steps"]  # committed steps (whole chunks only if never closed)
@@ -273,10 +230,11 @@ def read_meta(log_dir: Path) -> dict[str, Any]:
         raise damaged(log_dir, f"{META}: {exc}") from None
     if not isinstance(meta, dict) or meta.get("format") != FORMAT:
         raise damaged(log_dir, f"{META} is not a {FORMAT} file")
-    if meta.get("version") != VERSION:
+    if meta.get("version") not in READABLE:
+        versions = " and ".join(map(str, READABLE))
         raise MresimError(
             f"{log_dir}: run log format version {meta.get('version')!r}; this mresim reads"
-            f" version {VERSION}. Re-run the scenario or use a matching mresim."
+            f" versions {versions}. Re-run the scenario or use a matching mresim."
         )
     missing = {"shape", "chunk_steps", "agents", "starts", "steps"} - meta.keys()
     if missing:
@@ -285,32 +243,37 @@ def read_meta(log_dir: Path) -> dict[str, Any]:
 
 
 def read_truth(log_dir: Path, meta: dict[str, Any]) -> BoolGrid:
-    """The truth grid (read-only)."""
+    """The truth grid at step 0 (read-only)."""
     rows, cols = meta["shape"]
     try:
-        with np.load(log_dir / TRUTH, allow_pickle=False) as data:
+        with np.load(log_dir / TRUTH_FILE, allow_pickle=False) as data:
             bits = data["occupied"]
         return read_only(np.unpackbits(bits, count=rows * cols).view(bool).reshape(rows, cols))
     except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
-        raise damaged(log_dir, f"{TRUTH}: {exc}") from None
-
-
-def segment(chunk: Chunk, kind: str, k: int) -> slice:
-    """Entry ``k`` (step-in-chunk * agents + agent) of a chunk's ``kind`` arrays."""
-    return slice(int(chunk[f"{kind}_off"][k]), int(chunk[f"{kind}_off"][k + 1]))
+        raise damaged(log_dir, f"{TRUTH_FILE}: {exc}") from None
 
 
 class Replay:
-    """Applies a log's deltas to its own grids and recomputes each step's metrics."""
+    """Applies a log's deltas to its own grids and recomputes each step's metrics.
+
+    The truth follows the logged world changes; whenever it changes, the coverage counts
+    against the free cells then reachable from the robots' starts, as live.
+    """
 
     def __init__(self, log: RunLog) -> None:
-        self.log, self.shape, n = log, tuple(log.meta["shape"]), len(log.names)
-        cells = self.shape[0] * self.shape[1]
-        self.belief = [np.zeros(cells, np.uint8) for _ in range(n)]
-        self.safe = [np.zeros(cells, np.uint8) for _ in range(n)]
-        self.paths = [read_only(np.zeros((0, 2))) for _ in range(n)]
+        self.log, self.shape = log, (int(log.meta["shape"][0]), int(log.meta["shape"][1]))
+        n, cells = len(log.names), self.shape[0] * self.shape[1]
+        self.tracks = [Track(cells) for _ in range(n)]
+        self.static = [decode_line(STATIC_AGENT, AgentSnapshot, a, n) for a in log.meta["agents"]]
+        self.truth = flat_cells(log.truth)
         self.coverage = Coverage(free_components_mask(log.truth, log.meta["starts"]))
         self.known_at_base, self.first = 0.0, True
+        self.version: int | None = None
+
+    @property
+    def truth_grid(self) -> BoolGrid:
+        """The truth as now replayed (a read-only view, changed by later world changes)."""
+        return read_only(self.truth.view(bool).reshape(self.shape))
 
     def run(self) -> Iterator[tuple[Snapshot, StepRecord]]:
         """Every logged step in order: its Snapshot and its recomputed metrics."""
@@ -324,79 +287,72 @@ class Replay:
     def step(self, line: dict[str, Any], chunk: Chunk, j: int) -> tuple[Snapshot, StepRecord]:
         """Apply one logged step, entry ``j`` of its chunk."""
         n = len(self.log.names)
-        free = [self.apply(i, chunk, j * n + i) for i in range(n)]
-        links = np.isin(np.arange(n * n), line["links"]).reshape(n, n)
-        agents = tuple(self.agent(i, row) for i, row in enumerate(line["agents"]))
-        comm = CommSummary.from_json(line.get("comm"), n)
-        record = self.measure(line["step"], free[1:], links, agents, comm)  # robots: 1..n-1
+        fields = decode_line(SNAPSHOT_LINE, Snapshot, line, n)
+        self.follow_truth(fields["world_version"], chunk, j)
+        agents, free = [], []
+        for i, row in enumerate(line["agents"]):
+            agent, belief_changed = self.agent(i, row, chunk, j * n + i)
+            agents.append(agent)
+            if i > 0:  # robots: cells newly FREE in their maps count as explored
+                free.append(self.newly_free(i, belief_changed))
+        record = self.measure(fields["step"], free, fields["links"], agents, fields["comm"])
         snap = Snapshot(
-            step=line["step"],
+            **fields,
             explored=record.explored,
             known_at_base=record.known_at_base,
             alive=record.alive,
-            truth=self.log.truth,
-            agents=agents,
-            links=links,
-            events=tuple(line["events"]),
+            truth=self.truth_grid,
+            agents=tuple(agents),
             resolution=self.log.meta.get("resolution"),
-            comm=comm,
         )
         return snap, record
 
-    def apply(self, i: int, chunk: Chunk, k: int) -> IntArray:
-        """Apply agent ``i``'s deltas and path; return the cells that became FREE."""
-        part = segment(chunk, "belief", k)
-        idx = np.cumsum(chunk["belief_idx"][part], dtype=np.int64)
-        self.belief[i][idx] = chunk["belief_val"][part]
-        flips = np.cumsum(chunk["safe_idx"][segment(chunk, "safe", k)], dtype=np.int64)
-        self.safe[i][flips] ^= 1
-        keep, prev = int(chunk["path_keep"][k]), self.paths[i]
-        if keep == NEW_PATH:
-            self.paths[i] = read_only(chunk["path_xy"][segment(chunk, "path", k)])
-        else:
-            self.paths[i] = prev[len(prev) - keep :]
-        return idx[chunk["belief_val"][part] == FREE]
+    def follow_truth(self, version: int, chunk: Chunk, j: int) -> None:
+        """Apply the step's truth change, if the world changed, and retarget the coverage."""
+        if self.version is not None and version != self.version:
+            TRUTH.read(self.truth, chunk, j)
+            self.coverage.retarget(reachable_from(self.truth_grid, self.log.meta["starts"]))
+        self.version = version
 
-    def agent(self, i: int, row: dict[str, Any]) -> AgentSnapshot:
-        """Agent ``i`` of a step, its grids as read-only views of the replay's arrays."""
-        row = {**row, "position": tuple(row["position"])}
-        row["goal"] = None if row["goal"] is None else tuple(row["goal"])
-        belief = read_only(self.belief[i].reshape(self.shape))
-        safe = read_only(self.safe[i].view(bool).reshape(self.shape))
-        static = self.log.meta["agents"][i]
-        return AgentSnapshot(**static, **row, belief=belief, safe=safe, path=self.paths[i])
+    def agent(
+        self, i: int, row: dict[str, Any], chunk: Chunk, k: int
+    ) -> tuple[AgentSnapshot, IntArray | None]:
+        """Agent ``i`` at chunk entry ``k`` (grids: read-only views of the replay's arrays)
+        and the cells whose belief value changed."""
+        grids, changed = self.tracks[i].read(chunk, k, self.shape)
+        line = decode_line(AGENT_LINE, AgentSnapshot, row, len(self.tracks))
+        return AgentSnapshot(**self.static[i], **line, **grids), changed["belief"]
+
+    def newly_free(self, i: int, changed: IntArray | None) -> IntArray:
+        """The cells of ``changed`` that agent ``i`` now holds FREE."""
+        if changed is None:
+            return np.zeros(0, np.int64)
+        return changed[self.tracks[i].grids["belief"][changed] == FREE]
 
     def measure(
         self,
         step: int,
         free: list[IntArray],
         links: np.ndarray,
-        agents: tuple[AgentSnapshot, ...],
+        agents: list[AgentSnapshot],
         comm: CommSummary,
     ) -> StepRecord:
-        """The step's metrics as ``Simulation.measure`` computes them, from cells newly FREE."""
+        """The step's metrics as live (``metrics.measure_step``), from cells newly FREE."""
         self.count_free(np.concatenate([np.zeros(0, np.int64), *free]))
         if self.first or links[0].any():  # the base's map changes only when it is linked
-            base = self.belief[0].reshape(self.shape)
-            known = np.count_nonzero((base == FREE) & self.coverage.reachable)
-            fraction = known / self.coverage.total if self.coverage.total else 1.0
-            self.known_at_base = float(max(self.known_at_base, min(fraction, 1.0)))
+            base = self.tracks[0].grids["belief"].reshape(self.shape)
+            self.known_at_base = update_known_at_base(self.known_at_base, base, self.coverage)
         self.first = False
-        robots = tuple(RobotRecord(a.name, a.distance, a.state, a.base_contact) for a in agents[1:])
-        control = 0 if comm.control_links is None else int(np.triu(comm.control_links).sum())
-        return StepRecord(
-            step=step,
-            explored=min(self.coverage.fraction, 1.0),
-            known_at_base=self.known_at_base,
-            distance=sum(r.distance for r in robots),
-            alive=sum(r.state != "failed" for r in robots),
-            links=int(np.triu(links).sum()),
-            robots=robots,
+        return measure_step(
+            step,
+            self.coverage,
+            self.known_at_base,
+            [RobotRecord(a.name, a.distance, a.state, a.base_contact) for a in agents[1:]],
+            links,
+            control_links=comm.control_links,
             comm_bytes=comm.comm_bytes,
-            control_links=control,
             control_bytes=comm.control_bytes,
-            latency_max=comm.latency_max,
-            latency_mean=comm.latency_mean,
+            latency=(comm.latency_max, comm.latency_mean),
         )
 
     def count_free(self, idx: IntArray) -> None:
@@ -407,6 +363,16 @@ class Replay:
             window = np.zeros((row1 - row0) * cols, dtype=bool)
             window[idx - row0 * cols] = True
             self.coverage.add_cells(window.reshape(row1 - row0, cols), row0, 0)
+
+
+def reachable_from(truth: BoolGrid, starts: list[list[float]]) -> BoolGrid:
+    """The free cells 4-connected to the robots' ``starts`` (``free_components_mask``), after
+    a change of the world: a start a change buried under an obstacle stops seeding (as live,
+    ``world.reach``); with every start buried nothing is reachable."""
+    points = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
+    cols, rows = np.floor(points).astype(np.intp).T
+    seeds = points[~truth[rows, cols]]
+    return free_components_mask(truth, seeds) if len(seeds) else np.zeros_like(truth)
 
 
 def recompute_metrics(log: RunLog) -> Iterator[StepRecord]:

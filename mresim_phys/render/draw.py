@@ -18,8 +18,10 @@ from typing import TYPE_CHECKING
 import cv2
 import numpy as np
 
+from mresim_phys.render.layers import LayerSpec
+from mresim_phys.render.style import BGR, Style
+
 if TYPE_CHECKING:
-    from mresim_phys.render.frame import BGR, LayerSpec, Style
     from mresim_phys.snapshot import AgentSnapshot, Snapshot
 
 SHIFT, ONE, FONT, AA = 4, 16, cv2.FONT_HERSHEY_SIMPLEX, cv2.LINE_AA  # 4-bit fixed point

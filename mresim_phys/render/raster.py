@@ -4,7 +4,7 @@ A label is ``class + 6 * tint`` per cell. Classes: 0 unexplored, 1 team-known, 2
 base, 3 wall, 4 skeleton, 5 frontier (the larger wins). Tints: 0 none, ``1 + i`` robot
 ``i``'s free space, ``1 + n + i`` its safe space, ``n`` palette colours (the larger wins:
 later robots over earlier ones, safe space over free space). ``render.Renderer`` colours
-labels with one lookup table.
+labels with one lookup table (``render.style.Style.lut``).
 
 Per robot, the first pass (:func:`known_box`) finds the bounding box of its known cells;
 the second (:func:`mark_robot`) runs over that box (+1) only, while the belief is still in
@@ -27,13 +27,12 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numba import njit
 
+from mresim_phys.render.layers import LayerSpec
+from mresim_phys.render.style import AT_BASE, CLASSES, FRONTIER, SKELETON, TEAM_KNOWN, WALL
 from mresim_phys.types import FREE, UNKNOWN, BeliefGrid, BoolGrid
 
 if TYPE_CHECKING:
-    from mresim_phys.render.frame import LayerSpec
     from mresim_phys.snapshot import Snapshot
-
-TEAM_KNOWN, AT_BASE, WALL, SKELETON, FRONTIER, CLASSES = 1, 2, 3, 4, 5, 6
 
 
 @njit(cache=True, nogil=True)
