@@ -74,6 +74,28 @@ def test_replayed_planner_views_equal_live_frames(tmp_path: Path) -> None:
     assert skeletons == ["C", "D"]  # the topological planners' views were logged
 
 
+@pytest.mark.parametrize("model", ["disk", "path_loss"])
+def test_replay_follows_changes_of_the_world(
+    scenario_file: ScenarioFile, tmp_path: Path, model: str
+) -> None:
+    """The door closes at step 8 and half opens at step 20 (``cells`` events): replayed
+    frames (walls, regions through them) and metrics equal the live ones."""
+    door, half = [40, 25, 42, 37], [40, 25, 42, 31]
+    events = [{"step": 8, "cells": door}, {"step": 20, "cells": half, "occupied": False}]
+    team = {"speed": 2, "radius": 1.0, "sensor": {"range": 30}, "comm_range": 50}
+    radio = {"position": [8, 30], "comm_range": 50}  # regions reach through the door
+    changes = {"events": events, "team": team, "base_station": radio}
+    path = scenario_file(steps=30, communication={"model": model}, **changes)
+    out, steps = tmp_path / "run", (7, 8, 19, 20, 30)
+    flags = ["--snapshot", ",".join(map(str, steps)), "--layers", "all", "--scale", "2"]
+    run(path, out, *flags)
+    assert main(["replay", str(out), *flags, "--metrics"]) == 0
+    assert (out / "metrics-replayed.csv").read_bytes() == (out / "metrics.csv").read_bytes()
+    for step in steps:
+        live = read_png(out / f"step-{step:05d}.png")
+        assert np.array_equal(live, read_png(out / f"replay-step-{step:05d}.png")), step
+
+
 def test_path_loss_regions_are_drawn_where_circles_would_be(
     scenario_file: ScenarioFile, tmp_path: Path
 ) -> None:
