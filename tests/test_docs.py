@@ -101,3 +101,15 @@ def test_the_plugin_contracts_in_the_guide_match_the_protocols() -> None:
             call = f"{method}({', '.join(params)})"
             with_self = f"{method}({', '.join(['self', *params])})"
             assert call in text or with_self in text, f"the guide lacks {call}"
+
+
+def test_the_readme_scenario_example_validates_and_builds() -> None:
+    import yaml
+
+    from mresim_phys.scenario.load import validate_scenario
+
+    block = re.findall(r"```yaml\n(.*?)```", (ROOT / "README.md").read_text(encoding="utf-8"), re.S)
+    data = yaml.safe_load(block[0])
+    data["map"]["image"] = str(ROOT / "maps" / "office.png")
+    sim = Simulation(validate_scenario(data, "README.md"))
+    assert [r.name for r in sim.robots] == ["A", "B"]
