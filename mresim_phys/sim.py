@@ -39,6 +39,7 @@ from mresim_phys.metrics import (
     StepRecord,
     base_latency,
     measure_step,
+    update_known_at_base,
 )
 from mresim_phys.motion import MoveRules, take_step, wants_plan
 from mresim_phys.snapshot import (
@@ -50,7 +51,6 @@ from mresim_phys.snapshot import (
     read_only,
 )
 from mresim_phys.strategies import Decision, RobotView
-from mresim_phys.types import FREE
 from mresim_phys.world.sensing import scan
 
 PHASES = ("sensing", "mapping", "planning", "communication", "metrics")
@@ -279,9 +279,9 @@ class Simulation:
         self.comm = self.network.communicate(self.agents, self.world, self.t)
         self.note_links()
         if self.links[0].any() or self.t == 0:
-            known = np.count_nonzero((self.base.belief == FREE) & self.coverage.reachable)
-            fraction = known / self.coverage.total if self.coverage.total else 1.0
-            self.known_at_base = float(max(self.known_at_base, min(fraction, 1.0)))
+            self.known_at_base = update_known_at_base(
+                self.known_at_base, self.base.belief, self.coverage
+            )
         self.phase_times["communication"] += perf_counter() - started
 
     def note_links(self) -> None:

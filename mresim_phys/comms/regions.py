@@ -11,9 +11,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from mresim_phys.comms.base import COMM_MODELS, CommModel, Radios
+from mresim_phys.comms.base import CommModel, Radios
 from mresim_phys.comms.disk import DiskComm
-from mresim_phys.scenario.schema import Scenario
 from mresim_phys.types import FloatArray
 from mresim_phys.world.space import World
 
@@ -35,17 +34,6 @@ class RegionProbe:
 
     def __init__(self, model: CommModel, ranges: FloatArray, powers: FloatArray, world: World):
         self.model, self.ranges, self.powers, self.world = model, ranges, powers, world
-
-    @classmethod
-    def of(cls, scenario: Scenario, world: World) -> RegionProbe:
-        """The probe of ``scenario``'s main channel on ``world``."""
-        comm = scenario.communication
-        radios = [scenario.base_station, *scenario.robots]
-        ranges = np.array([r.comm_range for r in radios], dtype=float)
-        powers = np.array(
-            [np.nan if r.comm_power_dbm is None else r.comm_power_dbm for r in radios]
-        )
-        return cls(COMM_MODELS.make(comm.model, comm.params), ranges, powers, world)
 
     @property
     def circles(self) -> bool:

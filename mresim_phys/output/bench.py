@@ -24,7 +24,8 @@ from mresim_phys.errors import MresimError
 from mresim_phys.scenario.load import validate_scenario
 from mresim_phys.sim import PHASES, Simulation
 
-DEFAULT_MAP = Path(__file__).resolve().parent.parent / "maps" / "office.png"
+PACKAGE_DATA = Path(__file__).resolve().parent.parent / "data"  # installed with the package
+DEFAULT_MAP = PACKAGE_DATA / "office.png"
 DEFAULT_BASE = (25.0, 300.0)
 DEFAULT_START = (40.0, 300.0)
 
