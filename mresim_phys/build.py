@@ -1,0 +1,259 @@
+"""Composition root (between input and runtime): a validated Scenario -> runtime values.
+
+The only module that reads the schema and builds runtime objects: the ground
+truth and the pymunk world, the team (bodies, lasers, strategies, planners; every
+start checked against the world), the base station, the network with its
+channels, the events, the coverage counter and reachable set, every named random
+stream (one :class:`~mresim_phys.rng.Streams` per run) and the run rules. The
+runtime (``sim``, motion, sensing, comms, strategies, metrics) takes these values
+and never imports the schema, so a run can be rebuilt in any process from a
+picklable Scenario alone. ``sim`` reaches the input side only through here
+(``load_scenario`` is re-exported for ``Simulation.from_yaml``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from mresim_phys.agents import Agent, Body, Robot, empty_belief
+from mresim_phys.comms import COMM_MODELS
+from mresim_phys.comms.ledger import Ledger
+from mresim_phys.comms.network import Channel, Network
+from mresim_phys.comms.regions import RegionProbe
+from mresim_phys.errors import ScenarioError
+from mresim_phys.knowledge.mapping import Coverage
+from mresim_phys.knowledge.teammates import BASE_NAME
+from mresim_phys.planning import PLANNERS
+from mresim_phys.rng import Streams
+from mresim_phys.scenario.load import load_scenario
+from mresim_phys.scenario.readers import LoadedMap, load_image_map, load_ros_map, load_text_map
+from mresim_phys.scenario.schema import BaseStationSpec, MapSpec, RobotSpec, Scenario, SensorSpec
+from mresim_phys.strategies import STRATEGIES
+from mresim_phys.types import FloatArray
+from mresim_phys.world.events import Event, make_event
+from mresim_phys.world.reach import Reachable
+from mresim_phys.world.sensing import Laser
+from mresim_phys.world.space import World
+
+__all__ = ["RunRules", "Scenario", "Setup", "build_setup", "load_scenario", "region_probe"]
+
+
+def check_start(world: World, robot: RobotSpec) -> None:
+    """A robot must start inside the map, clear of every wall."""
+    rows, cols = world.shape
+    x, y = robot.start
+    if not (0 <= x < cols and 0 <= y < rows):
+        raise ScenarioError(
+            f"robot {robot.name!r} starts at {list(robot.start)}, outside the {cols}x{rows} map;"
+            " give a start with 0 <= x < columns and 0 <= y < rows (x = column, y = row)."
+        )
+    if world.overlaps_wall(robot.start, robot.radius):
+        raise ScenarioError(
+            f"robot {robot.name!r} starts at {list(robot.start)} inside or overlapping a wall"
+            f" (radius {robot.radius}); move its start into free space at least its radius"
+            " away from any obstacle."
+        )
+
+
+def check_base(world: World, base: BaseStationSpec) -> None:
+    """The base station must stand inside the map."""
+    rows, cols = world.shape
+    x, y = base.position
+    if not (0 <= x < cols and 0 <= y < rows):
+        raise ScenarioError(
+            f"base_station.position {[x, y]} is outside the {cols}x{rows} map;"
+            " give 0 <= x < columns and 0 <= y < rows."
+        )
+
+
+def laser_of(spec: SensorSpec) -> Laser:
+    """The runtime laser of a sensor spec."""
+    return Laser(spec.range, spec.fov_deg, spec.rays, spec.noise_std, spec.safe_fraction)
+
+
+def body_of(spec: RobotSpec) -> Body:
+    """The runtime body of a robot spec."""
+    return Body(spec.speed, spec.radius, spec.wall_margin, laser_of(spec.sensor))
+
+
+def make_robot(spec: RobotSpec, index: int, streams: Streams, shape: tuple[int, int]) -> Robot:
+    """A robot with an all-unknown map, its strategy, its planner and its own random stream."""
+    belief, safe = empty_belief(shape)
+    return Robot(
+        name=spec.name,
+        index=index,
+        position=(float(spec.start[0]), float(spec.start[1])),
+        comm_range=spec.comm_range,
+        belief=belief,
+        safe=safe,
+        role=spec.role,
+        body=body_of(spec),
+        strategy=STRATEGIES.make(spec.strategy.name, spec.strategy.params),
+        planner=PLANNERS.make(spec.planner.name, spec.planner.params),
+        heading=math.radians(spec.heading_deg),
+        rng=streams.get("strategy", index),
+    )
+
+
+def make_base(spec: BaseStationSpec, shape: tuple[int, int]) -> Agent:
+    """The base station (agent index 0) with an all-unknown map."""
+    belief, safe = empty_belief(shape)
+    position = (float(spec.position[0]), float(spec.position[1]))
+    return Agent(BASE_NAME, 0, position, spec.comm_range, belief, safe, role="base")
+
+
+def make_team(robots: list[RobotSpec], streams: Streams, world: World) -> list[Robot]:
+    """Every robot, checked against the world and placed in it."""
+    for spec in robots:
+        check_start(world, spec)
+    team = [make_robot(s, i + 1, streams, world.shape) for i, s in enumerate(robots)]
+    world.place_robots([r.position for r in team])
+    return team
+
+
+def radio_ranges(scenario: Scenario) -> tuple[FloatArray, FloatArray]:
+    """Every agent's main-channel range and transmit power (NaN: the model's default)."""
+    radios = [scenario.base_station, *scenario.robots]
+    ranges = np.array([r.comm_range for r in radios], dtype=float)
+    powers = np.array([np.nan if r.comm_power_dbm is None else r.comm_power_dbm for r in radios])
+    return ranges, powers
+
+
+def build_network(scenario: Scenario, streams: Streams, shape: tuple[int, int]) -> Network:
+    """The communication phase of ``scenario``: its channels, ledger and exchange rules."""
+    spec = scenario.communication
+    ranges, powers = radio_ranges(scenario)
+    model = COMM_MODELS.make(spec.model, spec.params)
+    main = Channel("main", model, ranges, powers, spec.dropout, streams.get("dropout-main"))
+    control = None
+    if spec.control is not None:
+        c = spec.control
+        control = Channel(
+            "control",
+            COMM_MODELS.make(c.model, c.params),
+            np.full(len(ranges), c.range),
+            powers,
+            c.dropout,
+            streams.get("dropout-control"),
+        )
+    return Network(
+        main,
+        Ledger(shape, len(ranges)),
+        control=control,
+        multi_hop=scenario.simulation.multi_hop,
+        full_maps=spec.maps == "full",
+    )
+
+
+def region_probe(scenario: Scenario, world: World) -> RegionProbe:
+    """The probe of ``scenario``'s main channel on ``world`` (live runs and replays)."""
+    comm = scenario.communication
+    ranges, powers = radio_ranges(scenario)
+    return RegionProbe(COMM_MODELS.make(comm.model, comm.params), ranges, powers, world)
+
+
+@dataclass(frozen=True)
+class RunRules:
+    """How the cycle runs and when it stops."""
+
+    steps: int  # hard cap
+    scan_every_point: bool  # scan after every path point (the original) or once per step
+    robots_block: bool  # robots block each other's rays and motion
+    stop_explored: float | None = None
+    stop_known_at_base: float | None = None
+    stop_all_done: bool = True
+    presume_lost_after: int = 200  # steps of silence after which a teammate is presumed lost
+
+
+@dataclass
+class Setup:
+    """Everything a :class:`~mresim_phys.sim.Simulation` runs on."""
+
+    truth: LoadedMap
+    world: World
+    base: Agent
+    robots: list[Robot]
+    network: Network
+    coverage: Coverage
+    reachable: Reachable  # free space connected to the starts, followed across world changes
+    events: list[Event]
+    streams: Streams
+    rules: RunRules
+    starts: list[tuple[float, float]]  # where the robots started (the reachable set's seeds)
+    resolution: float | None  # metres per cell, for reports
+
+    def sensing_streams(self) -> list[np.random.Generator]:
+        """Each robot's laser-noise stream, in robot order."""
+        return [self.streams.get("sensing", r.index) for r in self.robots]
+
+    def event_streams(self) -> list[np.random.Generator]:
+        """Each event's own stream, in scenario order."""
+        return [self.streams.get("event", k) for k in range(len(self.events))]
+
+
+def load_map(spec: MapSpec) -> LoadedMap:
+    """Read the ground truth named by ``spec`` (paths already resolved)."""
+    kind, path = spec.source
+    if kind == "image":
+        return load_image_map(Path(path), threshold=spec.threshold, negate=spec.negate)
+    if kind == "grid":
+        return load_text_map(Path(path))
+    return load_ros_map(Path(path))
+
+
+def check_event_boxes(scenario: Scenario, world: World) -> None:
+    """Every map window an event names must lie inside the map."""
+    rows, cols = world.shape
+    for i, event in enumerate(scenario.events):
+        for where, (row0, row1, col0, col1) in event.boxes():
+            if not (0 <= row0 < row1 <= rows and 0 <= col0 < col1 <= cols):
+                raise ScenarioError(
+                    f"events[{i}].{where}: the window x {col0}..{col1}, y {row0}..{row1} is not"
+                    f" inside the {cols}x{rows} map; give 0 <= x0 < x1 <= {cols} and"
+                    f" 0 <= y0 < y1 <= {rows}."
+                )
+
+
+def run_rules(scenario: Scenario) -> RunRules:
+    """The scenario's cycle and stop rules as plain values."""
+    sim, stop = scenario.simulation, scenario.stop
+    return RunRules(
+        steps=scenario.steps,
+        scan_every_point=sim.scan == "point",
+        robots_block=sim.robots_block,
+        stop_explored=stop.explored,
+        stop_known_at_base=stop.known_at_base,
+        stop_all_done=stop.all_done,
+        presume_lost_after=sim.presume_lost_after,
+    )
+
+
+def build_setup(scenario: Scenario) -> Setup:
+    """Load the map and build everything a run of ``scenario`` needs."""
+    truth = load_map(scenario.map)
+    world = World(truth.occupied, [r.radius for r in scenario.robots])
+    streams = Streams(scenario.seed)
+    robots = make_team(scenario.robots, streams, world)
+    check_base(world, scenario.base_station)
+    starts = [(float(r.start[0]), float(r.start[1])) for r in scenario.robots]
+    events = [make_event(e) for e in scenario.events]
+    check_event_boxes(scenario, world)
+    reachable = Reachable(truth.occupied, starts)
+    return Setup(
+        truth=truth,
+        world=world,
+        base=make_base(scenario.base_station, world.shape),
+        robots=robots,
+        network=build_network(scenario, streams, world.shape),
+        coverage=Coverage(reachable.mask),
+        reachable=reachable,
+        events=events,
+        streams=streams,
+        rules=run_rules(scenario),
+        starts=starts,
+        resolution=scenario.map.resolution or truth.resolution,
+    )
