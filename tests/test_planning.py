@@ -17,6 +17,7 @@ from mresim_phys.planning.fields import (
     snap_to_passable,
     traversable,
 )
+from mresim_phys.planning.grid import DIAGONAL, MOVES, STRAIGHT, diagonal_ok
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 
 SEEDS = st.integers(0, 2**32 - 1)
@@ -72,6 +73,23 @@ def assert_valid_path(path: np.ndarray, passable: np.ndarray) -> None:
     diag = np.flatnonzero(np.abs(steps).sum(axis=1) == 2)
     a, s = cells[diag], steps[diag]
     assert (passable[a[:, 0] + s[:, 0], a[:, 1]] | passable[a[:, 0], a[:, 1] + s[:, 1]]).all()
+
+
+# --------------------------------------------------------------------------- move rule
+
+
+def test_move_rule_is_the_documented_one() -> None:
+    """grid's MOVES, costs and corner rule: the one move rule of every grid search."""
+    raster = tuple((dr, dc) for dr in (-1, 0, 1) for dc in (-1, 0, 1) if (dr, dc) != (0, 0))
+    assert raster == MOVES  # raster order: neighbours are visited in it, which settles ties
+    assert STRAIGHT == 1.0
+    assert math.sqrt(2.0) == DIAGONAL
+    for bits in range(16):  # the four straight neighbours of the centre of a 3x3 mask
+        pad = np.zeros((3, 3), dtype=np.bool_)
+        pad[0, 1], pad[2, 1], pad[1, 0], pad[1, 2] = ((bits >> k) & 1 == 1 for k in range(4))
+        for dr, dc in ((dr, dc) for dr, dc in MOVES if dr and dc):
+            allowed = diagonal_ok(pad.ravel(), 3, 4, dr, dc)
+            assert allowed == bool(pad[1 + dr, 1] or pad[1, 1 + dc])
 
 
 # --------------------------------------------------------------------------- distance field

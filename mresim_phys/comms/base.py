@@ -59,7 +59,11 @@ class CommModel(Protocol):
 
     name: ClassVar[str]
     Params: ClassVar[type[CommParams]]
-    params: CommParams
+
+    @property
+    def params(self) -> CommParams:
+        """The validated parameters it was built from (read only: a model may narrow it)."""
+        ...
 
     def links(self, radios: Radios, world: World) -> np.ndarray:
         """Symmetric (n, n) bool matrix: True where agents i and j can exchange data."""

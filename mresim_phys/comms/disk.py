@@ -8,6 +8,8 @@ region is its own disk.
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 
 from mresim_phys.comms.base import (
@@ -37,7 +39,8 @@ class DiskComm(Plugin):
 
     name = "disk"
 
-    Params = DiskParams
+    Params: ClassVar[type[CommParams]] = DiskParams
+    params: DiskParams
 
     def __init__(self, params: DiskParams) -> None:
         self.params = params

@@ -80,7 +80,7 @@ class Ledger:
             self.box_count[index] = k + 1
             return
         boxes, ticks = self.boxes[index], self.box_ticks[index]
-        merged = union_box(tuple(boxes[0].tolist()), tuple(boxes[1].tolist()))  # type: ignore[arg-type]
+        merged = union_box(tuple(boxes[0].tolist()), tuple(boxes[1].tolist()))
         boxes[1], ticks[1] = merged, ticks[1]
         boxes[:-1], ticks[:-1] = boxes[1:].copy(), ticks[1:].copy()
 
@@ -99,8 +99,8 @@ class Ledger:
     ) -> int:
         """Merge received ``cells`` (flat indices, codes) into agent ``index``'s grids."""
         tick = received_tick(step)
-        args = (self.copies[index], self.stamps[index], self.origins[index], tick, sender)
-        changed, *tight = merge_cells(*cells, *grids, *args)
+        grid = (self.copies[index], self.stamps[index], self.origins[index])
+        changed, *tight = merge_cells(*cells, *grids, *grid, tick, sender)
         if changed:
             self.add_box(index, tick, (tight[0], tight[1], tight[2], tight[3]))
         return changed

@@ -9,6 +9,8 @@ exact line (0). An agent's region is its disk cut by the walls it sees.
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 from pydantic import Field
 
@@ -33,7 +35,8 @@ class LineOfSightComm(Plugin):
 
     name = "line_of_sight"
 
-    Params = LineOfSightParams
+    Params: ClassVar[type[CommParams]] = LineOfSightParams
+    params: LineOfSightParams
 
     def __init__(self, params: LineOfSightParams) -> None:
         self.params = params

@@ -22,7 +22,7 @@ passes through instead, so thick concrete attenuates more than a thin partition
 
 from __future__ import annotations
 
-from typing import Literal
+from typing import ClassVar, Literal
 
 import numpy as np
 from pydantic import Field
@@ -37,7 +37,7 @@ from mresim_phys.comms.base import (
 )
 from mresim_phys.comms.walls import reach_along_rays, walls_between
 from mresim_phys.plugin import Plugin
-from mresim_phys.types import FloatArray
+from mresim_phys.types import FloatArray, IntArray
 from mresim_phys.world.space import World
 
 
@@ -65,7 +65,8 @@ class PathLossComm(Plugin):
 
     name = "path_loss"
 
-    Params = PathLossParams
+    Params: ClassVar[type[CommParams]] = PathLossParams
+    params: PathLossParams
 
     def __init__(self, params: PathLossParams) -> None:
         self.params = params
@@ -86,7 +87,7 @@ class PathLossComm(Plugin):
             return np.minimum(inside, p.max_walls) * p.cell_db
         return np.minimum(runs, p.max_walls) * p.wall_db
 
-    def signal(self, radios: Radios, sender: FloatArray, distance: FloatArray) -> FloatArray:
+    def signal(self, radios: Radios, sender: IntArray, distance: FloatArray) -> FloatArray:
         """Free-space signal (dBm) of each ``sender`` at ``distance``, before walls."""
         powers = self.budgets(radios)[sender] + self.params.cutoff_dbm
         ratio = np.maximum(distance, 1e-9) / np.maximum(radios.ranges[sender], 1e-9)

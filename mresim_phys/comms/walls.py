@@ -94,7 +94,8 @@ def walls_between(
 @njit(cache=True, nogil=True)
 def _free_limit(budget: float, loss: float, exponent10: float, reference: float) -> float:
     """Distance at which the log-distance loss beyond ``reference`` uses up ``budget - loss`` dB."""
-    return reference * 10.0 ** ((budget - loss) / exponent10)
+    limit: float = reference * 10.0 ** ((budget - loss) / exponent10)
+    return limit
 
 
 @njit(cache=True, nogil=True)

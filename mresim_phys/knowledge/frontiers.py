@@ -10,9 +10,11 @@ cluster, the cheapest cell of a ``DistanceField`` from which the cluster is with
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import cast
 
 import cv2
 import numpy as np
+from numpy.typing import NDArray
 
 from mresim_phys.planning.fields import DistanceField
 from mresim_phys.types import FREE, UNKNOWN, BeliefGrid, BoolGrid, FloatArray, IntArray
@@ -62,10 +64,11 @@ def frontier_mask(belief: BeliefGrid) -> BoolGrid:
     """
     unknown = (belief == UNKNOWN).view(np.uint8)
     # cv2's default dilation border never wins, so outside the grid is "not unknown".
-    return (cv2.dilate(unknown, _KERNEL_3X3) != 0) & (belief == FREE)
+    mask: BoolGrid = (cv2.dilate(unknown, _KERNEL_3X3) != 0) & (belief == FREE)
+    return mask
 
 
-def _raster_ranks(labels_seq: IntArray, n_labels: int) -> IntArray:
+def _raster_ranks(labels_seq: NDArray[np.int32], n_labels: int) -> IntArray:
     """Map each label (1..n-1) to its rank by first occurrence in ``labels_seq``."""
     running = np.maximum.accumulate(labels_seq)
     if labels_seq[0] == 1 and np.all(np.diff(running) <= 1):
@@ -97,9 +100,10 @@ def find_frontiers(belief: BeliefGrid, min_size: int = 3) -> Frontiers:
     free_cols = np.flatnonzero((belief[r0:r1] == FREE).any(axis=0))
     c0, c1 = max(free_cols[0] - 1, 0), min(free_cols[-1] + 2, belief.shape[1])
     mask = frontier_mask(belief[r0:r1, c0:c1]).view(np.uint8)
-    n, labels, stats, centroids = cv2.connectedComponentsWithStatsWithAlgorithm(
+    n, found, stats, centroids = cv2.connectedComponentsWithStatsWithAlgorithm(
         mask, 8, cv2.CV_32S, cv2.CCL_SAUF
     )
+    labels = cast("NDArray[np.int32]", found)  # CV_32S labels (cv2 types any Mat)
     if n <= 1:
         return _empty_frontiers()
     xy = cv2.findNonZero(mask).reshape(-1, 2).astype(np.intp)  # raster order, 4x np.nonzero

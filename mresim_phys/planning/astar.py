@@ -18,11 +18,14 @@ from numpy.typing import NDArray
 from mresim_phys.planning.base import PLANNERS, GridPlanner, no_path
 from mresim_phys.planning.grid import (
     CLOSED,
+    DIAGONAL,
+    MOVES,
     NO_PRED,
     OPEN,
-    SQRT2,
+    STRAIGHT,
     UNSEEN,
     Window,
+    diagonal_ok,
     heap_grow,
     heap_new,
     heap_pop,
@@ -34,7 +37,6 @@ from mresim_phys.planning.grid import (
 )
 from mresim_phys.types import BoolGrid, FloatArray
 
-_OFFSETS = ((-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1))
 NO_LABELS = np.zeros(0, dtype=np.int32)
 NO_ALLOWED = np.zeros(0, dtype=np.bool_)
 
@@ -74,18 +76,18 @@ def astar_kernel(
             break
         here = g[u]
         ur, uc = u // wp, u % wp
-        for dr, dc in _OFFSETS:
+        for dr, dc in MOVES:
             v = u + dr * wp + dc
             if not pad[v] or state[v] == CLOSED:
                 continue
             if restricted and not allowed[labels[v] + 1]:
                 continue
             if dr != 0 and dc != 0:
-                if not (pad[u + dr * wp] or pad[u + dc]):
+                if not diagonal_ok(pad, wp, u, dr, dc):
                     continue
-                cost = here + SQRT2
+                cost = here + DIAGONAL
             else:
-                cost = here + 1.0
+                cost = here + STRAIGHT
             if state[v] == UNSEEN or cost < g[v]:
                 g[v], pred[v], state[v] = cost, u, OPEN
                 f = cost + octile(ur + dr, uc + dc, tr, tc)

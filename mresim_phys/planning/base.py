@@ -5,10 +5,10 @@ built once per robot from its validated ``Params``. Strategies choose WHERE to g
 distance fields (:mod:`mresim_phys.planning`); the robot's planner finds the path it
 then follows. Every planner works on the robot's configuration-space mask
 (``planning.traversable``: known free cells at least radius + wall margin from known
-obstacles; unknown cells are not traversable) with the move rules of
-:mod:`mresim_phys.planning`, and returns world points from the (snapped) start cell's
+obstacles; unknown cells are not traversable) with the move rule of
+:mod:`mresim_phys.planning.grid`, and returns world points from the (snapped) start cell's
 centre to the goal cell's centre, optionally shortened by line-of-sight shortcuts
-(:mod:`mresim_phys.planners.smoothing`).
+(:mod:`mresim_phys.planning.smoothing`).
 
 Typical use: ``PLANNERS.get("jps")(JumpPointParams()).plan(passable, (x, y), (row, col))``.
 """
@@ -45,7 +45,11 @@ class Planner(Protocol):
 
     name: ClassVar[str]
     Params: ClassVar[type[PlannerParams]]
-    params: PlannerParams
+
+    @property
+    def params(self) -> PlannerParams:
+        """The validated parameters it was built from (read only: a subclass may narrow it)."""
+        ...
 
     def plan(
         self, passable: BoolGrid, start_xy: tuple[float, float], goal_rc: tuple[int, int]
@@ -82,6 +86,7 @@ class GridPlanner(Plugin):
     """Shared ``plan``: snap the ends, search (``search`` of a subclass), then smooth."""
 
     Params: ClassVar[type[PlannerParams]] = PlannerParams
+    params: PlannerParams
 
     def __init__(self, params: PlannerParams) -> None:
         self.params = params

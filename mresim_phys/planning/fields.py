@@ -5,7 +5,9 @@ Pipeline: ``traversable`` turns a belief grid into a configuration-space mask, t
 for every cell (frontier selection) and paths to any of them; ``plan_path`` is the
 point-to-point shortcut.
 
-Move rules (shared by every function here, and by the reference Dijkstra in the tests):
+Move rules (defined once in ``planning.grid``: ``MOVES``, ``STRAIGHT``/``DIAGONAL`` and the
+corner rule ``diagonal_ok``; shared by every grid search, and written out independently by
+the reference Dijkstra in the tests):
 
 * 8-connected moves between passable cells, octile costs: 1 straight, sqrt(2) diagonal.
 * No corner cutting: a diagonal move is forbidden when BOTH orthogonal cells it squeezes
@@ -40,16 +42,19 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from mresim_phys.planning.grid import (
+    DIAGONAL,
+    MOVES,
+    SQRT2,
+    STRAIGHT,
+    Box,
+    Window,
+    bbox,
+    diagonal_ok,
+)
 from mresim_phys.types import FREE, OCCUPIED, BeliefGrid, BoolGrid, FloatArray, IntArray
 
-_SQRT2 = float(np.sqrt(2.0))
-# Neighbour offsets (drow, dcol) in raster order, and the length of each move.
-_OFFSETS: tuple[tuple[int, int], ...] = (
-    (-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1),
-)  # fmt: skip
 _NO_PRED = -9999  # "no predecessor" (the marker scipy.sparse.csgraph uses)
-
-Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)
 
 
 # --------------------------------------------------------------------------- C-space
@@ -68,17 +73,8 @@ def _clearance_kernel(clearance: float) -> NDArray[np.uint8]:
            [0, 1, 0]], dtype=uint8)
     """
     radius = max(int(np.ceil(clearance + 0.5)) - 1, 0)
-    gap = np.maximum(np.abs(np.arange(-radius, radius + 1)) - 0.5, 0.0)
+    gap: FloatArray = np.maximum(np.abs(np.arange(-radius, radius + 1)) - 0.5, 0.0)
     return (gap[:, None] ** 2 + gap[None, :] ** 2 < clearance**2).astype(np.uint8)
-
-
-def bbox(mask: BoolGrid) -> Box | None:
-    """Half-open bounding box (row0, row1, col0, col1) of the True cells, None if none."""
-    rows = np.flatnonzero(mask.any(axis=1))
-    if rows.size == 0:
-        return None
-    cols = np.flatnonzero(mask[rows[0] : rows[-1] + 1].any(axis=0))
-    return int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
 
 
 def _grow(box: Box, margin: int, shape: tuple[int, ...]) -> Box:
@@ -110,7 +106,7 @@ def traversable(belief: BeliefGrid, clearance: float) -> BoolGrid:
     Returns:
         Boolean grid of the same shape, True where the robot centre may be.
     """
-    free = belief == FREE
+    free: BoolGrid = belief == FREE
     box = bbox(free)
     if box is None or clearance <= 0.0:
         return free
@@ -185,16 +181,16 @@ def _dijkstra(
             here = dist[u]
             if int(here) != band:
                 continue  # moved to an earlier band, already expanded
-            for dr, dc in _OFFSETS:
+            for dr, dc in MOVES:
                 v = u + dr * wp + dc
                 if not pad[v]:
                     continue
                 if dr != 0 and dc != 0:
-                    if not (pad[u + dr * wp] or pad[u + dc]):  # no squeezing between two blocked
+                    if not diagonal_ok(pad, wp, u, dr, dc):
                         continue
-                    cost = here + _SQRT2
+                    cost = here + DIAGONAL
                 else:
-                    cost = here + 1.0
+                    cost = here + STRAIGHT
                 if cost <= limit and cost < dist[v]:
                     dist[v], pred[v] = cost, u
                     target = int(cost)
@@ -215,13 +211,9 @@ def _search(
     Node ``i`` is padded cell ``(i // (w + 2), i % (w + 2))``; the padding is blocked, so
     the kernel needs no bounds checks.
     """
-    r0, r1, c0, c1 = box
-    hp, wp = r1 - r0 + 2, c1 - c0 + 2
-    pad = np.zeros((hp, wp), dtype=np.bool_)
-    pad[1:-1, 1:-1] = passable[r0:r1, c0:c1]
-    source = (start_rc[0] - r0 + 1) * wp + (start_rc[1] - c0 + 1)
-    dist, pred = _dijkstra(pad.ravel(), wp, source, float(limit))
-    return dist.reshape(hp, wp), pred
+    window = Window.around(passable, box)
+    dist, pred = _dijkstra(window.pad, window.wp, window.node(start_rc), float(limit))
+    return dist.reshape(-1, window.wp), pred
 
 
 def _empty_f() -> FloatArray:
@@ -370,7 +362,7 @@ def plan_path(
     if not passable[goal]:
         return np.empty((0, 2))
     dr, dc = abs(goal[0] - start[0]), abs(goal[1] - start[1])
-    limit = 2.0 * (max(dr, dc) + (_SQRT2 - 1.0) * min(dr, dc)) + 8.0
+    limit = 2.0 * (max(dr, dc) + (SQRT2 - 1.0) * min(dr, dc)) + 8.0
     while True:
         window = _window(start, box, limit)
         whole = window == box

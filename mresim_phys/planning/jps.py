@@ -8,7 +8,7 @@ heap.
 
 The pruning rules are those of the movement model where a diagonal step is forbidden
 only when BOTH orthogonal cells it passes are blocked (corner cutting past a single
-blocked cell is allowed), i.e. exactly the rule of :mod:`mresim_phys.planning`:
+blocked cell is allowed), i.e. exactly the rule of :mod:`mresim_phys.planning.grid`:
 
 * straight move (here: along columns, direction ``dc``): a neighbour diagonally ahead,
   ``(+-1, dc)``, is forced when the cell beside it, ``(+-1, 0)``, is blocked (and the
@@ -29,10 +29,12 @@ from numpy.typing import NDArray
 from mresim_phys.planning.base import PLANNERS, GridPlanner, no_path
 from mresim_phys.planning.grid import (
     CLOSED,
+    MOVES,
     NO_PRED,
     OPEN,
     UNSEEN,
     Window,
+    diagonal_ok,
     heap_grow,
     heap_new,
     heap_pop,
@@ -44,7 +46,7 @@ from mresim_phys.planning.grid import (
 )
 from mresim_phys.types import BoolGrid, FloatArray
 
-_DIRECTIONS = ((-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1))
+_DIRECTIONS = MOVES  # a direction is its index in MOVES (raster order; see _add)
 
 
 @njit(cache=True, nogil=True)
@@ -70,8 +72,8 @@ def _jump_diagonal(pad: NDArray[np.bool_], wp: int, u: int, dr: int, dc: int, ta
     """First jump point on the diagonal ray from ``u`` (exclusive); -1 if none."""
     vertical = dr * wp
     while True:
-        if not (pad[u + vertical] or pad[u + dc]):
-            return -1  # no squeezing between two blocked cells
+        if not diagonal_ok(pad, wp, u, dr, dc):
+            return -1
         v = u + vertical + dc
         if not pad[v]:
             return -1

@@ -58,9 +58,11 @@ TABLE = removal_table()
 
 @njit(cache=True, nogil=True, inline="always")
 def _code(img: NDArray[np.uint8], u: int, wp: int) -> int:
-    return (img[u - wp - 1] + 2 * img[u - wp] + 4 * img[u - wp + 1] + 8 * img[u + 1]
-            + 16 * img[u + wp + 1] + 32 * img[u + wp] + 64 * img[u + wp - 1]
-            + 128 * img[u - 1])  # fmt: skip
+    """Lookup index of the neighbourhood of flat pixel ``u`` (bits as above)."""
+    code: int = (img[u - wp - 1] + 2 * img[u - wp] + 4 * img[u - wp + 1] + 8 * img[u + 1]
+                 + 16 * img[u + wp + 1] + 32 * img[u + wp] + 64 * img[u + wp - 1]
+                 + 128 * img[u - 1])  # fmt: skip
+    return code
 
 
 @njit(cache=True, nogil=True)

@@ -1,6 +1,6 @@
 """``topological``: a route over the skeleton's node regions, grid search inside (phase 4b).
 
-The robot keeps a :class:`~mresim_phys.planners.topomap.TopologicalMap` of its passable
+The robot keeps a :class:`~mresim_phys.planning.topomap.TopologicalMap` of its passable
 cells and rebuilds it only when enough of them changed (``rebuild_fraction`` of the cells
 it was built from); builds come from a content-addressed cache shared by every planner,
 so robots holding the same map (after an exchange) build it once. A query:
@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import threading
 from collections.abc import Mapping
-from typing import Any, NamedTuple
+from typing import Any, ClassVar, NamedTuple
 
 import numpy as np
 from numba import njit
@@ -35,13 +35,23 @@ from pydantic import Field
 
 from mresim_phys.planning.astar import astar_search
 from mresim_phys.planning.base import PLANNERS, GridPlanner, PlannerParams
-from mresim_phys.planning.grid import NO_PRED, SQRT2, Window, walk_back
+from mresim_phys.planning.grid import (
+    DIAGONAL,
+    MOVES,
+    NO_PRED,
+    STRAIGHT,
+    Box,
+    Window,
+    diagonal_ok,
+    passes_corner,
+    walk_back,
+)
 from mresim_phys.planning.topomap import SHARED, MapCache, TopologicalMap
 from mresim_phys.types import BoolGrid, FloatArray
 
-Box = tuple[int, int, int, int]
-# moves (dr, dc): the four straight ones, then up-left, up-right, down-left, down-right
-_STEPS = ((-1, 0), (1, 0), (0, -1), (0, 1), (-1, -1), (-1, 1), (1, -1), (1, 1))
+# The corridor search's order of MOVES: the four straight ones (up, down, left, right), then
+# up-left, up-right, down-left, down-right. The order decides ties between equal paths.
+_STEPS = tuple(MOVES[k] for k in (1, 6, 3, 4, 0, 2, 5, 7))
 ANCHOR_REACH = 2  # node spacings: how far an unlabelled end may be from a labelled cell
 
 
@@ -149,14 +159,15 @@ def _search_to(
             here = state[u, 1]
             if int(here) != band:
                 continue  # queued again in a lower band since
+            # the corner rule on the four straight neighbours, each read once
             up, down, left, right = pad[u - wp], pad[u + wp], pad[u - 1], pad[u + 1]
             for k in range(8):  # unrolled by the compiler
                 v = u + _STEPS[k][0] * wp + _STEPS[k][1]
                 if k < 4:
-                    cost = here + 1.0
+                    cost = here + STRAIGHT
                 else:
-                    cost = here + SQRT2
-                    if not ((up if k < 6 else down) or (left if k % 2 == 0 else right)):
+                    cost = here + DIAGONAL
+                    if not passes_corner(up if k < 6 else down, left if k % 2 == 0 else right):
                         continue
                 if state[v, 0] != key:
                     continue
@@ -173,7 +184,8 @@ def _search_to(
                     sizes[row] += 1
         sizes[now] = 0
         band, now, next1, next2 = band + 1, next1, next2, now
-    return state[target, 1]
+    found: float = state[target, 1]
+    return found
 
 
 @njit(cache=True, nogil=True)
@@ -249,19 +261,18 @@ def _nearest_labelled(
     queue = np.empty(pad.size, dtype=np.int64)
     queue[0], seen[source], head, tail = source, True, 0, 1
     while head < tail:
-        u = queue[head]
+        u: int = queue[head]
         head += 1
         if labels[u] >= 0:
             return u
-        for dr in range(-1, 2):
-            for dc in range(-1, 2):
-                v = u + dr * wp + dc
-                if seen[v] or not pad[v]:
-                    continue
-                if dr != 0 and dc != 0 and not (pad[u + dr * wp] or pad[u + dc]):
-                    continue
-                seen[v] = True
-                queue[tail], tail = v, tail + 1
+        for dr, dc in MOVES:
+            v = u + dr * wp + dc
+            if seen[v] or not pad[v]:
+                continue
+            if dr != 0 and dc != 0 and not diagonal_ok(pad, wp, u, dr, dc):
+                continue
+            seen[v] = True
+            queue[tail], tail = v, tail + 1
     return -1
 
 
@@ -319,13 +330,13 @@ def topological_path(
         fresh = passable.shape == topo.passable.shape and _same(
             np.ascontiguousarray(passable).ravel(), topo.passable.ravel()
         )
-    ends = anchor(topo, passable, start), anchor(topo, passable, goal)
-    if ends[0] is not None and ends[1] is not None:
-        route, _ = topo.route(ends[0].node, ends[1].node)
+    first, last = anchor(topo, passable, start), anchor(topo, passable, goal)
+    if first is not None and last is not None:
+        route, _ = topo.route(first.node, last.node)
         if fresh and not len(route):
             return np.zeros((0, 2))
         if len(route):
-            path = corridor_path(topo, passable, (start, goal), route, rings, ends, fresh)
+            path = corridor_path(topo, passable, (start, goal), route, rings, (first, last), fresh)
             if len(path):
                 return path
     window = Window.of(passable)
@@ -376,7 +387,7 @@ class TopologicalPlanner(GridPlanner):
 
     name = "topological"
 
-    Params = TopologicalParams
+    Params: ClassVar[type[PlannerParams]] = TopologicalParams
 
     def __init__(self, params: TopologicalParams, cache: MapCache = SHARED) -> None:
         super().__init__(params)

@@ -3,12 +3,12 @@
 Built from a configuration-space mask (the cells a robot centre may occupy):
 
 1. skeleton: Zhang-Suen thinning of the passable cells (their medial lines; a numba kernel,
-   :mod:`mresim_phys.planners.skeleton`, several times faster than scikit-image's);
+   :mod:`mresim_phys.planning.skeleton`, several times faster than scikit-image's);
 2. nodes: skeleton cells sampled uniformly, one per ``spacing`` x ``spacing`` block (the
    skeleton cell nearest the block centre);
 3. regions: every passable cell belongs to its nearest node ALONG passable space, by one
-   multi-source Dijkstra (numba, Dial's buckets, the move rules of
-   :mod:`mresim_phys.planning`). A wall is never crossed, so two rooms separated by a wall
+   multi-source Dijkstra (numba, Dial's buckets, the move rule of
+   :mod:`mresim_phys.planning.grid`). A wall is never crossed, so two rooms separated by a wall
    never share a region, and each region is connected. Cells no node reaches (a passable
    pocket the skeleton missed) get nodes of their own;
 4. graph: two regions are adjacent when a legal move joins them; the edge costs the
@@ -27,7 +27,7 @@ import hashlib
 from collections import OrderedDict
 from dataclasses import dataclass, field
 from functools import cached_property
-from typing import NamedTuple
+from typing import NamedTuple, TypeVar
 
 import numpy as np
 from numba import njit
@@ -35,13 +35,19 @@ from numpy.typing import NDArray
 from scipy.ndimage import convolve
 from scipy.sparse import csr_matrix
 
-from mresim_phys.planning.fields import bbox
-from mresim_phys.planning.grid import SQRT2, Window
+from mresim_phys.planning.grid import (
+    DIAGONAL,
+    FORWARD_MOVES,
+    MOVES,
+    STRAIGHT,
+    Window,
+    bbox,
+    diagonal_ok,
+)
 from mresim_phys.planning.skeleton import thin
 from mresim_phys.types import BoolGrid, IntArray
 
-_OFFSETS = ((-1, -1), (-1, 0), (-1, 1), (0, -1), (0, 1), (1, -1), (1, 0), (1, 1))
-_FORWARD = ((0, 1), (1, -1), (1, 0), (1, 1))  # each undirected neighbour pair once
+ScalarT = TypeVar("ScalarT", bound=np.generic)
 CACHE_SIZE = 8  # maps kept by shared_map: a team's distinct maps at one time, roughly
 
 
@@ -58,7 +64,8 @@ def _assign(
     dist = np.full(pad.size, np.inf)
     label = np.full(pad.size, -1, dtype=np.int32)
     queued = np.full(pad.size, -1, dtype=np.int32)
-    ring = np.empty((3, max(np.count_nonzero(pad), len(seeds))), dtype=np.int32)
+    width = max(int(np.count_nonzero(pad)), len(seeds))
+    ring = np.empty((3, width), dtype=np.int32)
     sizes = np.zeros(3, dtype=np.int64)
     for i in range(len(seeds)):
         s = seeds[i]
@@ -73,16 +80,16 @@ def _assign(
             here = dist[u]
             if int(here) != band:
                 continue
-            for dr, dc in _OFFSETS:
+            for dr, dc in MOVES:
                 v = u + dr * wp + dc
                 if not pad[v]:
                     continue
                 if dr != 0 and dc != 0:
-                    if not (pad[u + dr * wp] or pad[u + dc]):
+                    if not diagonal_ok(pad, wp, u, dr, dc):
                         continue
-                    cost = here + SQRT2
+                    cost = here + DIAGONAL
                 else:
-                    cost = here + 1.0
+                    cost = here + STRAIGHT
                 if cost < dist[v]:
                     dist[v], label[v] = cost, label[u]
                     target = int(cost)
@@ -116,16 +123,16 @@ def _adjacency(
         lu = label[u]
         if lu < 0:
             continue
-        for dr, dc in _FORWARD:
+        for dr, dc in FORWARD_MOVES:
             v = u + dr * wp + dc
             lv = label[v]
             if lv < 0 or lv == lu:
                 continue
-            step = 1.0
+            step = STRAIGHT
             if dr != 0 and dc != 0:
-                if not (pad[u + dr * wp] or pad[u + dc]):
+                if not diagonal_ok(pad, wp, u, dr, dc):
                     continue
-                step = SQRT2
+                step = DIAGONAL
             a, b = min(lu, lv), max(lu, lv)
             c = dist[u] + step + dist[v]
             for k in range(width + 1):
@@ -246,7 +253,8 @@ class TopologicalMap:
     @cached_property
     def adjacency(self) -> csr_matrix:
         """Boolean (k, k) node adjacency."""
-        return self.graph.astype(bool)
+        adjacency: csr_matrix = self.graph.astype(bool)
+        return adjacency
 
     @cached_property
     def junctions(self) -> IntArray:
@@ -343,7 +351,8 @@ def build_map(passable: BoolGrid, spacing: int) -> TopologicalMap:
         missed = np.flatnonzero(window.pad & (label < 0))
         if len(missed) == 0:
             break
-        extra = sample_nodes(np.column_stack(np.divmod(missed, window.wp)) + window.origin, spacing)
+        missed_rc: IntArray = np.column_stack(np.divmod(missed, window.wp))
+        extra = sample_nodes(missed_rc + window.origin, spacing)
         nodes = np.concatenate((nodes, extra))
         label, dist = _assign(window.pad, window.wp, _flat(window, nodes))
     graph = _graph(window, label, dist, len(nodes))
@@ -360,7 +369,9 @@ def _flat(window: Window, nodes_rc: IntArray) -> NDArray[np.int64]:
     return (nodes_rc[:, 0] - window.origin[0]) * window.wp + (nodes_rc[:, 1] - window.origin[1])
 
 
-def _full(window: Window, flat: NDArray, shape: tuple[int, ...], fill: float) -> NDArray:
+def _full(
+    window: Window, flat: NDArray[ScalarT], shape: tuple[int, ...], fill: float
+) -> NDArray[ScalarT]:
     """A padded window array put back on the full grid (``fill`` outside)."""
     out = np.full(shape, fill, dtype=flat.dtype)
     padded = flat.reshape(-1, window.wp)[1:-1, 1:-1]
@@ -369,7 +380,9 @@ def _full(window: Window, flat: NDArray, shape: tuple[int, ...], fill: float) ->
     return out
 
 
-def _graph(window: Window, label: NDArray[np.int32], dist: NDArray, count: int) -> csr_matrix:
+def _graph(
+    window: Window, label: NDArray[np.int32], dist: NDArray[np.float64], count: int
+) -> csr_matrix:
     """Node graph: the cheapest crossing between each pair of adjacent regions."""
     width, done = 16, False
     while not done:

@@ -20,11 +20,14 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import ClassVar
 
 import numpy as np
+from numpy.typing import NDArray
 from pydantic import Field
 
 from mresim_phys.knowledge.frontiers import Frontiers, find_frontiers, frontier_targets
+from mresim_phys.knowledge.teammates import TeammateInfo
 from mresim_phys.planning.fields import distance_field
 from mresim_phys.plugin import Plugin
 from mresim_phys.strategies.base import (
@@ -36,13 +39,15 @@ from mresim_phys.strategies.base import (
     plan_context,
     return_to_base,
 )
+from mresim_phys.types import BoolGrid, FloatArray, IntArray
 
 UTILITY_SCALE = 1e8  # original: U = area * 10^8 / d^4
 MIN_SEARCH = 10.0  # cells: smallest extra horizon when refining a teammate's bid
 SEARCH_GROWTH = 1.5  # a refinement searches to this multiple of the current lower bound
 MAX_BOUNDED_SEARCH = 2000.0  # cells: beyond this a teammate's search is unbounded
 
-PathSearch = Callable[["Bidder", float], "np.ndarray | None"]
+BoolArray = NDArray[np.bool_]
+PathSearch = Callable[["Bidder", float], "FloatArray | None"]
 
 
 class FrontierParams(StrategyParams):
@@ -69,17 +74,17 @@ class Bidder:
     """One robot in the auction: lower bounds on its path costs, and which are exact."""
 
     name: str
-    costs: np.ndarray
-    exact: np.ndarray
+    costs: FloatArray
+    exact: BoolArray
     position: tuple[float, float]
 
     @classmethod
-    def estimated(cls, name: str, position: tuple[float, float], goals_rc: np.ndarray) -> Bidder:
+    def estimated(cls, name: str, position: tuple[float, float], goals_rc: IntArray) -> Bidder:
         """A teammate bidding with straight-line distances (lower bounds on path costs)."""
         costs = straight_line(position, goals_rc)
         return cls(name, costs, np.zeros(len(costs), dtype=bool), position)
 
-    def refine(self, found: np.ndarray | None, limit: float) -> None:
+    def refine(self, found: FloatArray | None, limit: float) -> None:
         """Take path costs searched up to ``limit``; beyond it the bound rises to ``limit``."""
         if found is None:  # the teammate stands where this robot knows nothing: keep estimates
             self.exact[:] = True
@@ -89,25 +94,28 @@ class Bidder:
         self.exact = known
 
 
-def utility(sizes: np.ndarray, costs: np.ndarray) -> np.ndarray:
+def utility(sizes: FloatArray, costs: FloatArray) -> FloatArray:
     """The original's frontier utility; unreachable frontiers get -inf."""
     with np.errstate(divide="ignore", over="ignore"):
         u = sizes * UTILITY_SCALE / np.maximum(costs, 1.0) ** 4
     return np.where(np.isfinite(costs), u, -np.inf)
 
 
-@STRATEGIES.register
+# Strategy.params (strategies/base.py) is a settable protocol member, so the narrower params
+# here fails the protocol: drop this ignore once it is a read-only property, as Planner's is.
+@STRATEGIES.register  # type: ignore[arg-type]
 class FrontierExploration(Plugin):
     """Greedy utility-based frontier exploration with a teammate auction."""
 
     name = "frontier"
 
-    Params = FrontierParams
+    Params: ClassVar[type[StrategyParams]] = FrontierParams
+    params: FrontierParams
 
     def __init__(self, params: FrontierParams) -> None:
         self.params = params
-        self._ignored: np.ndarray | None = None
-        self._chasing: np.ndarray | None = None
+        self._ignored: BoolGrid | None = None
+        self._chasing: IntArray | None = None
         self._home: tuple[float, float] | None = None
 
     def decide(self, view: RobotView) -> Decision:
@@ -129,14 +137,14 @@ class FrontierExploration(Plugin):
             return decision
         self._home = None
         chosen = self._auction(view, context, frontiers, targets, costs, candidates)
-        self._chasing = frontiers.cells_rc[frontiers.cluster_of == chosen]
+        chasing = self._chasing = frontiers.cells_rc[frontiers.cluster_of == chosen]
         row, col = (int(v) for v in targets[chosen])
         path = context.plan_to(row, col)
         info = {"frontiers": frontiers, "target_cluster": chosen, **context.planner_info()}
         return Decision(
             path=path,
             goal=(col + 0.5, row + 0.5),
-            look_at=nearest_cell_centre(self._chasing, row, col),
+            look_at=nearest_cell_centre(chasing, row, col),
             info=info,
         )
 
@@ -147,7 +155,7 @@ class FrontierExploration(Plugin):
             self._ignored[self._chasing[:, 0], self._chasing[:, 1]] = True
         return find_frontiers(view.belief, self.params.min_frontier_size)
 
-    def _fresh(self, frontiers: Frontiers) -> np.ndarray:
+    def _fresh(self, frontiers: Frontiers) -> BoolArray:
         """Clusters this robot has not given up on (at most half their cells given up)."""
         assert self._ignored is not None
         cells = frontiers.cells_rc
@@ -158,7 +166,7 @@ class FrontierExploration(Plugin):
         )
         return ignored * 2 < frontiers.sizes
 
-    def _candidates(self, frontiers: Frontiers, fresh: np.ndarray, costs: np.ndarray) -> np.ndarray:
+    def _candidates(self, frontiers: Frontiers, fresh: BoolArray, costs: FloatArray) -> IntArray:
         """Indices of the best reachable, not-given-up frontiers, best first."""
         u = utility(frontiers.sizes.astype(float), costs)
         order = np.argsort(-u, kind="stable")
@@ -170,9 +178,9 @@ class FrontierExploration(Plugin):
         view: RobotView,
         context: PlanContext,
         frontiers: Frontiers,
-        targets: np.ndarray,
-        costs: np.ndarray,
-        candidates: np.ndarray,
+        targets: IntArray,
+        costs: FloatArray,
+        candidates: IntArray,
     ) -> int:
         sizes = frontiers.sizes[candidates].astype(float)
         goals = targets[candidates]
@@ -184,7 +192,7 @@ class FrontierExploration(Plugin):
         )
         return int(candidates[won])
 
-    def _teammates(self, view: RobotView) -> list:
+    def _teammates(self, view: RobotView) -> list[TeammateInfo]:
         memory = self.params.teammate_memory
         return sorted(
             (
@@ -199,20 +207,23 @@ class FrontierExploration(Plugin):
         )
 
 
-def nearest_cell_centre(cells_rc: np.ndarray, row: int, col: int) -> tuple[float, float]:
+def nearest_cell_centre(cells_rc: IntArray, row: int, col: int) -> tuple[float, float]:
     """World centre of the cell of ``cells_rc`` nearest to cell (row, col)."""
     nearest = cells_rc[np.argmin(np.hypot(cells_rc[:, 0] - row, cells_rc[:, 1] - col))]
     return float(nearest[1]) + 0.5, float(nearest[0]) + 0.5
 
 
-def straight_line(position: tuple[float, float], goals_rc: np.ndarray) -> np.ndarray:
+def straight_line(position: tuple[float, float], goals_rc: IntArray) -> FloatArray:
     """Straight-line distance from ``position`` to each goal cell centre."""
-    return np.hypot(goals_rc[:, 1] + 0.5 - position[0], goals_rc[:, 0] + 0.5 - position[1])
+    distance: FloatArray = np.hypot(
+        goals_rc[:, 1] + 0.5 - position[0], goals_rc[:, 0] + 0.5 - position[1]
+    )
+    return distance
 
 
 def exact_costs(
-    context: PlanContext, position: tuple[float, float], goals_rc: np.ndarray, limit: float
-) -> np.ndarray | None:
+    context: PlanContext, position: tuple[float, float], goals_rc: IntArray, limit: float
+) -> FloatArray | None:
     """Path costs on this robot's map from a teammate's position (None if off the map)."""
     field = distance_field(context.passable, position, limit=limit)
     if field.start_rc is None:
@@ -220,7 +231,7 @@ def exact_costs(
     return field.cost_at(goals_rc[:, 0], goals_rc[:, 1])
 
 
-def greedy_auction(bidders: list[Bidder], sizes: np.ndarray, search: PathSearch) -> int:
+def greedy_auction(bidders: list[Bidder], sizes: FloatArray, search: PathSearch) -> int:
     """Index of the frontier bidder 0 wins in the greedy auction.
 
     A pair whose cost is only a lower bound is refined before it can win: the
@@ -248,7 +259,7 @@ def greedy_auction(bidders: list[Bidder], sizes: np.ndarray, search: PathSearch)
 
 
 def best_pair(
-    bidders: list[Bidder], sizes: np.ndarray, assigned: set[int], taken: np.ndarray
+    bidders: list[Bidder], sizes: FloatArray, assigned: set[int], taken: BoolArray
 ) -> tuple[int, int]:
     """The (bidder, frontier) pair with the highest utility; (-1, -1) if none is left."""
     best, who, which = -np.inf, -1, -1

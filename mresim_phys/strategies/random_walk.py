@@ -7,6 +7,8 @@ run is reproducible and robots never disturb each other's draws.
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 from pydantic import Field
 
@@ -27,13 +29,16 @@ class RandomWalkParams(StrategyParams):
     distance: float = Field(30.0, gt=0, description="Longest path (cells) to a random goal.")
 
 
-@STRATEGIES.register
+# Strategy.params (strategies/base.py) is a settable protocol member, so the narrower params
+# here fails the protocol: drop this ignore once it is a read-only property, as Planner's is.
+@STRATEGIES.register  # type: ignore[arg-type]
 class RandomWalk(Plugin):
     """Pick a uniformly random reachable cell within ``distance`` path cost; go there."""
 
     name = "random_walk"
 
-    Params = RandomWalkParams
+    Params: ClassVar[type[StrategyParams]] = RandomWalkParams
+    params: RandomWalkParams
 
     def __init__(self, params: RandomWalkParams) -> None:
         self.params = params
