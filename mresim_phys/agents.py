@@ -116,12 +116,12 @@ class Robot(Agent):
         """Alive with a working laser."""
         return self.alive and "sensor" not in self.broken
 
-    def fail(self, part: str) -> None:
+    def fail(self, part: Literal["robot"] | Part) -> None:
         """Lose ``part`` for good (``robot``: everything, the robot is ``failed``)."""
         if part == "robot":
             self.status, self.path = "failed", self.path[:0]
         else:
-            self.broken = self.broken | {part}  # type: ignore[operator]
+            self.broken = self.broken | {part}
 
     @property
     def state(self) -> str:

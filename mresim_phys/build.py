@@ -117,9 +117,12 @@ def make_team(robots: list[RobotSpec], streams: Streams, world: World) -> list[R
 
 def radio_ranges(scenario: Scenario) -> tuple[FloatArray, FloatArray]:
     """Every agent's main-channel range and transmit power (NaN: the model's default)."""
-    radios = [scenario.base_station, *scenario.robots]
-    ranges = np.array([r.comm_range for r in radios], dtype=float)
-    powers = np.array([np.nan if r.comm_power_dbm is None else r.comm_power_dbm for r in radios])
+    radios: list[BaseStationSpec | RobotSpec] = [scenario.base_station, *scenario.robots]
+    ranges = np.array([r.comm_range for r in radios], dtype=np.float64)
+    powers = np.array(
+        [np.nan if r.comm_power_dbm is None else r.comm_power_dbm for r in radios],
+        dtype=np.float64,
+    )
     return ranges, powers
 
 

@@ -21,7 +21,7 @@ from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray
 
 def read_only(array: np.ndarray) -> np.ndarray:
     """A read-only view of ``array``."""
-    view = array.view()
+    view: np.ndarray = array.view()
     view.flags.writeable = False
     return view
 

@@ -99,7 +99,7 @@ def test_a_view_tells_links_base_contact_comm_range_and_lost_teammates(
         sim.step()
     view = sim.view_of(sim.robot("A"))
     assert view.comm_range == 20.0
-    assert set(view.links) == {a.name for a, on in zip(sim.agents, sim.links[1]) if on}
+    assert set(view.links) == {a.name for a, on in zip(sim.agents, sim.links[1], strict=True) if on}
     assert view.base_contact == sim.robot("A").last_base_contact
     assert view.lost == frozenset()
     assert any(v.links for v in Proposer.seen)

@@ -48,7 +48,10 @@ def test_readme_commands_are_the_ones_ci_runs() -> None:
     assert 'pip install -e ".[test]" && pytest' in readme
     assert "pip install -e . && mresim run scenarios/01_quickstart.yaml" in readme
     assert (ROOT / "scenarios/01_quickstart.yaml").exists()
-    assert 'pip install -e ".[test]" && pytest' in (ROOT / ".ci/run").read_text()
+    ci = (ROOT / ".ci/run").read_text()
+    assert 'pip install -e ".[test,dev]"' in ci  # the README's install, plus the checkers
+    for command in ("ruff check .", "ruff format --check .", "mypy", "pytest"):
+        assert f"\n{command}\n" in ci, f".ci/run does not run {command!r}"
 
 
 def test_coordination_example_runs(

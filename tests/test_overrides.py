@@ -1,4 +1,4 @@
-"""Overrides merge deeply: a team override beats a robot's own field; robots by name; dotted keys."""
+"""Overrides merge deeply: team overrides beat robots' own fields; robots by name; dotted keys."""
 
 from __future__ import annotations
 

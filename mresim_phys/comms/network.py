@@ -61,8 +61,11 @@ class Channel:
     def links(self, agents: Sequence[Agent], world: World, silent: np.ndarray) -> np.ndarray:
         """This step's links: the model's, among alive and unsilenced agents, minus dropouts."""
         speaking = np.array([a.speaking for a in agents]) & ~silent
-        links = self.model.links(self.radios(agents), world) & np.outer(speaking, speaking)
-        return links & ~self.dropped(len(agents))
+        links: np.ndarray = self.model.links(self.radios(agents), world) & np.outer(
+            speaking, speaking
+        )
+        kept: np.ndarray = links & ~self.dropped(len(agents))
+        return kept
 
     def dropped(self, n: int) -> np.ndarray:
         """Symmetric matrix of the links lost this step (drawn every step for every pair)."""

@@ -26,7 +26,10 @@ def region_polygon(
     angles = np.linspace(0.0, 2.0 * np.pi, rays, endpoint=False)
     reach = model.reach(radios, index, angles, world)
     origin = radios.positions[index]
-    return origin + reach[:, None] * np.column_stack([np.cos(angles), np.sin(angles)])
+    polygon: FloatArray = origin + reach[:, None] * np.column_stack(
+        [np.cos(angles), np.sin(angles)]
+    )
+    return polygon
 
 
 class RegionProbe:

@@ -62,7 +62,8 @@ def time_team(robots: int, map_path: Path, warmup: int, measured: int) -> BenchR
     sim = Simulation(validate_scenario(team_scenario(robots, map_path, warmup + measured)))
     for _ in range(warmup):
         sim.step()
-    totals, phases = [], {name: [] for name in (*PHASES, "motion")}
+    totals: list[float] = []
+    phases: dict[str, list[float]] = {name: [] for name in (*PHASES, "motion")}
     for _ in range(measured):
         before = dict(sim.phase_times)
         started = perf_counter()

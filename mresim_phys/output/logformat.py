@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from collections.abc import Callable, Mapping
 from dataclasses import MISSING, dataclass, fields
-from functools import cache
+from functools import cache, partial
 from typing import Any
 
 import numpy as np
@@ -70,7 +70,7 @@ def to_events(value: Any, n: int) -> tuple[str, ...]:
 
 def flat_true(matrix: np.ndarray) -> list[int]:
     """Flat indices of the True entries of an (n, n) matrix."""
-    return np.flatnonzero(matrix).tolist()
+    return [int(i) for i in np.flatnonzero(matrix)]
 
 
 def to_links(value: Any, n: int) -> np.ndarray:
@@ -149,13 +149,18 @@ def decode_line(
     return out
 
 
+def identity(value: Any) -> Any:
+    """``value`` itself (a field's fixed default, as a maker)."""
+    return value
+
+
 @cache
 def field_defaults(cls: type) -> dict[str, Callable[[], Any]]:
     """Makers of the default value of every dataclass field of ``cls`` that has one."""
     out: dict[str, Callable[[], Any]] = {}
     for f in fields(cls):
         if f.default is not MISSING:
-            out[f.name] = lambda value=f.default: value
+            out[f.name] = partial(identity, f.default)
         elif f.default_factory is not MISSING:
             out[f.name] = f.default_factory
     return out
@@ -250,7 +255,9 @@ class PointsField:
         cur = None if points is None else np.array(points, dtype=np.float64).reshape(-1, 2)
         keep = NONE if cur is None else tail_keep(prev, cur)
         parts[f"{self.name}_keep"].append(np.array([keep]))
-        parts[f"{self.name}_xy"].append(cur if keep == NEW else np.zeros((0, 2)))
+        parts[f"{self.name}_xy"].append(
+            cur if cur is not None and keep == NEW else np.zeros((0, 2))
+        )
         return prev if cur is None else cur
 
     def read(self, prev: FloatArray, chunk: Chunk, k: int) -> tuple[FloatArray, FloatArray | None]:
@@ -333,7 +340,7 @@ def new_parts() -> Parts:
 def chunk_arrays(parts: Parts) -> Chunk:
     """The parts gathered for a chunk as the arrays of its ``.npz`` file, with offsets
     ``<name>_off`` for every variable-length array (``_idx``, ``_xy``)."""
-    arrays = {k: np.concatenate(v).astype(ARRAYS[k]) for k, v in parts.items()}
+    arrays: Chunk = {k: np.concatenate(v).astype(ARRAYS[k]) for k, v in parts.items()}
     ragged = (k for k in parts if k.endswith(("_idx", "_xy")))
     return arrays | {f"{k.rsplit('_', 1)[0]}_off": offsets(parts[k]) for k in ragged}
 

@@ -73,7 +73,8 @@ def new_meta(first: Snapshot, name: str, seed: int, chunk_steps: int) -> dict[st
 
 def flat_cells(grid: np.ndarray) -> np.ndarray:
     """A flat uint8 copy of a bool or uint8 grid."""
-    return np.ascontiguousarray(grid).reshape(-1).view(np.uint8).copy()
+    cells: np.ndarray = np.ascontiguousarray(grid).reshape(-1).view(np.uint8).copy()
+    return cells
 
 
 def write_json(path: Path, data: dict[str, Any]) -> None:
@@ -133,7 +134,8 @@ class RunLogWriter:
         if not self._lines:
             return
         index = self.meta["steps"] // self.chunk_steps
-        np.savez_compressed(self.log_dir / chunk_file(index), **chunk_arrays(self._parts))
+        arrays: dict[str, Any] = chunk_arrays(self._parts)
+        np.savez_compressed(self.log_dir / chunk_file(index), **arrays)
         self._steps.write("\n".join(self._lines) + "\n")
         self._steps.flush()
         self.meta["steps"] += len(self._lines)
@@ -327,7 +329,8 @@ class Replay:
         """The cells of ``changed`` that agent ``i`` now holds FREE."""
         if changed is None:
             return np.zeros(0, np.int64)
-        return changed[self.tracks[i].grids["belief"][changed] == FREE]
+        free: IntArray = changed[self.tracks[i].grids["belief"][changed] == FREE]
+        return free
 
     def measure(
         self,

@@ -48,7 +48,8 @@ class Overlay:
 
     def px(self, xy: Sequence[float] | np.ndarray) -> np.ndarray:
         """World (x, y) points -> fixed-point output pixel coordinates (int32, 4 bits)."""
-        return np.round(np.asarray(xy, dtype=float) * self.to_px - ONE / 2).astype(np.int32)
+        pixels: np.ndarray = np.round(np.asarray(xy, dtype=float) * self.to_px - ONE / 2)
+        return pixels.astype(np.int32)
 
     def draw(
         self, image: np.ndarray, snap: Snapshot, regions: Sequence[np.ndarray | None] = ()
@@ -128,11 +129,16 @@ class Overlay:
                 radius = round(agent.comm_range * self.scale * ONE)
                 cv2.circle(image, c, radius, colour, 1, AA, SHIFT)
         on, index = self.layers.global_layers, {a.name: i for i, a in enumerate(snap.agents)}
-        ends = centres[np.argwhere(np.triu(snap.links, 1))] if "links" in on else []
+        ends: np.ndarray | list[np.ndarray] = (
+            centres[np.argwhere(np.triu(snap.links, 1))] if "links" in on else []
+        )
         if len(ends):  # one call for all links: 1-pixel AA polylines draw as cv2.line does
             cv2.polylines(image, list(ends), False, self.style.link, 1, AA, SHIFT)
         if "hierarchy" in on:
-            parents = [(i, index.get(a.parent)) for i, a in enumerate(snap.agents)]
+            parents = [
+                (i, index.get(a.parent) if a.parent is not None else None)
+                for i, a in enumerate(snap.agents)
+            ]
             for i, j in ((i, j) for i, j in parents if j is not None):
                 cv2.line(image, centres[i], centres[j], self.style.hierarchy, 2, AA, SHIFT)
 
@@ -170,7 +176,8 @@ def robot_triangles(
     angles = headings[:, None] + TRIANGLE_TURNS
     reach = TRIANGLE_REACH[None, :, None] * np.asarray(sizes, dtype=float)[:, None, None] * ONE
     units = np.stack((np.cos(angles), np.sin(angles)), axis=-1)
-    return (np.reshape(centres, (-1, 1, 2)) + units * reach).astype(np.int32)
+    corners: np.ndarray = (np.reshape(centres, (-1, 1, 2)) + units * reach).astype(np.int32)
+    return corners
 
 
 def draw_cross(image: np.ndarray, centre: np.ndarray, half: int, colour: BGR) -> None:

@@ -54,7 +54,8 @@ class Renderer:
         self.rows, self.cols = (int(n) for n in truth_shape)
         self.layers, self.scale, self.style = layers, float(scale), style
         self.map_size = (max(round(self.cols * scale), 1), max(round(self.rows * scale), 1))
-        self.size = tuple(max(n + n % 2, 2) for n in self.map_size)  # (width, height), even
+        width, height = (max(n + n % 2, 2) for n in self.map_size)
+        self.size = (width, height)  # output pixels, even
         self._to_px = np.array(self.map_size) / (self.cols, self.rows) * ONE
         self._lut = style.lut(layers)
         self._table = packed_colours(self._lut)

@@ -16,10 +16,10 @@ from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from types import MappingProxyType
 
-GLOBAL_LAYERS = ("walls", "unexplored", "team_known", "known_at_base", "links", "hierarchy")
-GLOBAL_LAYERS += ("legend", "header")
-ROBOT_LAYERS = ("location", "path", "free_space", "safe_space", "frontiers", "comm_range")
-ROBOT_LAYERS += ("goal", "skeleton", "rendezvous")
+GLOBAL_LAYERS: tuple[str, ...] = ("walls", "unexplored", "team_known", "known_at_base")
+GLOBAL_LAYERS += ("links", "hierarchy", "legend", "header")
+ROBOT_LAYERS: tuple[str, ...] = ("location", "path", "free_space", "safe_space", "frontiers")
+ROBOT_LAYERS += ("comm_range", "goal", "skeleton", "rendezvous")
 LAYERS = GLOBAL_LAYERS + ROBOT_LAYERS
 DEFAULT_GLOBAL = frozenset(GLOBAL_LAYERS)
 DEFAULT_ROBOT = frozenset(ROBOT_LAYERS) - {"free_space", "safe_space"}
@@ -98,11 +98,12 @@ def parse_layers(text: str) -> LayerSpec:
     plain = [("-" if t[0] == "-" else "", t.lstrip("-")) for t in tokens if ":" not in t]
     adds = any(sign == "" for sign, _ in plain)
     chosen = _apply(set() if adds else set(DEFAULTS), plain, LAYERS)
-    robot, per_robot = chosen & set(ROBOT_LAYERS), {}
+    robot = chosen & set(ROBOT_LAYERS)
+    per_robot: dict[str, frozenset[str]] = {}
     for token in (t for t in tokens if ":" in t):
         name, _, rest = token.partition(":")
         if not name or not re.fullmatch(r"[+-]?\w+([+-]\w+)*", rest):
             raise ValueError(f"layers: {token!r} should look like 'B:free_space+path-goal'")
         changes = re.findall(r"([+-]?)(\w+)", rest)
-        per_robot[name] = _apply(set(per_robot.get(name, robot)), changes, ROBOT_LAYERS)
+        per_robot[name] = frozenset(_apply(set(per_robot.get(name, robot)), changes, ROBOT_LAYERS))
     return LayerSpec(frozenset(chosen & set(GLOBAL_LAYERS)), frozenset(robot), per_robot)

@@ -122,7 +122,7 @@ def finish_labels(
 
 
 @njit(cache=True, nogil=True)
-def colour_labels(label: BeliefGrid, table: np.ndarray, image: BeliefGrid) -> None:
+def colour_labels(label: np.ndarray, table: np.ndarray, image: np.ndarray) -> None:
     """``image[r, c]`` = the colour ``table[label[r, c]]`` (uint32 0xRRGGBB as BGR bytes);
     cells of ``image`` beyond the label grid (padding) take ``table[0]``."""
     rows, cols = label.shape

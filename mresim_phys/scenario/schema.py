@@ -8,7 +8,7 @@ inherits; a robot entry may override any of them (nested ``sensor`` keys merge).
 
 from __future__ import annotations
 
-from typing import Annotated, Any, Literal, Union
+from typing import TYPE_CHECKING, Annotated, Any, Literal, Union
 
 from pydantic import (
     BaseModel,
@@ -244,7 +244,17 @@ def event_union() -> Any:
     ]
 
 
-Event = event_union()
+def events_type() -> Any:
+    """``list[SerializeAsAny[<event union>]]``: the type of ``Scenario.events``."""
+    union = event_union()
+    # a type built at run time from the registry: mypy cannot check it, pydantic does
+    return list[SerializeAsAny[union]]  # type: ignore[valid-type]
+
+
+if TYPE_CHECKING:
+    EventList = list[EventParams]  # what every member of the union is
+else:
+    EventList = events_type()
 
 
 class Scenario(Strict):
@@ -267,7 +277,7 @@ class Scenario(Strict):
     render: RenderSpec = Field(
         default_factory=RenderSpec, description="Video, pictures, run log and plots."
     )
-    events: list[SerializeAsAny[Event]] = Field(  # type: ignore[valid-type]
+    events: EventList = Field(
         default_factory=list,
         description="Scheduled events (robot failures, blackouts, ...): see 'events' below.",
     )
@@ -317,6 +327,5 @@ def refresh_event_union() -> None:
     names = tuple(EVENTS.names())
     if names != _EVENT_NAMES:
         _EVENT_NAMES = names
-        Scenario.model_fields["events"].annotation = list[SerializeAsAny[event_union()]]
+        Scenario.model_fields["events"].annotation = events_type()
         Scenario.model_rebuild(force=True)
-

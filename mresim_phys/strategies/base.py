@@ -84,7 +84,11 @@ class Strategy(Protocol):
 
     name: ClassVar[str]
     Params: ClassVar[type[StrategyParams]]
-    params: StrategyParams
+
+    @property
+    def params(self) -> StrategyParams:
+        """The validated parameters it was built from (read only: a subclass may narrow it)."""
+        ...
 
     def decide(self, view: RobotView) -> Decision:
         """Choose the robot's next path from what it knows."""

@@ -101,9 +101,7 @@ def utility(sizes: FloatArray, costs: FloatArray) -> FloatArray:
     return np.where(np.isfinite(costs), u, -np.inf)
 
 
-# Strategy.params (strategies/base.py) is a settable protocol member, so the narrower params
-# here fails the protocol: drop this ignore once it is a read-only property, as Planner's is.
-@STRATEGIES.register  # type: ignore[arg-type]
+@STRATEGIES.register
 class FrontierExploration(Plugin):
     """Greedy utility-based frontier exploration with a teammate auction."""
 

@@ -29,9 +29,7 @@ class RandomWalkParams(StrategyParams):
     distance: float = Field(30.0, gt=0, description="Longest path (cells) to a random goal.")
 
 
-# Strategy.params (strategies/base.py) is a settable protocol member, so the narrower params
-# here fails the protocol: drop this ignore once it is a read-only property, as Planner's is.
-@STRATEGIES.register  # type: ignore[arg-type]
+@STRATEGIES.register
 class RandomWalk(Plugin):
     """Pick a uniformly random reachable cell within ``distance`` path cost; go there."""
 

@@ -89,11 +89,14 @@ class Patch:
 
     def cells(self) -> IntArray:
         """``(n, 2)`` (row, col) of every flipped cell."""
-        return np.argwhere(self.flipped) + np.array([self.row0, self.col0])
+        cells: IntArray = np.argwhere(self.flipped) + np.array([self.row0, self.col0])
+        return cells
 
     def closed(self) -> IntArray:
         """``(n, 2)`` (row, col) of every cell that became occupied."""
-        return np.argwhere(self.flipped & self.occupied) + np.array([self.row0, self.col0])
+        closed = self.flipped & self.occupied
+        cells: IntArray = np.argwhere(closed) + np.array([self.row0, self.col0])
+        return cells
 
 
 @dataclass(frozen=True)
@@ -221,4 +224,5 @@ def circles_on_cells(centres: FloatArray, radii: FloatArray, patch: Patch) -> In
     x, y, r = x[near, None], y[near, None], r[near, None]
     dx = np.maximum(np.maximum(cells[:, 1] - x, 0.0), x - (cells[:, 1] + 1))
     dy = np.maximum(np.maximum(cells[:, 0] - y, 0.0), y - (cells[:, 0] + 1))
-    return near[(dx * dx + dy * dy < r * r).any(axis=1)]
+    touching: IntArray = near[(dx * dx + dy * dy < r * r).any(axis=1)]
+    return touching

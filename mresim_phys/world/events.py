@@ -85,7 +85,11 @@ class Event(Protocol):
 
     name: ClassVar[str]
     Params: ClassVar[type[EventParams]]
-    params: EventParams
+
+    @property
+    def params(self) -> EventParams:
+        """The validated parameters it was built from (read only: a subclass may narrow it)."""
+        ...
 
     def apply(self, context: EventContext) -> None:
         """Act if this event has anything to do at ``context.step``."""
@@ -115,10 +119,11 @@ class Failure(Plugin):
     """A robot, or one of its parts, fails for good."""
 
     name = "fail"
-    Params = FailParams
+    Params: ClassVar[type[EventParams]] = FailParams
+    params: FailParams
 
     def __init__(self, params: FailParams) -> None:
-        self.params: FailParams = params
+        self.params = params
 
     def apply(self, context: EventContext) -> None:
         """Fail the robot (or part) at its step."""
@@ -152,10 +157,11 @@ class Blackout(Plugin):
     """Agents go silent on a channel for a while (jamming, a dead zone, a radio reset)."""
 
     name = "blackout"
-    Params = BlackoutParams
+    Params: ClassVar[type[EventParams]] = BlackoutParams
+    params: BlackoutParams
 
     def __init__(self, params: BlackoutParams) -> None:
-        self.params: BlackoutParams = params
+        self.params = params
 
     def apply(self, context: EventContext) -> None:
         """Silence the agents at ``step``; note the end at ``until``."""
@@ -194,10 +200,11 @@ class Cells(Plugin):
     """Part of the building changes: a window of cells becomes wall or free space."""
 
     name = "cells"
-    Params = CellsParams
+    Params: ClassVar[type[EventParams]] = CellsParams
+    params: CellsParams
 
     def __init__(self, params: CellsParams) -> None:
-        self.params: CellsParams = params
+        self.params = params
 
     def apply(self, context: EventContext) -> None:
         """Change the cells at the event's step."""

@@ -146,7 +146,8 @@ class World:
     @property
     def shape(self) -> tuple[int, int]:
         """(rows, cols) of the map."""
-        return self.occupied.shape  # type: ignore[return-value]
+        rows, cols = self.occupied.shape
+        return rows, cols
 
     @property
     def segments(self) -> FloatArray:

@@ -70,12 +70,14 @@ class WallSet:
     def segments(self) -> FloatArray:
         """``(n, 4)`` current segments: those never replaced in their original order, then
         the replacements in the order they were made."""
-        return self._ends.copy()
+        ends: FloatArray = self._ends.copy()
+        return ends
 
     @property
     def kinds(self) -> KindArray:
         """``(n,)`` kind (1 wall, 2 movable) of each row of :attr:`segments`."""
-        return self._kinds.copy()
+        kinds: KindArray = self._kinds.copy()
+        return kinds
 
     def rebuild(self, kinds: KindGrid, box: Box) -> None:
         """Replace the segments on every unit edge of the cells in ``box`` from ``kinds``."""
