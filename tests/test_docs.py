@@ -19,14 +19,21 @@ def python_blocks(path: Path) -> list[str]:
     return re.findall(r"```python\n(.*?)```", path.read_text(encoding="utf-8"), re.S)
 
 
+def importable_example(
+    index: int, module: str, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Python block ``index`` of the strategy guide saved as ``module`` on the path."""
+    (tmp_path / f"{module}.py").write_text(
+        python_blocks(ROOT / "docs/writing-a-strategy.md")[index]
+    )
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.delitem(sys.modules, module, raising=False)
+
+
 def test_strategy_example_runs(
     tmp_path: Path, scenario_file: Callable[..., Path], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    (tmp_path / "my_strategies.py").write_text(
-        python_blocks(ROOT / "docs/writing-a-strategy.md")[0]
-    )
-    monkeypatch.syspath_prepend(str(tmp_path))
-    monkeypatch.delitem(sys.modules, "my_strategies", raising=False)
+    importable_example(0, "my_strategies", tmp_path, monkeypatch)
     strategy = {"name": "my_strategies:NearestFrontier", "params": {"min_size": 5}}
     team = {"speed": 2, "radius": 1.0, "sensor": {"range": 30}, "comm_range": 20}
     sim = Simulation.from_yaml(scenario_file(team={**team, "strategy": strategy}, steps=40))
@@ -57,11 +64,7 @@ def test_readme_commands_are_the_ones_ci_runs() -> None:
 def test_coordination_example_runs(
     tmp_path: Path, scenario_file: Callable[..., Path], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    (tmp_path / "meet_strategies.py").write_text(
-        python_blocks(ROOT / "docs/writing-a-strategy.md")[1]
-    )
-    monkeypatch.syspath_prepend(str(tmp_path))
-    monkeypatch.delitem(sys.modules, "meet_strategies", raising=False)
+    importable_example(1, "meet_strategies", tmp_path, monkeypatch)
     team = {"speed": 2, "radius": 1.0, "sensor": {"range": 30}, "comm_range": 20}
     strategy = {"name": "meet_strategies:MeetAtBase"}
     sim = Simulation.from_yaml(scenario_file(team={**team, "strategy": strategy}, steps=20))
