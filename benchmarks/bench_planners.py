@@ -35,8 +35,8 @@ from mresim_phys.planning.fields import distance_field, path_length, traversable
 from mresim_phys.planning.grid import Window
 from mresim_phys.planning.jps import jps_search
 from mresim_phys.planning.smoothing import smooth_path
+from mresim_phys.planning.topobuild import build_map
 from mresim_phys.planning.topological import topological_path
-from mresim_phys.planning.topomap import build_map
 from mresim_phys.scenario.readers import load_image_map, load_ros_map, load_text_map
 from mresim_phys.types import BoolGrid
 

@@ -18,7 +18,7 @@ from test_planning import assert_valid_path, random_passable, reference_dijkstra
 from mresim_phys import Simulation
 from mresim_phys.cli import main
 from mresim_phys.errors import ScenarioError, UnknownPluginError
-from mresim_phys.planning import BUILT_IN, PLANNERS, Planner, topological
+from mresim_phys.planning import BUILT_IN, PLANNERS, Planner, topocorridor, topological
 from mresim_phys.planning.astar import AStar, astar_search
 from mresim_phys.planning.base import PlannerParams
 from mresim_phys.planning.fields import distance_field, path_length, traversable
@@ -26,8 +26,9 @@ from mresim_phys.planning.grid import Window
 from mresim_phys.planning.jps import JumpPointSearch, jps_search
 from mresim_phys.planning.skeleton import removal_table, thin
 from mresim_phys.planning.smoothing import smooth_path
+from mresim_phys.planning.topobuild import build_map
+from mresim_phys.planning.topocache import MapCache
 from mresim_phys.planning.topological import TopologicalParams, TopologicalPlanner
-from mresim_phys.planning.topomap import MapCache, build_map
 from mresim_phys.scenario.readers import load_image_map, load_ros_map, load_text_map
 from mresim_phys.strategies import RobotView, plan_context
 from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams
@@ -268,10 +269,10 @@ def test_topological_queries_agree_however_freshness_is_known_and_however_wide_t
         for fresh in (None, False):
             got = topological.topological_path(topo, passable.copy(), start, goal, 1, fresh)
             np.testing.assert_array_equal(got, expected)
-        monkeypatch.setattr(topological._WORK, "ring", np.empty((3, 2), dtype=np.int32))
+        monkeypatch.setattr(topocorridor._WORK, "ring", np.empty((3, 2), dtype=np.int32))
         got = topological.topological_path(topo, passable, start, goal, 1, True)
         np.testing.assert_array_equal(got, expected)
-        assert topological._WORK.ring.shape[1] > 2
+        assert topocorridor._WORK.ring.shape[1] > 2
 
 
 def test_graph_routes_cost_what_scipy_dijkstra_finds() -> None:

@@ -10,7 +10,8 @@ from __future__ import annotations
 
 from mresim_phys.planning import astar, jps, topological
 from mresim_phys.planning.base import PLANNERS, Planner, PlannerParams
-from mresim_phys.planning.topomap import TopologicalMap, shared_map
+from mresim_phys.planning.topocache import shared_map
+from mresim_phys.planning.topomap import TopologicalMap
 
 BUILT_IN = ("astar", "jps", "topological")
 assert {astar.AStar.name, jps.JumpPointSearch.name, topological.TopologicalPlanner.name} == set(
