@@ -1,12 +1,14 @@
 """Phase 1 (geometry) benchmark: grid -> wall segments -> pymunk Space -> 181-ray scans.
 
 Run ``python benchmarks/bench_maps.py`` from the repository root. It prints medians over
-7 repeats for :func:`mresim_phys.maps.wall_segments` on ``maps/office.png`` and on a
+7 repeats for :func:`mresim_phys.world.maps.wall_segments` on ``maps/office.png`` and on a
 synthetic 2000 x 2000 maze, the time to build a pymunk Space from the segments (added in
 a shuffled order with a fixed seed), and the cost of a 181-ray scan through the low-level
 ``cpSpaceSegmentQueryFirst`` on three spatial indexes: the BB tree with segments added in
-generation order, the BB tree with shuffled insertion, and ``use_spatial_hash(10, 10 n)``.
-This is a script, not a test; see ``docs/`` and ``performance-notes.md`` for targets.
+generation order, the BB tree with shuffled insertion, and ``use_spatial_hash(10, 10 n)``;
+then the same scan on the shuffled BB tree through pymunk's own ``segment_query_first``
+(which allocates its result per ray). This is a script, not a test; the figures it gave
+are in ``docs/performance.md`` (Kernels).
 """
 
 from __future__ import annotations
@@ -127,6 +129,21 @@ def scan_all(space: pymunk.Space, poses: NDArray[np.float64], max_range: float) 
     return total
 
 
+def scan_all_wrapper(space: pymunk.Space, poses: NDArray[np.float64], max_range: float) -> float:
+    """:func:`scan_all` through pymunk's ``Space.segment_query_first`` instead of the C call."""
+    shape_filter = pymunk.ShapeFilter()
+    offsets = np.linspace(-np.pi / 2, np.pi / 2, N_RAYS)
+    total = 0.0
+    for x, y, heading in poses:
+        angles = heading + offsets
+        ends = np.column_stack((x + max_range * np.cos(angles), y + max_range * np.sin(angles)))
+        start = (x, y)
+        for end in ends.tolist():
+            hit = space.segment_query_first(start, end, 0.0, shape_filter)
+            total += hit.alpha * max_range if hit is not None else max_range
+    return total
+
+
 def bench_map(name: str, occupied: NDArray[np.bool_], max_range: float) -> dict[str, object]:
     """All figures for one map."""
     segments = wall_segments(occupied)
@@ -149,6 +166,10 @@ def bench_map(name: str, occupied: NDArray[np.bool_], max_range: float) -> dict[
     for key, space in spaces.items():
         seconds = median_seconds(lambda space=space: scan_all(space, poses, max_range))
         row[f"scan us {key}"] = 1e6 * seconds / N_POSES
+    shuffled_space = spaces["shuffled"]
+    assert np.isclose(scan_all_wrapper(shuffled_space, poses, max_range), sums["sorted"])
+    seconds = median_seconds(lambda: scan_all_wrapper(shuffled_space, poses, max_range))
+    row["scan us wrapper"] = 1e6 * seconds / N_POSES
     return row
 
 
@@ -175,7 +196,8 @@ def main(argv: list[str] | None = None) -> int:
     ]
     print(
         f"medians of {REPEATS}; scans: {N_RAYS} rays over 180 deg, range {args.range:g} cells, "
-        f"{N_POSES} free poses, low-level cpSpaceSegmentQueryFirst"
+        f"{N_POSES} free poses, low-level cpSpaceSegmentQueryFirst "
+        "('wrapper': pymunk's segment_query_first, shuffled BB tree)"
     )
     print_table(rows)
     return 0

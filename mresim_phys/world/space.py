@@ -20,10 +20,10 @@ segments have their own category and every obstacle filter includes it: rays,
 line of sight and motion see them exactly where the grid has them.
 
 Queries go through Chipmunk's C function via pymunk's cffi handle with one
-reused result struct: the pymunk wrapper costs ~3 us per ray in allocations,
-the direct call ~0.7 us (performance-notes.md, section 2). Walls live in the
+reused result struct: the pymunk wrapper allocates per ray and costs ~4 us a ray,
+the direct call ~1.3 us (docs/performance.md, Kernels). Walls live in the
 default bounding-box tree, inserted in a fixed shuffled order (sorted insertion
-builds a degenerate tree). The spatial hash the notes measured as fastest is NOT
+builds a degenerate tree). The spatial hash, measured as fast, is NOT
 used: its segment query misses hits near the end of a ray (a ray from (60, 30)
 to (1.88, 44.90) passes through the wall x = 2 with ``use_spatial_hash(10, n)``;
 tests/test_sensing.py keeps that case).
