@@ -31,8 +31,7 @@ from mresim_phys.agents import empty_belief  # noqa: E402
 from mresim_phys.knowledge.mapping import integrate_scan  # noqa: E402
 from mresim_phys.scenario.load import validate_scenario  # noqa: E402
 from mresim_phys.scenario.readers import load_image_map  # noqa: E402
-from mresim_phys.scenario.schema import SensorSpec  # noqa: E402
-from mresim_phys.world.sensing import scan  # noqa: E402
+from mresim_phys.world.sensing import Laser, scan  # noqa: E402
 from mresim_phys.world.space import World  # noqa: E402
 
 OFFICE = ROOT / "maps" / "office.png"
@@ -58,12 +57,12 @@ def bench_kernels(repeats: int) -> None:
     flt = world.query_filter(None, robots_block=False)
     print("kernel (office 800x600, 200 poses)        median per call")
     x, y, h = poses[0]
-    first_scan = scan(world, (x, y), h, SensorSpec(range=100.0), flt)
+    first_scan = scan(world, (x, y), h, Laser(range=100.0), flt)
     t0 = time.perf_counter()
     integrate_scan(*empty_belief(occupied.shape), first_scan, 0.1)
     print(f"  first map update (compile or cache load) {(time.perf_counter() - t0) * 1e3:8.0f} ms")
     for rng in (100.0, 200.0):
-        sensor = SensorSpec(range=rng)
+        sensor = Laser(range=rng)
         scans = [scan(world, (x, y), h, sensor, flt) for x, y, h in poses]
         t_scan, t_map = [], []
         for _ in range(repeats):
