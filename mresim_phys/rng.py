@@ -1,4 +1,4 @@
-"""Seeding: one ``SeedSequence`` from the scenario seed feeds named random streams.
+"""Seeding (shared): one ``SeedSequence`` from the scenario seed feeds named random streams.
 
 Each stream is derived from the seed and a fixed key (its name, and the agent
 index for per-agent streams), never from the order in which streams are asked

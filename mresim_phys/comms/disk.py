@@ -1,4 +1,4 @@
-"""``disk``: the original's StaticCircle model, walls ignored.
+"""``disk`` (phase 6): the original's StaticCircle model, walls ignored.
 
 Two agents are linked when their distance is below the SUM of their two comm
 ranges (the original's semantics: each range is a disk around its agent and the

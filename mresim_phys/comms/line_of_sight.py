@@ -1,4 +1,4 @@
-"""``line_of_sight``: the original's DirectLine model on exact geometry.
+"""``line_of_sight`` (phase 6): the original's DirectLine model on exact geometry.
 
 Linked when ``disk`` links the pair (distance < sum of ranges) and nothing
 blocks the straight segment between them: one pymunk segment query against the

@@ -1,4 +1,4 @@
-"""``path_loss``: log-distance path loss with wall attenuation (paper, section 2.6).
+"""``path_loss`` (phase 6): log-distance path loss with wall attenuation (paper, section 2.6).
 
 The Bahl-Padmanabhan (RADAR, 2000) model the original calls PropModel1, as the
 standard formula for the signal of agent i received at agent j::

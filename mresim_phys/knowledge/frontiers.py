@@ -1,4 +1,4 @@
-"""Phase 3b of the simulation cycle: frontiers from a belief grid.
+"""Frontiers (phase 3b, knowledge): frontier clusters and targets from a belief grid.
 
 A frontier cell is a FREE cell 8-adjacent to an UNKNOWN cell (cells outside the grid are not
 unknown). Clusters are the 8-connected components of frontier cells. ``find_frontiers``

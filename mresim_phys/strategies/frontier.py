@@ -1,4 +1,4 @@
-"""``frontier``: the original's greedy frontier exploration ("return when done").
+"""``frontier`` (phase 4, decide): the original's greedy frontier exploration ("return when done").
 
 At every replan the robot finds the frontiers of its own map, scores each as
 ``U = size * 1e8 / d**4`` (``d`` = path length; original ``FrontierExploration``)

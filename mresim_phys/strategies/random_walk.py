@@ -1,4 +1,4 @@
-"""``random_walk``: go to a random reachable known-free cell nearby, again and again.
+"""``random_walk`` (phase 4, decide): go to a random reachable known-free cell nearby, repeatedly.
 
 A baseline for comparisons (the original uses random steps for its first cycles
 and after errors). Draws come from the robot's own ``strategy`` stream, so a
