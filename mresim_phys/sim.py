@@ -264,11 +264,6 @@ class Simulation:
         """This step's main-channel links (index 0 = base)."""
         return self.comm.links
 
-    @property
-    def parts(self) -> Setup:
-        """The run's runtime values (older name of :attr:`setup`)."""
-        return self.setup
-
     def communicate(self) -> None:
         """Find links among alive agents and exchange knowledge along them."""
         started = perf_counter()
@@ -302,7 +297,7 @@ class Simulation:
             agents=tuple(agents),
             links=self.links.copy(),
             events=tuple(self.events_now),
-            resolution=self.scenario.map.resolution or self.parts.truth.resolution,
+            resolution=self.setup.resolution,
             comm=CommSummary(
                 self.record.comm_bytes,
                 self.comm.control_links.copy() if self.network.control else None,

@@ -71,7 +71,7 @@ def test_robot_order_never_changes_the_result(scenario_file: ScenarioFile) -> No
 
 def test_robots_move_at_most_their_speed_and_never_into_walls(scenario_file: ScenarioFile) -> None:
     sim = Simulation.from_yaml(scenario_file(), steps=60)
-    truth = sim.parts.truth.occupied
+    truth = sim.world.occupied
     before = {r.name: r.position for r in sim.robots}
     for _ in range(60):
         sim.step()
