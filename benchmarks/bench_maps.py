@@ -17,7 +17,7 @@ import argparse
 import statistics
 import sys
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import cv2
@@ -113,17 +113,24 @@ def scan_poses(occupied: NDArray[np.bool_], rng: np.random.Generator) -> NDArray
     return np.column_stack((picks[:, 1] + 0.5, picks[:, 0] + 0.5, headings))
 
 
+def scan_rays(
+    poses: NDArray[np.float64], max_range: float
+) -> Iterator[tuple[tuple[float, float], list[list[float]]]]:
+    """Each pose's origin and the ends of its 181-ray, 180-degree scan."""
+    offsets = np.linspace(-np.pi / 2, np.pi / 2, N_RAYS)
+    for x, y, heading in poses:
+        angles = heading + offsets
+        ends = np.column_stack((x + max_range * np.cos(angles), y + max_range * np.sin(angles)))
+        yield (x, y), ends.tolist()
+
+
 def scan_all(space: pymunk.Space, poses: NDArray[np.float64], max_range: float) -> float:
     """Cast a 181-ray, 180-degree scan from every pose; return the sum of hit distances."""
     query, cp_space = lib.cpSpaceSegmentQueryFirst, space._space
     info, shape_filter, null = ffi.new("cpSegmentQueryInfo *"), pymunk.ShapeFilter(), ffi.NULL
-    offsets = np.linspace(-np.pi / 2, np.pi / 2, N_RAYS)
     total = 0.0
-    for x, y, heading in poses:
-        angles = heading + offsets
-        ends = np.column_stack((x + max_range * np.cos(angles), y + max_range * np.sin(angles)))
-        start = (x, y)
-        for end in ends.tolist():
+    for start, ends in scan_rays(poses, max_range):
+        for end in ends:
             hit = query(cp_space, start, end, 0.0, shape_filter, info)
             total += info.alpha * max_range if hit != null else max_range
     return total
@@ -132,13 +139,9 @@ def scan_all(space: pymunk.Space, poses: NDArray[np.float64], max_range: float) 
 def scan_all_wrapper(space: pymunk.Space, poses: NDArray[np.float64], max_range: float) -> float:
     """:func:`scan_all` through pymunk's ``Space.segment_query_first`` instead of the C call."""
     shape_filter = pymunk.ShapeFilter()
-    offsets = np.linspace(-np.pi / 2, np.pi / 2, N_RAYS)
     total = 0.0
-    for x, y, heading in poses:
-        angles = heading + offsets
-        ends = np.column_stack((x + max_range * np.cos(angles), y + max_range * np.sin(angles)))
-        start = (x, y)
-        for end in ends.tolist():
+    for start, ends in scan_rays(poses, max_range):
+        for end in ends:
             hit = space.segment_query_first(start, end, 0.0, shape_filter)
             total += hit.alpha * max_range if hit is not None else max_range
     return total

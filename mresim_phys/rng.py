@@ -22,18 +22,6 @@ def stream_key(name: str) -> int:
     return zlib.crc32(name.encode("utf-8"))
 
 
-def named_stream(seed: int, name: str, index: int = 0) -> np.random.Generator:
-    """The generator for stream ``name`` (and agent ``index``) of a run with ``seed``.
-
-    >>> a = named_stream(7, "strategy", 1).integers(1 << 30)
-    >>> b = named_stream(7, "strategy", 1).integers(1 << 30)
-    >>> bool(a == b)
-    True
-    """
-    sequence = np.random.SeedSequence(entropy=seed, spawn_key=(stream_key(name), index))
-    return np.random.Generator(np.random.PCG64(sequence))
-
-
 class Streams:
     """Every random stream of one run, derived from one ``SeedSequence`` of the scenario seed.
 
@@ -48,11 +36,6 @@ class Streams:
 
     def __init__(self, seed: int) -> None:
         self.root = np.random.SeedSequence(entropy=seed)
-
-    @property
-    def seed(self) -> int:
-        """The scenario seed the streams come from."""
-        return int(self.root.entropy)  # type: ignore[arg-type]
 
     def get(self, name: str, index: int = 0) -> np.random.Generator:
         """A fresh generator for stream ``name`` (and ``index``); equal calls, equal draws."""

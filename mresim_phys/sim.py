@@ -166,7 +166,7 @@ class Simulation:
         Returns the robots that decided this step (their strategies are not asked again
         before they move; a robot given an action is not asked at all this step).
         """
-        unknown = sorted(set(actions) - {r.name for r in self.robots})
+        unknown = sorted(set(actions) - {r.name for r in self.robots}) if actions else []
         if unknown:
             raise ValueError(f"actions name robots the team does not have: {unknown}")
         planned = set(actions)
@@ -361,4 +361,5 @@ def agent_snapshot(agent: Agent) -> AgentSnapshot:
         skeleton=bool_view(info.get("skeleton")),
         rendezvous=points_or_none(info.get("rendezvous")),
         base_contact=agent.last_base_contact,
+        broken=tuple(sorted(robot.broken)) if robot else (),
     )

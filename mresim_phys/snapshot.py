@@ -57,6 +57,7 @@ class AgentSnapshot:
     skeleton: BoolGrid | None = None  # from a strategy's Decision.info["skeleton"], if any
     rendezvous: FloatArray | None = None  # (k, 2) points from Decision.info["rendezvous"]
     base_contact: int = -1  # last step this agent's data reached the base (-1: never)
+    broken: tuple[str, ...] = ()  # parts that failed for good (drive, radio, sensor)
 
 
 @dataclass(frozen=True)

@@ -26,6 +26,7 @@ from mresim_phys.output.runlog import (
     recompute_metrics,
 )
 from mresim_phys.render import LayerSpec, Renderer
+from mresim_phys.render.draw import robot_label
 from mresim_phys.scenario.schema import RenderSpec
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot
 from mresim_phys.world.maps import free_components_mask
@@ -148,6 +149,25 @@ def test_the_log_shows_the_failure(failing: Path, tmp_path: Path) -> None:
         state = snap.robots[1].state
         assert (state == "failed") == (snap.step >= 10), (snap.step, state)
         assert snap.alive == (2 if snap.step >= 10 else 3)
+
+
+def test_part_failures_are_logged_replayed_and_drawn(
+    scenario_file: ScenarioFile, tmp_path: Path
+) -> None:
+    """A robot that lost its radio stays 'active' in metrics, but the log, the replay and
+    the frame's label say what broke."""
+    events = [{"step": 5, "fail": "B", "part": "radio"}, {"step": 8, "fail": "C", "part": "drive"}]
+    snaps, _, _ = record_run(
+        scenario_file(robots=THREE_ROBOTS, events=events), tmp_path / "log", 12
+    )
+    assert [r.broken for r in snaps[-1].robots] == [(), ("radio",), ("drive",)]
+    assert snaps[4].robots[1].broken == ()
+    lines = (tmp_path / "log" / "steps.jsonl").read_text().splitlines()
+    assert "broken" not in json.loads(lines[4])["agents"][2]  # nothing broken: nothing stored
+    for got, want in zip(RunLog.open(tmp_path / "log").snapshots(), snaps, strict=True):
+        assert_same_snapshot(got, want)
+    assert robot_label(snaps[-1].robots[1]) == "B [radio]"
+    assert robot_label(snaps[-1].robots[0]) == "A"
 
 
 def test_an_unclosed_log_holds_its_flushed_chunks(

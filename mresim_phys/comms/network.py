@@ -97,13 +97,12 @@ class Network:
         ledger: Ledger,
         *,
         control: Channel | None = None,
-        blackouts: Sequence[Blackout] = (),
         multi_hop: bool = True,
         full_maps: bool = False,
     ) -> None:
         self.main, self.control = main, control
         self.ledger = ledger
-        self.blackouts = tuple(blackouts)
+        self.blackouts: tuple[Blackout, ...] = ()  # added by blackout events as they start
         self.multi_hop = multi_hop
         self.maps = Exchange(ledger, full_maps=full_maps)
         self.records = Exchange(ledger, maps=False)

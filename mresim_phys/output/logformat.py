@@ -64,7 +64,7 @@ def to_float(value: Any, n: int) -> float:
 
 
 def to_events(value: Any, n: int) -> tuple[str, ...]:
-    """A JSON list of event texts read back."""
+    """A JSON list of texts (events, broken parts) read back."""
     return tuple(value)
 
 
@@ -87,13 +87,15 @@ def to_comm(value: Any, n: int) -> CommSummary:
 class LineField:
     """A field stored as JSON: ``encode(value)``, and ``decode(json, agents)`` back.
 
-    ``omit_none``: left out of the line when None. A key missing from a line (a None left
-    out, or an older log) reads back as the dataclass field's default.
+    ``omit_none``: left out of the line when None; ``omit_empty``: left out when empty. A
+    key missing from a line (a value left out, or an older log) reads back as the dataclass
+    field's default.
     """
 
     encode: Callable[[Any], Any]
     decode: Callable[[Any, int], Any]
     omit_none: bool = False
+    omit_empty: bool = False
 
 
 STATIC_AGENT = {
@@ -111,6 +113,7 @@ AGENT_LINE = {
     "distance": LineField(float, to_float),
     "parent": LineField(str, plain, omit_none=True),
     "base_contact": LineField(int, to_int),
+    "broken": LineField(list, to_events, omit_empty=True),
 }
 SNAPSHOT_LINE = {
     "step": LineField(int, to_int),
@@ -128,7 +131,7 @@ def encode_line(codecs: Mapping[str, LineField], obj: object) -> dict[str, Any]:
     out = {}
     for name, codec in codecs.items():
         value = getattr(obj, name)
-        if not (codec.omit_none and value is None):
+        if not (codec.omit_none and value is None) and not (codec.omit_empty and not value):
             out[name] = codec.encode(value)
     return out
 

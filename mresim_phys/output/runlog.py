@@ -44,7 +44,7 @@ from mresim_phys.output.logformat import (
 )
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
 from mresim_phys.types import FREE, BoolGrid, IntArray
-from mresim_phys.world.maps import free_components_mask
+from mresim_phys.world.maps import connected_to, free_components_mask, seed_cells
 
 META, TRUTH_FILE, STEPS = "meta.json", "truth.npz", "steps.jsonl"
 
@@ -372,10 +372,7 @@ def reachable_from(truth: BoolGrid, starts: list[list[float]]) -> BoolGrid:
     """The free cells 4-connected to the robots' ``starts`` (``free_components_mask``), after
     a change of the world: a start a change buried under an obstacle stops seeding (as live,
     ``world.reach``); with every start buried nothing is reachable."""
-    points = np.asarray(starts, dtype=np.float64).reshape(-1, 2)
-    cols, rows = np.floor(points).astype(np.intp).T
-    seeds = points[~truth[rows, cols]]
-    return free_components_mask(truth, seeds) if len(seeds) else np.zeros_like(truth)
+    return connected_to(~truth, seed_cells(starts, truth.shape))
 
 
 def recompute_metrics(log: RunLog) -> Iterator[StepRecord]:

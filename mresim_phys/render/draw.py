@@ -76,7 +76,7 @@ class Overlay:
             if "location" in layers[i]:
                 at, size = centres[i], sizes[i - 1]
                 draw_robot(image, robot.state, triangles[i - 1], at, size, colours[i], style)
-                draw_label(image, robot.name, at, size, colours[i], style)
+                draw_label(image, robot_label(robot), at, size, colours[i], style)
         if "header" in on:
             draw_header(image, snap, style)
         if "legend" in on:
@@ -204,6 +204,11 @@ def draw_robot(
     cv2.polylines(image, [pts], True, outline, width, AA, SHIFT)
     if state == "failed":
         draw_cross(image, at, max(round(size * 0.8), 3), style.error)
+
+
+def robot_label(robot: AgentSnapshot) -> str:
+    """A robot's name, with its failed parts if any (``B [radio]``)."""
+    return f"{robot.name} [{','.join(robot.broken)}]" if robot.broken else robot.name
 
 
 def draw_label(

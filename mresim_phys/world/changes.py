@@ -16,6 +16,7 @@ newly occupied cell. Callers use it to retarget coverage and to log the truth.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -118,15 +119,18 @@ class Change:
     @property
     def box(self) -> Box | None:
         """Bounding box of every patch, or None if nothing changed."""
-        if not self.patches:
-            return None
-        boxes = np.array([p.box for p in self.patches])
-        return (
-            int(boxes[:, 0].min()),
-            int(boxes[:, 1].max()),
-            int(boxes[:, 2].min()),
-            int(boxes[:, 3].max()),
-        )
+        return union_box(self.patches) if self.patches else None
+
+
+def union_box(patches: Sequence[Patch]) -> Box:
+    """Bounding box of every patch (at least one)."""
+    boxes = np.array([p.box for p in patches])
+    return (
+        int(boxes[:, 0].min()),
+        int(boxes[:, 1].max()),
+        int(boxes[:, 2].min()),
+        int(boxes[:, 3].max()),
+    )
 
 
 @dataclass(frozen=True)

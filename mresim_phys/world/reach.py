@@ -30,7 +30,7 @@ from numpy.typing import ArrayLike
 from scipy import ndimage
 
 from mresim_phys.types import BoolGrid, IntArray
-from mresim_phys.world.changes import Change, Patch
+from mresim_phys.world.changes import Change, Patch, union_box
 from mresim_phys.world.maps import (
     FOUR_CONNECTED,
     connected_to,
@@ -113,17 +113,6 @@ def follow_changes(
     window = reachable.follow(occupied, changes)
     if window != NOTHING:
         coverage.retarget(reachable.mask, window)
-
-
-def union_box(patches: Sequence[Patch]) -> Box:
-    """Bounding box of every patch."""
-    boxes = np.array([p.box for p in patches])
-    return (
-        int(boxes[:, 0].min()),
-        int(boxes[:, 1].max()),
-        int(boxes[:, 2].min()),
-        int(boxes[:, 3].max()),
-    )
 
 
 def grown(box: Box, margin: int, shape: tuple[int, int]) -> Box:
