@@ -31,7 +31,14 @@ from mresim_phys.planning import PLANNERS
 from mresim_phys.rng import Streams
 from mresim_phys.scenario.load import load_scenario
 from mresim_phys.scenario.readers import LoadedMap, load_image_map, load_ros_map, load_text_map
-from mresim_phys.scenario.schema import BaseStationSpec, MapSpec, RobotSpec, Scenario, SensorSpec
+from mresim_phys.scenario.schema import (
+    BaseStationSpec,
+    MapSpec,
+    RobotSpec,
+    Scenario,
+    SensorSpec,
+    StartJitterSpec,
+)
 from mresim_phys.strategies import STRATEGIES
 from mresim_phys.types import FloatArray
 from mresim_phys.world.events import Event, make_event
@@ -95,7 +102,7 @@ def make_robot(spec: RobotSpec, index: int, streams: Streams, shape: tuple[int, 
         strategy=STRATEGIES.make(spec.strategy.name, spec.strategy.params),
         planner=PLANNERS.make(spec.planner.name, spec.planner.params),
         heading=math.radians(spec.heading_deg),
-        rng=streams.get("strategy", index),
+        rng=streams.of_robot("strategy", spec.name),
     )
 
 
@@ -106,13 +113,49 @@ def make_base(spec: BaseStationSpec, shape: tuple[int, int]) -> Agent:
     return Agent(BASE_NAME, 0, position, spec.comm_range, belief, safe, role="base")
 
 
-def make_team(robots: list[RobotSpec], streams: Streams, world: World) -> list[Robot]:
-    """Every robot, checked against the world and placed in it."""
+def make_team(
+    robots: list[RobotSpec], streams: Streams, world: World, jitter: StartJitterSpec | None = None
+) -> list[Robot]:
+    """Every robot, checked against the world, shifted by ``jitter`` and placed in it."""
     for spec in robots:
         check_start(world, spec)
     team = [make_robot(s, i + 1, streams, world.shape) for i, s in enumerate(robots)]
+    if jitter is not None and (jitter.position > 0 or jitter.heading_deg > 0):
+        for robot in team:
+            jitter_start(robot, jitter, streams.of_robot("start-jitter", robot.name), world)
     world.place_robots([r.position for r in team])
     return team
+
+
+JITTER_TRIES = 100  # draws of a shifted start before the declared one is kept
+
+
+def jitter_start(
+    robot: Robot, jitter: StartJitterSpec, rng: np.random.Generator, world: World
+) -> None:
+    """Shift ``robot``'s start by at most ``jitter.position`` (uniform in a disk, reachable
+    in a straight line without touching a wall) and turn it by at most
+    ``jitter.heading_deg``, both from the robot's own stream."""
+    robot.heading += math.radians(float(rng.uniform(-jitter.heading_deg, jitter.heading_deg)))
+    start = robot.position
+    walls_only = world.query_filter(None, robots_block=False)
+    for _ in range(JITTER_TRIES if jitter.position > 0 else 0):
+        r = jitter.position * math.sqrt(float(rng.random()))
+        a = float(rng.uniform(0.0, 2.0 * math.pi))
+        end = (start[0] + r * math.cos(a), start[1] + r * math.sin(a))
+        clear = world.blocked(start, end, robot.radius, walls_only) is None
+        if clear and not world.overlaps_wall(end, robot.radius):
+            robot.position = end
+            return
+
+
+def team_order(robots: list[RobotSpec], streams: Streams, vary: bool) -> tuple[str, ...]:
+    """The robots' tie-break order in auctions: a seeded permutation of the sorted names, or
+    the sorted names themselves; either way the order the team is listed in does not matter."""
+    names = sorted(r.name for r in robots)
+    if not vary:
+        return tuple(names)
+    return tuple(names[int(i)] for i in streams.get("tie-order").permutation(len(names)))
 
 
 def radio_ranges(scenario: Scenario) -> tuple[FloatArray, FloatArray]:
@@ -170,6 +213,7 @@ class RunRules:
     stop_known_at_base: float | None = None
     stop_all_done: bool = True
     presume_lost_after: int = 200  # steps of silence after which a teammate is presumed lost
+    vary_with_seed: bool = True  # the seed varies initial random steps, ties and starts
 
 
 @dataclass
@@ -188,10 +232,11 @@ class Setup:
     rules: RunRules
     starts: list[tuple[float, float]]  # where the robots started (the reachable set's seeds)
     resolution: float | None  # metres per cell, for reports
+    team_order: tuple[str, ...] = ()  # tie-break order of the robots in auctions
 
     def sensing_streams(self) -> list[np.random.Generator]:
         """Each robot's laser-noise stream, in robot order."""
-        return [self.streams.get("sensing", r.index) for r in self.robots]
+        return [self.streams.of_robot("sensing", r.name) for r in self.robots]
 
     def event_streams(self) -> list[np.random.Generator]:
         """Each event's own stream, in scenario order."""
@@ -232,6 +277,7 @@ def run_rules(scenario: Scenario) -> RunRules:
         stop_known_at_base=stop.known_at_base,
         stop_all_done=stop.all_done,
         presume_lost_after=sim.presume_lost_after,
+        vary_with_seed=sim.vary_with_seed,
     )
 
 
@@ -240,9 +286,11 @@ def build_setup(scenario: Scenario) -> Setup:
     truth = load_map(scenario.map)
     world = World(truth.occupied, [r.radius for r in scenario.robots])
     streams = Streams(scenario.seed)
-    robots = make_team(scenario.robots, streams, world)
+    vary = scenario.simulation.vary_with_seed
+    jitter = scenario.simulation.start_jitter if vary else None
+    robots = make_team(scenario.robots, streams, world, jitter)
     check_base(world, scenario.base_station)
-    starts = [(float(r.start[0]), float(r.start[1])) for r in scenario.robots]
+    starts = [r.position for r in robots]
     events = [make_event(e) for e in scenario.events]
     check_event_boxes(scenario, world)
     reachable = Reachable(truth.occupied, starts)
@@ -259,4 +307,5 @@ def build_setup(scenario: Scenario) -> Setup:
         rules=run_rules(scenario),
         starts=starts,
         resolution=scenario.map.resolution or truth.resolution,
+        team_order=team_order(scenario.robots, streams, vary),
     )

@@ -42,3 +42,8 @@ class Streams:
         key = (*self.root.spawn_key, stream_key(name), index)
         sequence = np.random.SeedSequence(entropy=self.root.entropy, spawn_key=key)
         return np.random.Generator(np.random.PCG64(sequence))
+
+    def of_robot(self, name: str, robot: str) -> np.random.Generator:
+        """Stream ``name`` of the robot called ``robot``: keyed by the robot's name, so
+        listing the team in another order never changes any robot's draws."""
+        return self.get(name, stream_key(robot))

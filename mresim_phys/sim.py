@@ -257,6 +257,8 @@ class Simulation:
             links=robot.links,
             base_contact=robot.last_base_contact,
             lost=presumed_lost(robot.teammates, self.t, self.rules.presume_lost_after),
+            team_order=self.setup.team_order,
+            vary_with_seed=self.rules.vary_with_seed,
         )
 
     @property

@@ -312,7 +312,7 @@ def test_topological_skeleton_reaches_the_decision_info() -> None:
     belief[5:35, 80:95] = UNKNOWN
     planner = TopologicalPlanner(TopologicalParams(node_spacing=6), MapCache())
     view = RobotView(
-        step=1, name="A", position=(10.5, 20.5), heading=0.0, belief=belief, radius=1.0,
+        step=10, name="A", position=(10.5, 20.5), heading=0.0, belief=belief, radius=1.0,
         clearance=2.0, speed=2.0, sensor_range=30.0, role="explorer",
         base_position=(10.5, 20.5), teammates={}, rng=np.random.default_rng(0), planner=planner,
     )  # fmt: skip
@@ -328,7 +328,7 @@ def test_the_frontier_strategy_follows_its_planners_path() -> None:
     belief[5:35, 5:95] = FREE
     belief[28:35, 60:95] = UNKNOWN  # the only frontier: down and to the right of the robot
     view = RobotView(
-        step=1, name="A", position=(10.5, 8.5), heading=0.0, belief=belief, radius=1.0,
+        step=10, name="A", position=(10.5, 8.5), heading=0.0, belief=belief, radius=1.0,
         clearance=2.0, speed=2.0, sensor_range=30.0, role="explorer",
         base_position=(10.5, 8.5), teammates={}, rng=np.random.default_rng(0),
     )  # fmt: skip
@@ -348,7 +348,7 @@ def test_strategies_get_the_topological_map_with_or_without_that_planner() -> No
     belief[15:25, 2:58] = FREE  # two crossing corridors: a junction where they meet
     belief[2:38, 25:35] = FREE
     view = RobotView(
-        step=1, name="A", position=(10.5, 20.5), heading=0.0, belief=belief, radius=1.0,
+        step=10, name="A", position=(10.5, 20.5), heading=0.0, belief=belief, radius=1.0,
         clearance=2.0, speed=2.0, sensor_range=30.0, role="relay",
         base_position=(10.5, 20.5), teammates={}, rng=np.random.default_rng(0),
     )  # fmt: skip

@@ -32,6 +32,7 @@ SECTIONS: list[tuple[str, type[BaseModel]]] = [
     ("strategy and planner", schema.PluginSpec),
     ("stop", schema.StopSpec),
     ("simulation", schema.SimulationSpec),
+    ("simulation.start_jitter", schema.StartJitterSpec),
     ("render", schema.RenderSpec),
 ]
 

@@ -80,7 +80,9 @@ def _raster_ranks(labels_seq: NDArray[np.int32], n_labels: int) -> IntArray:
     return ranks
 
 
-def find_frontiers(belief: BeliefGrid, min_size: int = 3) -> Frontiers:
+def find_frontiers(
+    belief: BeliefGrid, min_size: int = 3, exclude: BoolGrid | None = None
+) -> Frontiers:
     """Frontier clusters of a belief grid (see the module docstring).
 
     Only the bounding box of FREE cells (+1) is processed. Clusters with fewer than
@@ -89,6 +91,7 @@ def find_frontiers(belief: BeliefGrid, min_size: int = 3) -> Frontiers:
     Args:
         belief: Belief grid (UNKNOWN / FREE / OCCUPIED).
         min_size: Smallest cluster kept, in cells.
+        exclude: Cells never counted as frontier (e.g. ones a robot gave up on).
 
     Returns:
         The kept clusters, ordered by their first cell in raster order.
@@ -99,7 +102,10 @@ def find_frontiers(belief: BeliefGrid, min_size: int = 3) -> Frontiers:
     r0, r1 = max(free_rows[0] - 1, 0), min(free_rows[-1] + 2, belief.shape[0])
     free_cols = np.flatnonzero((belief[r0:r1] == FREE).any(axis=0))
     c0, c1 = max(free_cols[0] - 1, 0), min(free_cols[-1] + 2, belief.shape[1])
-    mask = frontier_mask(belief[r0:r1, c0:c1]).view(np.uint8)
+    frontier = frontier_mask(belief[r0:r1, c0:c1])
+    if exclude is not None:
+        frontier &= ~exclude[r0:r1, c0:c1]
+    mask = frontier.view(np.uint8)
     n, found, stats, centroids = cv2.connectedComponentsWithStatsWithAlgorithm(
         mask, 8, cv2.CV_32S, cv2.CCL_SAUF
     )

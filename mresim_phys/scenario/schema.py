@@ -184,6 +184,17 @@ class StopSpec(Strict):
     all_done: bool = Field(True, description="Stop when every robot is done or failed.")
 
 
+class StartJitterSpec(Strict):
+    """Per-robot random offsets of the declared starts, drawn from the seed."""
+
+    position: float = Field(
+        0.0, ge=0, le=1000, description="Largest shift of a start (cells, uniform in a disk)."
+    )
+    heading_deg: float = Field(
+        0.0, ge=0, le=180, description="Largest turn of a start heading (degrees, uniform, +-)."
+    )
+
+
 class SimulationSpec(Strict):
     """How the cycle runs."""
 
@@ -198,6 +209,18 @@ class SimulationSpec(Strict):
         200,
         ge=1,
         description="Steps without news after which a strategy sees a teammate as presumed lost.",
+    )
+    vary_with_seed: bool = Field(
+        True,
+        description=(
+            "The seed varies the run: initial random-walk steps, auction tie-breaks and"
+            " start_jitter; false makes every seed give the same run (noise and dropouts"
+            " you turn on still draw from the seed)."
+        ),
+    )
+    start_jitter: StartJitterSpec = Field(
+        default_factory=StartJitterSpec,
+        description="Random shifts of the robots' starts (position and heading) per seed.",
     )
 
 

@@ -63,6 +63,13 @@ class RobotView:
     links: tuple[str, ...] = ()  # agents it was linked with at the last exchange ('base' too)
     base_contact: int = -1  # last step its data reached the base (-1: never)
     lost: frozenset[str] = frozenset()  # teammates silent for longer than the run's limit
+    team_order: tuple[str, ...] = ()  # the team's tie-break order (from the seed), the same for all
+    vary_with_seed: bool = True  # the scenario lets the seed vary the run (initial random steps)
+
+    def tie_rank(self, name: str) -> int:
+        """Where ``name`` stands in the team's tie-break order (unknown names last)."""
+        order = self.team_order
+        return order.index(name) if name in order else len(order)
 
 
 @dataclass(frozen=True)

@@ -12,8 +12,13 @@ path search bounded to 1.5 times the straight-line estimate, widened only if nee
 With nothing reachable left to explore the robot returns to the base: ``done``.
 
 On arriving, the robot turns to face the frontier (its laser covers only 180
-degrees) and scans; a frontier it reached without resolving (unknown cells it
-cannot see into) is remembered and skipped, like the original's "bad frontiers".
+degrees) and scans; the cells of a frontier it reached without resolving
+(unknown cells it cannot see into) within ``give_up_radius`` of where it stood are
+remembered and no longer count as frontier for it, like the original's "bad
+frontiers"; the rest of that cluster stays a frontier. Ties in the auction go by
+the team's seeded order (``RobotView.team_order``), so robots that see equal bids
+agree on the winner. The first ``init_cycles`` steps are the original's
+random-walk steps.
 """
 
 from __future__ import annotations
@@ -39,6 +44,7 @@ from mresim_phys.strategies.base import (
     plan_context,
     return_to_base,
 )
+from mresim_phys.strategies.random_walk import random_step
 from mresim_phys.types import BoolGrid, FloatArray, IntArray
 
 UTILITY_SCALE = 1e8  # original: U = area * 10^8 / d^4
@@ -62,6 +68,22 @@ class FrontierParams(StrategyParams):
         gt=0,
         description="First search horizon, in sensor ranges; doubles until a frontier is found.",
     )
+    init_cycles: int = Field(
+        3,
+        ge=0,
+        description=(
+            "First steps taken as random-walk steps (the original's INIT_CYCLES), from the"
+            " robot's seeded stream; none when the scenario sets vary_with_seed: false."
+        ),
+    )
+    give_up_radius: float = Field(
+        10.0,
+        gt=0,
+        description=(
+            "On reaching a frontier that is still there after facing it, its cells within"
+            " this distance (cells) are given up by this robot."
+        ),
+    )
     reach: float | None = Field(
         None,
         gt=0,
@@ -77,12 +99,15 @@ class Bidder:
     costs: FloatArray
     exact: BoolArray
     position: tuple[float, float]
+    rank: int = 0  # the team's tie-break order: of two equal bids the lower rank wins
 
     @classmethod
-    def estimated(cls, name: str, position: tuple[float, float], goals_rc: IntArray) -> Bidder:
+    def estimated(
+        cls, name: str, position: tuple[float, float], goals_rc: IntArray, rank: int = 0
+    ) -> Bidder:
         """A teammate bidding with straight-line distances (lower bounds on path costs)."""
         costs = straight_line(position, goals_rc)
-        return cls(name, costs, np.zeros(len(costs), dtype=bool), position)
+        return cls(name, costs, np.zeros(len(costs), dtype=bool), position, rank)
 
     def refine(self, found: FloatArray | None, limit: float) -> None:
         """Take path costs searched up to ``limit``; beyond it the bound rises to ``limit``."""
@@ -119,13 +144,16 @@ class FrontierExploration(Plugin):
     def decide(self, view: RobotView) -> Decision:
         """Pick the frontier this robot wins in the auction and plan a path to it."""
         context = plan_context(view)
+        if view.vary_with_seed and view.step <= self.params.init_cycles:
+            step = random_step(view, context)
+            if step is not None:
+                return step
         frontiers = self._frontiers(view)
         reach = self.params.reach or view.clearance + 2.0
-        fresh = self._fresh(frontiers)
         fields = context.fields_growing(self.params.horizon * view.sensor_range)
-        for field in fields if fresh.any() else ():
+        for field in fields if len(frontiers) else ():
             targets, costs = frontier_targets(frontiers, field, context.passable, reach)
-            candidates = self._candidates(frontiers, fresh, costs)
+            candidates = self._candidates(frontiers, costs)
             if len(candidates):
                 break
         else:
@@ -147,28 +175,18 @@ class FrontierExploration(Plugin):
         )
 
     def _frontiers(self, view: RobotView) -> Frontiers:
+        """This robot's frontier clusters, without the cells it has given up on."""
         if self._ignored is None:
             self._ignored = np.zeros(view.belief.shape, dtype=bool)
         if view.reached_goal and self._chasing is not None:
-            self._ignored[self._chasing[:, 0], self._chasing[:, 1]] = True
-        return find_frontiers(view.belief, self.params.min_frontier_size)
+            give_up(self._ignored, self._chasing, view.position, self.params.give_up_radius)
+        return find_frontiers(view.belief, self.params.min_frontier_size, self._ignored)
 
-    def _fresh(self, frontiers: Frontiers) -> BoolArray:
-        """Clusters this robot has not given up on (at most half their cells given up)."""
-        assert self._ignored is not None
-        cells = frontiers.cells_rc
-        ignored = np.bincount(
-            frontiers.cluster_of,
-            weights=self._ignored[cells[:, 0], cells[:, 1]],
-            minlength=len(frontiers),
-        )
-        return ignored * 2 < frontiers.sizes
-
-    def _candidates(self, frontiers: Frontiers, fresh: BoolArray, costs: FloatArray) -> IntArray:
-        """Indices of the best reachable, not-given-up frontiers, best first."""
+    def _candidates(self, frontiers: Frontiers, costs: FloatArray) -> IntArray:
+        """Indices of the best reachable frontiers, best first."""
         u = utility(frontiers.sizes.astype(float), costs)
         order = np.argsort(-u, kind="stable")
-        keep = order[np.isfinite(u[order]) & fresh[order]]
+        keep = order[np.isfinite(u[order])]
         return keep[: self.params.max_frontiers]
 
     def _auction(
@@ -183,8 +201,11 @@ class FrontierExploration(Plugin):
         sizes = frontiers.sizes[candidates].astype(float)
         goals = targets[candidates]
         mine = costs[candidates]
-        bidders = [Bidder(view.name, mine, np.ones(len(mine), dtype=bool), view.position)]
-        bidders += [Bidder.estimated(t.name, t.position, goals) for t in self._teammates(view)]
+        rank = view.tie_rank
+        me = Bidder(view.name, mine, np.ones(len(mine), dtype=bool), view.position, rank(view.name))
+        bidders = [me] + [
+            Bidder.estimated(t.name, t.position, goals, rank(t.name)) for t in self._teammates(view)
+        ]
         won = greedy_auction(
             bidders, sizes, lambda b, limit: exact_costs(context, b.position, goals, limit)
         )
@@ -203,6 +224,20 @@ class FrontierExploration(Plugin):
             ),
             key=lambda t: t.name,
         )
+
+
+def give_up(
+    ignored: BoolGrid, chasing: IntArray, position: tuple[float, float], radius: float
+) -> None:
+    """Mark the cells of the chased frontier within ``radius`` of ``position`` as given up.
+
+    The robot stood there, faced the frontier and scanned: the frontier cells near it
+    that are still frontier cannot be resolved from where it can go. Cells of the same
+    cluster farther away were never tried and stay.
+    """
+    x, y = position
+    near = np.hypot(chasing[:, 0] + 0.5 - y, chasing[:, 1] + 0.5 - x) <= radius
+    ignored[chasing[near, 0], chasing[near, 1]] = True
 
 
 def nearest_cell_centre(cells_rc: IntArray, row: int, col: int) -> tuple[float, float]:
@@ -259,13 +294,17 @@ def greedy_auction(bidders: list[Bidder], sizes: FloatArray, search: PathSearch)
 def best_pair(
     bidders: list[Bidder], sizes: FloatArray, assigned: set[int], taken: BoolArray
 ) -> tuple[int, int]:
-    """The (bidder, frontier) pair with the highest utility; (-1, -1) if none is left."""
-    best, who, which = -np.inf, -1, -1
+    """The (bidder, frontier) pair with the highest utility; (-1, -1) if none is left.
+
+    Equal utilities go to the bidder of lower rank, so robots that see the same bids
+    (robots started on one spot) agree on who wins instead of each taking the tie.
+    """
+    best, who, which = (-np.inf, 0), -1, -1
     for i, bidder in enumerate(bidders):
         if i in assigned:
             continue
         u = np.where(taken, -np.inf, utility(sizes, bidder.costs))
         j = int(np.argmax(u))
-        if u[j] > best:
-            best, who, which = u[j], i, j
+        if u[j] > -np.inf and (u[j], -bidder.rank) > best:
+            best, who, which = (u[j], -bidder.rank), i, j
     return who, which

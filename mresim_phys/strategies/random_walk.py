@@ -1,8 +1,11 @@
 """``random_walk`` (phase 4, decide): go to a random reachable known-free cell nearby, repeatedly.
 
-A baseline for comparisons (the original uses random steps for its first cycles
-and after errors). Draws come from the robot's own ``strategy`` stream, so a
-run is reproducible and robots never disturb each other's draws.
+A baseline for comparisons. :func:`random_step` is the original's ``RandomWalk``
+step, which its frontier exploration takes for its first cycles (and after
+errors): keep the heading or turn a little, and move one step's length if the
+straight line stays in known free space clear of walls. Draws come from the
+robot's own ``strategy`` stream, so a run is reproducible and robots never
+disturb each other's draws.
 """
 
 from __future__ import annotations
@@ -16,10 +19,53 @@ from mresim_phys.plugin import Plugin
 from mresim_phys.strategies.base import (
     STRATEGIES,
     Decision,
+    PlanContext,
     RobotView,
     StrategyParams,
     plan_context,
 )
+
+# The original's RandomWalk: heading changes and their odds (out of 26).
+TURNS_DEG = np.array([-45.0, -22.5, 0.0, 22.5, 45.0])
+TURN_ODDS = np.array([1, 2, 20, 2, 1]) / 26
+STEP_TRIES = 50  # tries at one step length before giving up
+MIN_STEP = 3.0  # cells: a failed try shortens the step by one cell down to this
+
+
+def random_step(view: RobotView, context: PlanContext) -> Decision | None:
+    """One random-walk step from the robot's own stream, or None if no try fits.
+
+    The heading changes by -45, -22.5, 0, +22.5 or +45 degrees (odds 1:2:20:2:1);
+    the step is the robot's speed, one cell shorter after each failed try (at least
+    3 cells). A try fits if every cell on the straight line is passable: known
+    free and the robot's clearance away from known walls.
+    """
+    passable = context.passable
+    x, y = view.position
+    length = view.speed
+    for _ in range(STEP_TRIES):
+        turn = float(np.radians(view.rng.choice(TURNS_DEG, p=TURN_ODDS)))
+        heading = view.heading + turn
+        end = (x + length * np.cos(heading), y + length * np.sin(heading))
+        if segment_passable(passable, (x, y), end):
+            path = np.array([[x, y], end])
+            return Decision(path=path, goal=(float(end[0]), float(end[1])))
+        length = max(length - 1.0, min(MIN_STEP, view.speed))
+    return None
+
+
+def segment_passable(
+    passable: np.ndarray, start: tuple[float, float], end: tuple[float, float]
+) -> bool:
+    """True if every cell the straight segment crosses (sampled at quarter cells) is passable."""
+    n = max(int(np.ceil(4 * np.hypot(end[0] - start[0], end[1] - start[1]))), 1)
+    t = np.linspace(0.0, 1.0, n + 1)
+    cols = np.floor(start[0] + t * (end[0] - start[0])).astype(np.intp)
+    rows = np.floor(start[1] + t * (end[1] - start[1])).astype(np.intp)
+    rows_n, cols_n = passable.shape
+    if rows.min() < 0 or cols.min() < 0 or rows.max() >= rows_n or cols.max() >= cols_n:
+        return False
+    return bool(passable[rows, cols].all())
 
 
 class RandomWalkParams(StrategyParams):
