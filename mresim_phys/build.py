@@ -233,6 +233,7 @@ class Setup:
     starts: list[tuple[float, float]]  # where the robots started (the reachable set's seeds)
     resolution: float | None  # metres per cell, for reports
     team_order: tuple[str, ...] = ()  # tie-break order of the robots in auctions
+    free_area: int = 0  # free cells of the map (the original's total area), known to robots
 
     def sensing_streams(self) -> list[np.random.Generator]:
         """Each robot's laser-noise stream, in robot order."""
@@ -308,4 +309,5 @@ def build_setup(scenario: Scenario) -> Setup:
         starts=starts,
         resolution=scenario.map.resolution or truth.resolution,
         team_order=team_order(scenario.robots, streams, vary),
+        free_area=int(np.count_nonzero(~truth.occupied)),
     )

@@ -59,6 +59,11 @@ def make_parser() -> argparse.ArgumentParser:
     run.add_argument("--steps", type=positive_int, help="override the step cap")
     run.add_argument("--seed", type=non_negative_int, help="override the scenario seed")
     run.add_argument("--out", type=Path, help="output folder (default runs/<name>/seed-<seed>)")
+    run.add_argument(
+        "--fixed",
+        action="store_true",
+        help="the seed varies nothing by itself (simulation.vary_with_seed: false)",
+    )
     run.add_argument("--quiet", action="store_true", help="no progress bar or summary line")
     add_render_flags(run)
     run.add_argument("--no-log", action="store_true", help="do not write the run log")
@@ -155,8 +160,9 @@ def bench_command(args: argparse.Namespace) -> int:
 
 def run_command(args: argparse.Namespace) -> int:
     """``mresim run``: simulate, streaming metrics (and log, video, PNGs) to the run folder."""
+    fixed = {"simulation": {"vary_with_seed": False}} if args.fixed else {}
     sim = Simulation.from_yaml(
-        args.scenario, seed=args.seed, steps=args.steps, render=render_overrides(args)
+        args.scenario, seed=args.seed, steps=args.steps, render=render_overrides(args), **fixed
     )
     scenario = sim.scenario
     out_dir = args.out or default_run_dir(scenario)

@@ -259,6 +259,7 @@ class Simulation:
             lost=presumed_lost(robot.teammates, self.t, self.rules.presume_lost_after),
             team_order=self.setup.team_order,
             vary_with_seed=self.rules.vary_with_seed,
+            free_area=self.setup.free_area,
         )
 
     @property

@@ -145,3 +145,69 @@ def test_random_walk_stays_within_its_leg_length(scenario_file: Callable[..., Pa
         sim.step()
         for robot in sim.robots:
             assert robot.goal is None or len(robot.decision.path) <= 12
+
+
+def test_robots_on_one_spot_agree_on_who_takes_which_frontier() -> None:
+    """Equal bids go by the team's order, so two robots with the same view split up."""
+    goals = {}
+    for me, other in (("A", "B"), ("B", "A")):
+        mate = TeammateInfo(other, (50.0, 10.5), None, "active", "explorer", step=9)
+        view = corridor_view({other: mate}, (50.0, 10.5))
+        view = RobotView(**{**view.__dict__, "name": me, "team_order": ("B", "A")})
+        decision = FrontierExploration(FrontierParams()).decide(view)
+        assert decision.goal is not None
+        goals[me] = decision.goal[0] < 50
+    assert goals["A"] != goals["B"]
+
+
+def test_reaching_an_unresolved_frontier_gives_up_only_the_cells_near_it() -> None:
+    """A long frontier: the cells near where the robot stood go, the far ones stay."""
+    from mresim_phys.knowledge.frontiers import find_frontiers
+    from mresim_phys.strategies.frontier import give_up
+
+    belief = np.full((20, 100), FREE, dtype=np.uint8)
+    belief[:2, :] = UNKNOWN  # a 100-cell frontier along the top (row 2)
+    frontiers = find_frontiers(belief)
+    assert len(frontiers) == 1
+    ignored = np.zeros(belief.shape, dtype=bool)
+    give_up(ignored, frontiers.cells_rc, (5.5, 2.5), radius=10.0)
+    assert ignored[2, :15].all() and not ignored[2, 16:].any()
+    left = find_frontiers(belief, exclude=ignored)
+    assert len(left) == 1 and left.cells_rc[:, 1].min() > 15
+
+
+def test_a_robot_whose_map_holds_the_goal_fraction_goes_home() -> None:
+    """The original's mission-complete rule: own map >= 95 % of the free area, after step 100."""
+    view = corridor_view({}, (45.5, 10.5))
+    free = int(np.count_nonzero(view.belief == FREE))
+    strategy = FrontierExploration(FrontierParams())
+    for step, area, done in ((150, free, True), (50, free, False), (150, 2 * free, False)):
+        later = RobotView(**{**view.__dict__, "step": step, "free_area": area})
+        assert strategy.decide(later).done is done
+
+
+def test_the_first_steps_are_seeded_random_walk_steps() -> None:
+    view = corridor_view({}, (45.5, 10.5))
+    steps = []
+    for seed in range(8):
+        early = RobotView(**{**view.__dict__, "step": 1, "rng": np.random.default_rng(seed)})
+        decision = FrontierExploration(FrontierParams()).decide(early)
+        (x0, y0), (x1, y1) = decision.path
+        assert (x0, y0) == early.position
+        assert np.hypot(x1 - x0, y1 - y0) <= early.speed + 1e-9
+        assert view.belief[int(y1), int(x1)] == FREE
+        steps.append((round(x1, 6), round(y1, 6)))
+    assert len(set(steps)) > 1
+    fixed = RobotView(**{**view.__dict__, "step": 1, "vary_with_seed": False})
+    assert "frontiers" in FrontierExploration(FrontierParams()).decide(fixed).info
+
+
+def test_a_random_step_never_leaves_known_free_space() -> None:
+    from mresim_phys.strategies.base import plan_context
+    from mresim_phys.strategies.random_walk import random_step
+
+    view = corridor_view({}, (45.5, 10.5))
+    boxed = view.belief.copy()
+    boxed[:, 44] = boxed[:, 47] = OCCUPIED  # a slot 2 cells wide: nowhere to step
+    cornered = RobotView(**{**view.__dict__, "belief": boxed})
+    assert random_step(cornered, plan_context(cornered)) is None

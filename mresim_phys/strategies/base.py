@@ -65,6 +65,7 @@ class RobotView:
     lost: frozenset[str] = frozenset()  # teammates silent for longer than the run's limit
     team_order: tuple[str, ...] = ()  # the team's tie-break order (from the seed), the same for all
     vary_with_seed: bool = True  # the scenario lets the seed vary the run (initial random steps)
+    free_area: int = 0  # free cells of the whole map, known before the mission (0: not known)
 
     def tie_rank(self, name: str) -> int:
         """Where ``name`` stands in the team's tie-break order (unknown names last)."""

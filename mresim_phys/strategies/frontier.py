@@ -45,7 +45,7 @@ from mresim_phys.strategies.base import (
     return_to_base,
 )
 from mresim_phys.strategies.random_walk import random_step
-from mresim_phys.types import BoolGrid, FloatArray, IntArray
+from mresim_phys.types import FREE, BoolGrid, FloatArray, IntArray
 
 UTILITY_SCALE = 1e8  # original: U = area * 10^8 / d^4
 MIN_SEARCH = 10.0  # cells: smallest extra horizon when refining a teammate's bid
@@ -75,6 +75,19 @@ class FrontierParams(StrategyParams):
             "First steps taken as random-walk steps (the original's INIT_CYCLES), from the"
             " robot's seeded stream; none when the scenario sets vary_with_seed: false."
         ),
+    )
+    done_fraction: float | None = Field(
+        0.95,
+        gt=0,
+        le=1,
+        description=(
+            "Mission complete (return to the base) once the robot's own map holds this"
+            " fraction of the building's free area, as the original's"
+            " TERRITORY_PERCENT_EXPLORED_GOAL; null: only when no frontier is left."
+        ),
+    )
+    done_after: int = Field(
+        100, ge=0, description="Steps before the done_fraction rule may fire (the original: 100)."
     )
     give_up_radius: float = Field(
         10.0,
@@ -151,7 +164,8 @@ class FrontierExploration(Plugin):
         frontiers = self._frontiers(view)
         reach = self.params.reach or view.clearance + 2.0
         fields = context.fields_growing(self.params.horizon * view.sensor_range)
-        for field in fields if len(frontiers) else ():
+        searching = len(frontiers) > 0 and not self._goal_met(view)
+        for field in fields if searching else ():
             targets, costs = frontier_targets(frontiers, field, context.passable, reach)
             candidates = self._candidates(frontiers, costs)
             if len(candidates):
@@ -173,6 +187,16 @@ class FrontierExploration(Plugin):
             look_at=nearest_cell_centre(chasing, row, col),
             info=info,
         )
+
+    def _goal_met(self, view: RobotView) -> bool:
+        """The original's mission-complete rule: after ``done_after`` steps, the robot's own
+        map holds ``done_fraction`` of the building's free area (known before the mission)."""
+        fraction = self.params.done_fraction
+        if fraction is None or view.free_area <= 0 or view.step < self.params.done_after:
+            return False
+        if view.base_contact >= view.step - 1:  # its data reaches the base: nothing to carry
+            return False
+        return int(np.count_nonzero(view.belief == FREE)) >= fraction * view.free_area
 
     def _frontiers(self, view: RobotView) -> Frontiers:
         """This robot's frontier clusters, without the cells it has given up on."""
@@ -247,10 +271,13 @@ def nearest_cell_centre(cells_rc: IntArray, row: int, col: int) -> tuple[float, 
 
 
 def straight_line(position: tuple[float, float], goals_rc: IntArray) -> FloatArray:
-    """Straight-line distance from ``position`` to each goal cell centre."""
-    distance: FloatArray = np.hypot(
-        goals_rc[:, 1] + 0.5 - position[0], goals_rc[:, 0] + 0.5 - position[1]
-    )
+    """Straight-line distance from the centre of ``position``'s cell to each goal cell centre.
+
+    Path costs run from cell centre to cell centre, so this is a true lower bound of
+    the teammate's path cost: its bid is refined before it can lose a tie it would win.
+    """
+    col, row = np.floor(position[0]), np.floor(position[1])
+    distance: FloatArray = np.hypot(goals_rc[:, 1] - col, goals_rc[:, 0] - row)
     return distance
 
 
