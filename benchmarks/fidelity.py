@@ -1,0 +1,205 @@
+"""Fidelity against the original MRESim: the original's team layouts, ours vs its figures.
+
+Runs the shipped comparison scenarios (``scenarios/11_library_8_robots.yaml``,
+``12_library_16_robots.yaml``, ``13_rooms_4_robots.yaml``: the original's maps,
+team layouts and settings) over many seeds and comm models, each to its end (every
+robot done, or the step cap) instead of stopping at 95 % known at base, and prints
+steps to 50 / 90 / 95 % explored and known at base and the final fractions: the
+median and the range over seeds, next to the original's figures measured from the
+Java MRESim (``docs/differences-from-original.md`` quotes this table).
+
+    python benchmarks/fidelity.py                       # 20 seeds, disk and path_loss
+    python benchmarks/fidelity.py --seeds 5 --models disk --teams library8
+    python benchmarks/fidelity.py --maps ../shared/maps  # the original's own images
+
+``--maps DIR`` swaps the shipped redrawn maps for ``DIR/library.png`` and
+``DIR/rooms.png`` (the original's images, when you have them). ``--csv FILE``
+writes one row per run. A script, not a test: it takes minutes (``--jobs``
+processes, default: all cores).
+"""
+
+from __future__ import annotations
+
+import argparse
+import csv
+import os
+import statistics
+import sys
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import asdict, dataclass
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from mresim_phys import Simulation  # noqa: E402
+from mresim_phys.build import load_scenario  # noqa: E402
+
+
+@dataclass(frozen=True)
+class Team:
+    """One comparison scenario and the original's figures for it."""
+
+    key: str
+    scenario: str
+    map_file: str
+    cap: int  # steps: long enough for every robot to finish
+    original: dict[str, str]  # the original's figures (reference measurements)
+    target: dict[str, float]  # what the fidelity issue asks of us (medians)
+
+
+TEAMS = {
+    "library8": Team(
+        "library8",
+        "11_library_8_robots.yaml",
+        "library.png",
+        600,
+        {"e50": "88", "e90": "214", "e95": "239", "b95": "249", "final": "0.990"},
+        {"e90": 214, "b95": 249},
+    ),
+    "library16": Team(
+        "library16",
+        "12_library_16_robots.yaml",
+        "library.png",
+        600,
+        {"e50": "52", "e90": "130", "e95": "154", "b95": "175", "final": "0.971"},
+        {"e90": 130, "b95": 175},
+    ),
+    "rooms4": Team(
+        "rooms4",
+        "13_rooms_4_robots.yaml",
+        "rooms.png",
+        900,
+        {
+            "e50": "110-126",
+            "e90": "240-247",
+            "e95": "283-320",
+            "b95": "300-400",
+            "final": "0.962-0.968",
+        },
+        {"e90": 247},
+    ),
+}
+COLUMNS = ("e50", "e90", "e95", "b90", "b95", "final", "base")
+
+
+@dataclass(frozen=True)
+class Result:
+    """One run: steps to each milestone (None: never) and the final fractions."""
+
+    team: str
+    model: str
+    seed: int
+    e50: int | None
+    e90: int | None
+    e95: int | None
+    b90: int | None
+    b95: int | None
+    final: float
+    base: float
+    steps: int
+
+
+def run_one(job: tuple[str, str, int, str | None]) -> Result:
+    """Run one team with one comm model and seed to its end."""
+    key, model, seed, maps = job
+    team = TEAMS[key]
+    overrides: dict[str, Any] = {
+        "seed": seed,
+        "steps": team.cap,
+        "stop": {"known_at_base": 1.0, "all_done": True},  # None would keep the 0.95
+        "communication": {"model": model},
+        "render": {"video": False, "final_png": False, "log": False, "plots": False},
+    }
+    if maps:
+        overrides["map"] = {"image": str(Path(maps).resolve() / team.map_file)}
+    sim = Simulation(load_scenario(ROOT / "scenarios" / team.scenario, **overrides))
+    last = sim.run()
+    explored, base = sim.milestones.explored, sim.milestones.known_at_base
+    return Result(
+        key, model, seed, explored["0.5"], explored["0.9"], explored["0.95"],
+        base["0.9"], base["0.95"], last.explored, last.known_at_base, last.step,
+    )  # fmt: skip
+
+
+def spread(values: list[Any], digits: int = 0) -> str:
+    """Median [min-max] of the values; '-' counts runs that never got there."""
+    reached = [v for v in values if v is not None]
+    if not reached:
+        return "never"
+    fmt = (lambda v: f"{v:.3f}") if digits else (lambda v: f"{v:g}")
+    text = f"{fmt(statistics.median(reached))} [{fmt(min(reached))}-{fmt(max(reached))}]"
+    missed = len(values) - len(reached)
+    return text + (f" ({missed} never)" if missed else "")
+
+
+def median_or_none(values: list[Any]) -> float | None:
+    """Median of the values, counting a run that never got there as worse than any."""
+    if any(v is None for v in values):
+        return None if sum(v is None for v in values) * 2 >= len(values) else float("inf")
+    return float(statistics.median(values))
+
+
+def report(results: list[Result]) -> list[str]:
+    """The fidelity table, one line per team and model, then ours-vs-target checks."""
+    lines = [
+        "| team | comm | seeds | explored 50 % | 90 % | 95 % | known at base 95 % | final explored"
+        " | original (50 / 90 / 95 / base 95 / final) |",
+        "|---|---|---|---|---|---|---|---|---|",
+    ]
+    checks = []
+    for key, team in TEAMS.items():
+        for model in sorted({r.model for r in results}):
+            runs = [r for r in results if r.team == key and r.model == model]
+            if not runs:
+                continue
+            col = {c: [getattr(r, c) for r in runs] for c in COLUMNS}
+            o = team.original
+            lines.append(
+                f"| {key} | {model} | {len(runs)} | {spread(col['e50'])} | {spread(col['e90'])}"
+                f" | {spread(col['e95'])} | {spread(col['b95'])} | {spread(col['final'], 3)}"
+                f" | {o['e50']} / {o['e90']} / {o['e95']} / {o['b95']} / {o['final']} |"
+            )
+            for column, limit in team.target.items():
+                got = median_or_none(col[column])
+                verdict = "met" if got is not None and got <= limit else "NOT met"
+                checks.append(f"{key} {model}: median {column} {got} <= {limit}: {verdict}")
+            low = min(col["final"])
+            checks.append(f"{key} {model}: lowest final explored {low:.3f} > 0.97: "
+                          + ("met" if low > 0.97 else "NOT met"))  # fmt: skip
+    return [*lines, "", *checks]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, default=20, help="seeds 1..N (default 20)")
+    parser.add_argument("--models", default="disk,path_loss", help="comm models, comma separated")
+    parser.add_argument("--teams", default=",".join(TEAMS), help="teams, comma separated")
+    parser.add_argument("--maps", help="folder with the original's library.png and rooms.png")
+    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="processes")
+    parser.add_argument("--csv", type=Path, help="write one row per run to this file")
+    args = parser.parse_args()
+    unknown = [t for t in args.teams.split(",") if t not in TEAMS]
+    if unknown:
+        parser.error(f"unknown team(s) {unknown}; choose from {sorted(TEAMS)}")
+    jobs = [
+        (team, model, seed, args.maps)
+        for team in args.teams.split(",")
+        for model in args.models.split(",")
+        for seed in range(1, args.seeds + 1)
+    ]
+    with ProcessPoolExecutor(max(args.jobs, 1)) as pool:
+        results = list(pool.map(run_one, jobs))
+    if args.csv:
+        with args.csv.open("w", newline="") as handle:
+            writer = csv.DictWriter(handle, fieldnames=list(asdict(results[0])))
+            writer.writeheader()
+            writer.writerows(asdict(r) for r in results)
+    source = args.maps or "the shipped redrawn maps"
+    print(f"Fidelity over seeds 1-{args.seeds} on {source} (median [range] of steps):\n")
+    print("\n".join(report(results)))
+
+
+if __name__ == "__main__":
+    main()
