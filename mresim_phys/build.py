@@ -212,6 +212,8 @@ class RunRules:
     stop_explored: float | None = None
     stop_known_at_base: float | None = None
     stop_all_done: bool = True
+    stalled_for: int | None = None  # stop after this many steps without progress
+    stalled_gain: float = 0.001  # the smallest gain that counts as progress
     presume_lost_after: int = 200  # steps of silence after which a teammate is presumed lost
     vary_with_seed: bool = True  # the seed varies initial random steps, ties and starts
 
@@ -277,6 +279,8 @@ def run_rules(scenario: Scenario) -> RunRules:
         stop_explored=stop.explored,
         stop_known_at_base=stop.known_at_base,
         stop_all_done=stop.all_done,
+        stalled_for=stop.stalled_for,
+        stalled_gain=stop.stalled_gain,
         presume_lost_after=sim.presume_lost_after,
         vary_with_seed=sim.vary_with_seed,
     )

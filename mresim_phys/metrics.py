@@ -172,6 +172,34 @@ class Milestones:
 
 
 @dataclass
+class StallWatch:
+    """When the run last made progress: a gain of ``gain`` in explored or known at base.
+
+    The run is stalled once ``window`` steps have passed since the last step at which
+    either fraction rose by at least ``gain`` above its value at the progress before
+    (``stop.stalled_for`` / ``stop.stalled_gain``). Slow, steady gains add up: 0.01 %
+    a step for ten steps is a gain of 0.1 %.
+    """
+
+    window: int | None
+    gain: float
+    explored: float = 0.0
+    known_at_base: float = 0.0
+    last_progress: int = 0
+
+    def update(self, record: StepRecord) -> None:
+        """Note progress made by ``record``."""
+        gained = max(record.explored - self.explored, record.known_at_base - self.known_at_base)
+        if record.step == 0 or gained >= self.gain:
+            self.explored, self.known_at_base = record.explored, record.known_at_base
+            self.last_progress = record.step
+
+    def stalled(self, step: int) -> bool:
+        """No progress in the last ``window`` steps."""
+        return self.window is not None and step - self.last_progress >= self.window
+
+
+@dataclass
 class CommTotals:
     """Communication over the whole run, for ``summary.json``."""
 

@@ -36,6 +36,7 @@ from mresim_phys.metrics import (
     CommTotals,
     Milestones,
     RobotRecord,
+    StallWatch,
     StepRecord,
     base_latency,
     measure_step,
@@ -78,6 +79,7 @@ class Simulation:
         self.known_at_base = 0.0
         self.milestones = Milestones()
         self.comm_totals = CommTotals()
+        self.stall = StallWatch(s.rules.stalled_for, s.rules.stalled_gain)
         self._sensing_rngs = s.sensing_streams()
         self._events = RunEventContext(
             self.agents, s.network, s.world, s.coverage, s.reachable, s.event_streams()
@@ -141,7 +143,8 @@ class Simulation:
         return self.stop_reason() is not None
 
     def stop_reason(self) -> str | None:
-        """Why the run stops now (``steps``, ``explored``, ``known_at_base``, ``all_done``)."""
+        """Why the run stops now (``steps``, ``explored``, ``known_at_base``, ``all_done``,
+        ``stalled``)."""
         rules = self.rules
         if rules.stop_explored is not None and self.record.explored >= rules.stop_explored:
             return "explored"
@@ -150,6 +153,8 @@ class Simulation:
             return "known_at_base"
         if rules.stop_all_done and self.all_idle():
             return "all_done"
+        if self.t < rules.steps and self.stall.stalled(self.t):
+            return "stalled"
         return "steps" if self.t >= rules.steps else None
 
     def all_idle(self) -> bool:
@@ -334,6 +339,7 @@ class Simulation:
         )
         self.milestones.update(record)
         self.comm_totals.update(record)
+        self.stall.update(record)
         self.phase_times["metrics"] += perf_counter() - started
         return record
 

@@ -156,3 +156,37 @@ def test_scenario_and_seed_override(scenario_file: ScenarioFile) -> None:
         iterator = Simulation(scenario).iterate()
         for _ in range(10):
             next(iterator)
+
+
+def test_a_stalled_run_stops_with_reason_stalled(scenario_file: ScenarioFile) -> None:
+    """Robots that can no longer move make no progress: the run ends N steps after the last gain."""
+    stuck = [{"step": 1, "fail": name, "part": "drive"} for name in ("A", "B")]
+    sim = Simulation.from_yaml(
+        scenario_file(steps=500, events=stuck, stop={"stalled_for": 25, "all_done": True})
+    )
+    last = sim.run()
+    assert sim.stop_reason() == "stalled"
+    assert last.step == sim.stall.last_progress + 25 and last.step < 60
+    endless = Simulation.from_yaml(
+        scenario_file(steps=80, events=stuck, stop={"stalled_for": None, "all_done": True})
+    )
+    assert endless.run().step == 80 and endless.stop_reason() == "steps"
+
+
+def test_slow_steady_gains_count_as_progress() -> None:
+    from mresim_phys.metrics import StallWatch
+
+    watch = StallWatch(window=5, gain=0.001)
+    for step in range(40):  # 0.0004 a step: a gain of 0.001 every three steps
+        watch.update(_Fractions(step, 0.0004 * step, 0.0))
+        assert not watch.stalled(step)
+    for step in range(40, 46):  # no more gain
+        watch.update(_Fractions(step, 0.0004 * 39, 0.0))
+    assert watch.stalled(45) and watch.last_progress <= 39
+
+
+class _Fractions:
+    """The part of a step record that StallWatch reads."""
+
+    def __init__(self, step: int, explored: float, known_at_base: float) -> None:
+        self.step, self.explored, self.known_at_base = step, explored, known_at_base

@@ -49,7 +49,7 @@ def team_scenario(robots: int, map_path: Path, steps: int) -> dict[str, Any]:
         "name": f"bench-{robots}",
         "seed": 1,
         "steps": steps,
-        "stop": {"all_done": False},
+        "stop": {"all_done": False, "stalled_for": None},
         "map": {"image": str(map_path)},
         "base_station": {"position": list(DEFAULT_BASE), "comm_range": 150},
         "team": {"speed": 3, "radius": 2, "sensor": {"range": 100}, "comm_range": 150},

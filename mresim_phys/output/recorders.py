@@ -26,7 +26,7 @@ from mresim_phys.errors import ScenarioError
 from mresim_phys.metrics import CommTotals, Milestones, StepRecord, csv_header
 from mresim_phys.output.runlog import RunLogWriter
 from mresim_phys.output.video import VideoRecorder, default_video_path, write_png
-from mresim_phys.render import LayerSpec, Renderer, parse_layers
+from mresim_phys.render import LayerSpec, Renderer, frame_scale, parse_layers
 from mresim_phys.scenario.schema import RenderSpec, Scenario
 from mresim_phys.snapshot import Snapshot
 
@@ -227,7 +227,7 @@ def frame_recorder(
     png_prefix: str = "",
 ) -> FrameRecorder:
     """A FrameRecorder of maps of ``shape`` with ``spec``'s scale, fps, every and PNG steps."""
-    renderer = Renderer(shape, layers, spec.scale, regions=regions)
+    renderer = Renderer(shape, layers, frame_scale(shape, spec.scale), regions=regions)
     writer = VideoRecorder(video, spec.fps, renderer.size) if video is not None else None
     steps = spec.snapshots
     return FrameRecorder(renderer, writer, spec.every, steps, png_dir, final_png, png_prefix)

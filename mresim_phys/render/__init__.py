@@ -9,7 +9,7 @@ Typical use: ``Renderer(truth.shape, parse_layers("all")).render(snapshot)``.
 
 from __future__ import annotations
 
-from mresim_phys.render.frame import Renderer
+from mresim_phys.render.frame import MIN_FRAME_SIDE, Renderer, frame_scale
 from mresim_phys.render.layers import (
     DEFAULT_GLOBAL,
     DEFAULT_ROBOT,
@@ -30,10 +30,12 @@ __all__ = [
     "DEFAULT_STYLE",
     "GLOBAL_LAYERS",
     "LAYERS",
+    "MIN_FRAME_SIDE",
     "PALETTE",
     "ROBOT_LAYERS",
     "LayerSpec",
     "Renderer",
     "Style",
+    "frame_scale",
     "parse_layers",
 ]

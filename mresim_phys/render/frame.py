@@ -15,6 +15,7 @@ Typical use: ``Renderer(truth.shape, parse_layers("all")).render(snapshot)``.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
@@ -31,6 +32,15 @@ if TYPE_CHECKING:
     from mresim_phys.snapshot import Snapshot
 
 _AREA = cv2.INTER_AREA
+MIN_FRAME_SIDE = 640  # output pixels: the longer side of a run's frames is at least this
+
+
+def frame_scale(truth_shape: tuple[int, int], scale: float) -> float:
+    """``scale`` times the smallest whole factor that makes the frame's longer side at least
+    :data:`MIN_FRAME_SIDE` pixels, so the header and legend fit on small maps (a 160x120
+    map at scale 1 is drawn at scale 4, 640x480)."""
+    longer = max(truth_shape) * scale
+    return scale * max(1, math.ceil(MIN_FRAME_SIDE / longer)) if longer > 0 else scale
 
 
 class Renderer:

@@ -182,6 +182,21 @@ class StopSpec(Strict):
     explored: float | None = Field(None, gt=0, le=1, description="Team-known fraction.")
     known_at_base: float | None = Field(None, gt=0, le=1, description="Base-known fraction.")
     all_done: bool = Field(True, description="Stop when every robot is done or failed.")
+    stalled_for: int | None = Field(
+        300,
+        ge=1,
+        le=1_000_000,
+        description=(
+            "Stop when neither explored nor known at base has gained stalled_gain in this"
+            " many steps (stop reason 'stalled'); null = never."
+        ),
+    )
+    stalled_gain: float = Field(
+        0.001,
+        ge=0,
+        le=1,
+        description="Smallest gain (fraction of the free area) that counts as progress.",
+    )
 
 
 class StartJitterSpec(Strict):
