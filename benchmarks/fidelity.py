@@ -11,11 +11,13 @@ Java MRESim (``docs/differences-from-original.md`` quotes this table).
     python benchmarks/fidelity.py                       # 20 seeds, disk and path_loss
     python benchmarks/fidelity.py --seeds 5 --models disk --teams library8
     python benchmarks/fidelity.py --maps ../shared/maps  # the original's own images
+    python benchmarks/fidelity.py --teams library8 --set team.radius=2 --set team.wall_margin=1
 
-``--maps DIR`` swaps the shipped redrawn maps for ``DIR/library.png`` and
-``DIR/rooms.png`` (the original's images, when you have them). ``--csv FILE``
-writes one row per run. A script, not a test: it takes minutes (``--jobs``
-processes, default: all cores).
+``--set PATH=VALUE`` changes any scenario field of every run (a dotted path; the value
+is read as YAML), to measure what one setting costs. ``--maps DIR`` swaps the shipped
+redrawn maps for ``DIR/library.png`` and ``DIR/rooms.png`` (the original's images, when
+you have them). ``--csv FILE`` writes one row per run. A script, not a test: it takes
+minutes (``--jobs`` processes, default: all cores).
 """
 
 from __future__ import annotations
@@ -29,6 +31,8 @@ from concurrent.futures import ProcessPoolExecutor
 from dataclasses import asdict, dataclass
 from pathlib import Path
 from typing import Any
+
+import yaml
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
@@ -101,9 +105,12 @@ class Result:
     steps: int
 
 
-def run_one(job: tuple[str, str, int, str | None]) -> Result:
-    """Run one team with one comm model and seed to its end."""
-    key, model, seed, maps = job
+Job = tuple[str, str, int, "str | None", "tuple[tuple[str, Any], ...]"]
+
+
+def run_one(job: Job) -> Result:
+    """Run one team with one comm model and seed to its end (``changes``: ``--set``)."""
+    key, model, seed, maps, changes = job
     team = TEAMS[key]
     overrides: dict[str, Any] = {
         "seed": seed,
@@ -114,6 +121,7 @@ def run_one(job: tuple[str, str, int, str | None]) -> Result:
     }
     if maps:
         overrides["map"] = {"image": str(Path(maps).resolve() / team.map_file)}
+    overrides.update(dict(changes))
     sim = Simulation(load_scenario(ROOT / "scenarios" / team.scenario, **overrides))
     last = sim.run()
     explored, base = sim.milestones.explored, sim.milestones.known_at_base
@@ -171,6 +179,14 @@ def report(results: list[Result]) -> list[str]:
     return [*lines, "", *checks]
 
 
+def setting(text: str) -> tuple[str, Any]:
+    """argparse type: ``PATH=VALUE`` with the value read as YAML."""
+    path, sep, value = text.partition("=")
+    if not sep or not path:
+        raise argparse.ArgumentTypeError(f"expected PATH=VALUE, got {text!r}")
+    return path.strip(), yaml.safe_load(value)
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=20, help="seeds 1..N (default 20)")
@@ -179,12 +195,20 @@ def main() -> None:
     parser.add_argument("--maps", help="folder with the original's library.png and rooms.png")
     parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="processes")
     parser.add_argument("--csv", type=Path, help="write one row per run to this file")
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        type=setting,
+        metavar="PATH=VALUE",
+        help="change a scenario field of every run, e.g. team.radius=2 (repeatable)",
+    )
     args = parser.parse_args()
     unknown = [t for t in args.teams.split(",") if t not in TEAMS]
     if unknown:
         parser.error(f"unknown team(s) {unknown}; choose from {sorted(TEAMS)}")
     jobs = [
-        (team, model, seed, args.maps)
+        (team, model, seed, args.maps, tuple(args.set))
         for team in args.teams.split(",")
         for model in args.models.split(",")
         for seed in range(1, args.seeds + 1)
@@ -197,7 +221,9 @@ def main() -> None:
             writer.writeheader()
             writer.writerows(asdict(r) for r in results)
     source = args.maps or "the shipped redrawn maps"
-    print(f"Fidelity over seeds 1-{args.seeds} on {source} (median [range] of steps):\n")
+    changed = ", ".join(f"{k}={v}" for k, v in args.set)
+    with_changes = f", with {changed}" if changed else ""
+    print(f"Fidelity over seeds 1-{args.seeds} on {source}{with_changes} (median [range]):\n")
     print("\n".join(report(results)))
 
 
