@@ -2,14 +2,16 @@
 
 Argument parsing only; the work is delegated to ``load``, ``sim`` and
 ``recorders``. Every user mistake ends in a one-paragraph message on stderr and
-exit status 2, never a traceback; an interrupted run still writes its summary.
+exit status 2, never a traceback. A run stopped by SIGINT (Ctrl-C) or SIGTERM still
+closes its files and writes its summary (``output.session``), then exits with 130 or 143.
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
+from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any
 
@@ -21,10 +23,28 @@ from mresim_phys.output.bench import run_bench
 from mresim_phys.output.plots import plot_runs, plotting_available
 from mresim_phys.output.recorders import default_run_dir
 from mresim_phys.output.replay import replay_run
-from mresim_phys.output.session import run_session
+from mresim_phys.output.session import INTERRUPTED, Outcome, run_session
+from mresim_phys.output.signals import StopRequest, stop_on_signals
+from mresim_phys.render.layers import GLOBAL_LAYERS, ROBOT_LAYERS
 from mresim_phys.sim import Simulation
 
 EXIT_USER_ERROR = 2
+EXIT_INTERRUPTED = 130  # Ctrl-C outside a run's own handling (128 + SIGINT)
+LAYERS_HELP = (
+    "comma-separated layers applied in order: 'default', 'all', NAME to add, -NAME to remove,"
+    " ROBOT:NAME+NAME-NAME for one robot (e.g. 'default,B:free_space'). Global layers: "
+    + ", ".join(GLOBAL_LAYERS)
+    + "; robot layers: "
+    + ", ".join(ROBOT_LAYERS)
+)
+
+
+def package_version() -> str:
+    """The installed version of mresim_phys (``unknown`` when run from a bare source tree)."""
+    try:
+        return version("mresim_phys")
+    except PackageNotFoundError:
+        return "unknown"
 
 
 def whole_number(text: str, minimum: int) -> int:
@@ -53,12 +73,18 @@ def make_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="mresim", description="Multi-robot exploration simulator (mresim_phys)."
     )
+    parser.add_argument("--version", action="version", version=f"mresim {package_version()}")
     commands = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     run = commands.add_parser("run", help="run a scenario and write metrics")
     run.add_argument("scenario", type=Path, help="scenario YAML file")
     run.add_argument("--steps", type=positive_int, help="override the step cap")
     run.add_argument("--seed", type=non_negative_int, help="override the scenario seed")
     run.add_argument("--out", type=Path, help="output folder (default runs/<name>/seed-<seed>)")
+    run.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace the output folder even if it holds another scenario's run or other files",
+    )
     run.add_argument(
         "--fixed",
         action="store_true",
@@ -104,7 +130,7 @@ def add_render_flags(parser: argparse.ArgumentParser) -> None:
     )
     parser.add_argument("--fps", type=positive_float, help="video frames per second")
     parser.add_argument("--every", type=positive_int, help="one frame every N steps")
-    parser.add_argument("--layers", help="layers, e.g. 'default', 'all', 'default,B:free_space'")
+    parser.add_argument("--layers", metavar="L", help=LAYERS_HELP)
     parser.add_argument("--scale", type=positive_float, help="frame scale (2 = twice the map)")
     parser.add_argument(
         "--snapshot",
@@ -148,8 +174,11 @@ def step_list(text: str) -> list[int]:
 
 
 def robot_counts(text: str) -> tuple[int, ...]:
-    """argparse type: comma-separated positive team sizes."""
-    return tuple(positive_int(part) for part in text.split(",") if part.strip())
+    """argparse type: comma-separated positive team sizes (at least one)."""
+    counts = tuple(positive_int(part) for part in text.split(",") if part.strip())
+    if not counts:
+        raise argparse.ArgumentTypeError(f"expected team sizes such as 4,8,16, got {text!r}")
+    return counts
 
 
 def bench_command(args: argparse.Namespace) -> int:
@@ -159,13 +188,39 @@ def bench_command(args: argparse.Namespace) -> int:
 
 
 def run_command(args: argparse.Namespace) -> int:
-    """``mresim run``: simulate, streaming metrics (and log, video, PNGs) to the run folder."""
-    fixed = {"simulation": {"vary_with_seed": False}} if args.fixed else {}
-    sim = Simulation.from_yaml(
-        args.scenario, seed=args.seed, steps=args.steps, render=render_overrides(args), **fixed
-    )
+    """``mresim run``: simulate, streaming metrics (and log, video, PNGs) to the run folder.
+
+    SIGINT and SIGTERM are handled from the start (building the simulation included): the
+    run stops after the current step and still writes everything (``output.session``).
+    """
+    with stop_on_signals(StopRequest(notice=not args.quiet)) as stop:
+        fixed = {"simulation": {"vary_with_seed": False}} if args.fixed else {}
+        sim = Simulation.from_yaml(
+            args.scenario, seed=args.seed, steps=args.steps, render=render_overrides(args), **fixed
+        )
+        out_dir = args.out or default_run_dir(sim.scenario)
+        plotted: list[bool] = []
+
+        def plots(folder: Path) -> None:
+            wanted = sim.scenario.render.plots
+            plotted.append(draw_plots(wanted, [folder], folder / "plots", args.quiet))
+
+        outcome = run_with_bar(sim, out_dir, args, stop, plots)
+    if not args.quiet:
+        print(summary_line(sim, outcome, any(plotted)))
+    return outcome.exit_status
+
+
+def run_with_bar(
+    sim: Simulation,
+    out_dir: Path,
+    args: argparse.Namespace,
+    stop: StopRequest,
+    finish: Callable[[Path], object],
+) -> Outcome:
+    """run_session under a tqdm progress bar whose total is the steps run when a stop rule
+    ends the run early."""
     scenario = sim.scenario
-    out_dir = args.out or default_run_dir(scenario)
     with tqdm(total=scenario.steps, disable=args.quiet, unit="step", desc=scenario.name) as bar:
 
         def progress(record: StepRecord) -> None:
@@ -174,18 +229,26 @@ def run_command(args: argparse.Namespace) -> int:
                 explored=f"{record.explored:.3f}", base=f"{record.known_at_base:.3f}", refresh=False
             )
 
-        outcome = run_session(sim, out_dir, progress)
-    plotted = draw_plots(scenario.render.plots, [out_dir], out_dir / "plots", args.quiet)
-    if not args.quiet:
-        summary = outcome.summary
-        print(
-            f"{scenario.name} seed {scenario.seed}: {summary['steps']} steps ({outcome.reason}),"
-            f" explored {summary['final_explored']:.3f}, at base"
-            f" {summary['final_known_at_base']:.3f}, {summary['wall_time_s']:.1f} s -> {out_dir}"
-            + (f"; video {outcome.video}" if outcome.video else "")
-            + (f"; plots in {out_dir / 'plots'}" if plotted else "")
+        outcome = run_session(
+            sim, out_dir, progress, overwrite=args.overwrite, stop=stop, finish=finish
         )
-    return 130 if outcome.reason == "interrupted" else 0
+        if outcome.reason != INTERRUPTED:
+            bar.total = bar.n
+            bar.refresh()
+    return outcome
+
+
+def summary_line(sim: Simulation, outcome: Outcome, plotted: bool) -> str:
+    """The one line ``mresim run`` prints at the end."""
+    scenario, summary, out_dir = sim.scenario, outcome.summary, outcome.out_dir
+    reason = outcome.reason + (f" by {outcome.signal}" if outcome.signal else "")
+    return (
+        f"{scenario.name} seed {scenario.seed}: {summary['steps']} steps ({reason}),"
+        f" explored {summary['final_explored']:.3f}, at base"
+        f" {summary['final_known_at_base']:.3f}, {summary['wall_time_s']:.1f} s -> {out_dir}"
+        + (f"; video {outcome.video}" if outcome.video else "")
+        + (f"; plots in {out_dir / 'plots'}" if plotted else "")
+    )
 
 
 def draw_plots(wanted: bool, run_dirs: list[Path], out_dir: Path, quiet: bool) -> bool:
@@ -238,6 +301,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     handler = COMMANDS[args.command]
     try:
         return handler(args)
+    except KeyboardInterrupt:
+        print("mresim: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
     except MresimError as exc:
         print(f"mresim: error: {exc}", file=sys.stderr)
         return EXIT_USER_ERROR

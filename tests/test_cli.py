@@ -282,3 +282,107 @@ def test_console_script_exits_nonzero_without_traceback(scenario_file: MakeScena
     assert done.stderr.startswith("mresim: error:")
     assert "did you mean 'steps'" in done.stderr
     assert "Traceback" not in done.stderr
+
+
+# --- output folders ---------------------------------------------------------------------
+
+
+def quiet_run(
+    capsys: pytest.CaptureFixture[str], path: Path, out: Path, *flags: str
+) -> tuple[int, str, str]:
+    return cli(capsys, "run", path, "--quiet", "--no-plots", "--out", out, *flags)
+
+
+def test_a_rerun_of_the_same_scenario_replaces_the_old_run_whole(
+    scenario_file: MakeScenario, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "out"
+    assert quiet_run(capsys, scenario_file(steps=4), out, "--snapshot", "2")[0] == 0
+    assert (out / "log").is_dir() and (out / "step-00002.png").is_file()
+    (out / "metrics-replayed.csv").write_text("left by a replay\n")
+    assert quiet_run(capsys, scenario_file(steps=3), out, "--no-log")[0] == 0
+    assert sorted(p.name for p in out.iterdir()) == [
+        "final.png",
+        "metrics.csv",
+        "scenario.yaml",
+        "summary.json",
+    ]
+    assert json.loads((out / "summary.json").read_text())["steps"] == 3
+    assert [p.name for p in tmp_path.iterdir() if ".tmp-" in p.name or ".old-" in p.name] == []
+
+
+def test_a_run_of_another_scenario_is_kept_unless_overwrite(
+    scenario_file: MakeScenario, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "out"
+    assert quiet_run(capsys, scenario_file(steps=2), out)[0] == 0
+    code, stdout, err = quiet_run(capsys, scenario_file(steps=2, name="other"), out)
+    assert code == 2 and stdout == ""
+    assert err.startswith("mresim: error:") and "another scenario, 'tiny'" in err
+    assert "--overwrite" in err and "Traceback" not in err
+    assert json.loads((out / "summary.json").read_text())["name"] == "tiny"
+    assert quiet_run(capsys, scenario_file(steps=2, name="other"), out, "--overwrite")[0] == 0
+    assert json.loads((out / "summary.json").read_text())["name"] == "other"
+
+
+@pytest.mark.parametrize("kind", ["files", "junk summary", "a file"])
+def test_a_folder_that_is_no_run_is_refused_unless_overwrite(
+    scenario_file: MakeScenario, tmp_path: Path, capsys: pytest.CaptureFixture[str], kind: str
+) -> None:
+    out = tmp_path / "out"
+    if kind == "a file":
+        out.write_text("a file")
+    else:
+        out.mkdir()
+        (out / ("notes.txt" if kind == "files" else "summary.json")).write_text("{not json")
+    code, _, err = quiet_run(capsys, scenario_file(steps=2), out)
+    assert code == 2
+    assert str(out) in err and "--overwrite" in err
+    assert quiet_run(capsys, scenario_file(steps=2), out, "--overwrite")[0] == 0
+    assert json.loads((out / "summary.json").read_text())["name"] == "tiny"
+    assert not (out / "notes.txt").exists()
+
+
+def test_an_empty_folder_is_used(
+    scenario_file: MakeScenario, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    (tmp_path / "out").mkdir()
+    assert quiet_run(capsys, scenario_file(steps=2), tmp_path / "out")[0] == 0
+    assert (tmp_path / "out" / "summary.json").is_file()
+
+
+def test_the_current_folder_is_never_replaced(
+    scenario_file: MakeScenario,
+    tmp_path: Path,
+    monkeypatch: pytest.MonkeyPatch,
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    path = scenario_file(steps=2)
+    monkeypatch.chdir(tmp_path)
+    for out in (".", str(tmp_path.parent)):
+        code, _, err = quiet_run(capsys, path, Path(out), "--overwrite")
+        assert code == 2
+        assert "current folder" in err
+    assert path.is_file()
+
+
+def test_a_failing_run_leaves_the_old_run_and_no_temporary_folder(
+    scenario_file: MakeScenario, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "out"
+    assert quiet_run(capsys, scenario_file(steps=2), out)[0] == 0
+    before = (out / "metrics.csv").read_bytes()
+    code, _, err = quiet_run(capsys, scenario_file(steps=5), out, "--layers", "nope")
+    assert code == 2 and "nope" in err
+    assert (out / "metrics.csv").read_bytes() == before
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out", "rooms.png", "scenario.yaml"]
+
+
+def test_outputs_are_written_under_temporary_names_and_renamed(
+    scenario_file: MakeScenario, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    video = tmp_path / "videos" / "v.mp4"
+    out = tmp_path / "out"
+    assert quiet_run(capsys, scenario_file(steps=3), out, "--video", str(video))[0] == 0
+    assert [p.name for p in video.parent.iterdir()] == ["v.mp4"]
+    assert list(out.rglob(".*")) == []  # no temporary file left

@@ -1,7 +1,9 @@
 """Output (output edge): everything a run leaves on disk, and what reads it back.
 
 ``session`` (the run loop) feeds the recorders of ``recorders`` (metrics.csv and
-summary.json, the run log, video frames and PNGs); ``runlog`` writes and replays run logs,
+summary.json, the run log, video frames and PNGs) into a fresh folder that ``rundir``
+moves into place, stopping cleanly on the signals ``signals`` routes to it; ``files``
+writes every file under a temporary name first; ``runlog`` writes and replays run logs,
 every snapshot field stored as ``logformat`` says; ``video`` encodes frames; ``replay``,
 ``plots`` and ``bench`` are the ``mresim replay``, ``plot`` and ``bench`` commands.
 """

@@ -12,7 +12,7 @@ scenario and seed give a byte-identical file.
 from __future__ import annotations
 
 import csv
-import json
+import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
@@ -24,6 +24,7 @@ from mresim_phys.build import region_probe
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.errors import ScenarioError
 from mresim_phys.metrics import CommTotals, Milestones, StepRecord, csv_header
+from mresim_phys.output.files import temp_sibling, write_json_atomic, write_text_atomic
 from mresim_phys.output.runlog import RunLogWriter
 from mresim_phys.output.video import VideoRecorder, default_video_path, write_png
 from mresim_phys.render import LayerSpec, Renderer, frame_scale, parse_layers
@@ -59,13 +60,20 @@ def scenario_yaml(scenario: Scenario) -> str:
 
 
 class RunWriter:
-    """Streams ``metrics.csv`` during a run and writes ``summary.json`` when closed."""
+    """Streams ``metrics.csv`` during a run and writes ``summary.json`` when closed.
+
+    Every file appears whole or not at all (``output.files``): ``scenario.yaml`` and
+    ``summary.json`` through a temporary sibling, ``metrics.csv`` under a temporary name
+    renamed at :meth:`close`.
+    """
 
     def __init__(self, out_dir: Path, scenario: Scenario) -> None:
         self.out_dir = out_dir
         out_dir.mkdir(parents=True, exist_ok=True)
-        (out_dir / "scenario.yaml").write_text(scenario_yaml(scenario), encoding="utf-8")
-        self._file = (out_dir / "metrics.csv").open("w", newline="", encoding="utf-8")
+        write_text_atomic(out_dir / "scenario.yaml", scenario_yaml(scenario))
+        self.path = out_dir / "metrics.csv"
+        self._partial = temp_sibling(self.path)
+        self._file = self._partial.open("w", newline="", encoding="utf-8")
         self._csv = csv.writer(self._file, lineterminator="\n")
         self._csv.writerow(csv_header([r.name for r in scenario.robots]))
 
@@ -74,14 +82,14 @@ class RunWriter:
         self._csv.writerow(record.csv_row())
 
     def close(self) -> None:
-        """Flush and close ``metrics.csv``."""
-        self._file.close()
+        """Close ``metrics.csv`` and give it its name (idempotent)."""
+        if not self._file.closed:
+            self._file.close()
+            os.replace(self._partial, self.path)
 
     def write_summary(self, summary: dict[str, Any]) -> Path:
         """Write ``summary.json`` and return its path."""
-        path = self.out_dir / "summary.json"
-        path.write_text(json.dumps(summary, indent=2) + "\n", encoding="utf-8")
-        return path
+        return write_json_atomic(self.out_dir / "summary.json", summary)
 
 
 def summarise(

@@ -15,7 +15,6 @@ the rows of ``metrics.csv`` from the log alone. Layout: ``docs/run-log-format.md
 from __future__ import annotations
 
 import json
-import os
 import zipfile
 from collections.abc import Iterator
 from pathlib import Path
@@ -26,6 +25,7 @@ import numpy as np
 from mresim_phys.errors import MresimError
 from mresim_phys.knowledge.mapping import Coverage
 from mresim_phys.metrics import RobotRecord, StepRecord, measure_step, update_known_at_base
+from mresim_phys.output.files import write_json_atomic
 from mresim_phys.output.logformat import (
     AGENT_LINE,
     FORMAT,
@@ -77,13 +77,6 @@ def flat_cells(grid: np.ndarray) -> np.ndarray:
     return cells
 
 
-def write_json(path: Path, data: dict[str, Any]) -> None:
-    """Write ``data`` as JSON to ``path`` atomically (temporary file, then rename)."""
-    tmp = path.with_suffix(".tmp")
-    tmp.write_text(json.dumps(data, indent=2) + "\n", encoding="utf-8")
-    os.replace(tmp, path)
-
-
 class RunLogWriter:
     """Streams a run's snapshots into ``log_dir``; ``first`` (step 0) is logged at once."""
 
@@ -110,7 +103,7 @@ class RunLogWriter:
         self._last_step: int | None = None
         self._steps = (self.log_dir / STEPS).open("w", encoding="utf-8")
         self._closed = False
-        write_json(self.log_dir / META, self.meta)
+        write_json_atomic(self.log_dir / META, self.meta)
         self.write(first)
 
     def write(self, snap: Snapshot) -> None:
@@ -139,7 +132,7 @@ class RunLogWriter:
         self._steps.write("\n".join(self._lines) + "\n")
         self._steps.flush()
         self.meta["steps"] += len(self._lines)
-        write_json(self.log_dir / META, self.meta)
+        write_json_atomic(self.log_dir / META, self.meta)
         self._lines, self._parts = [], new_parts()
 
     def close(self) -> None:
@@ -148,7 +141,7 @@ class RunLogWriter:
             self._flush()
             self._steps.close()
             self.meta["closed"], self._closed = True, True
-            write_json(self.log_dir / META, self.meta)
+            write_json_atomic(self.log_dir / META, self.meta)
 
     def __enter__(self) -> RunLogWriter:
         return self

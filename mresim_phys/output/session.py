@@ -3,21 +3,31 @@
 :func:`run_session` is the only loop of a command-line run: it takes each step's
 record from ``Simulation.iterate()`` and hands it, with a lazily built snapshot,
 to each recorder (``output.recorders``: metrics files, run log, video, PNG snapshots).
-Rendering never happens inside ``Simulation.step()``. An interrupted run still closes
-every recorder, so nothing already written is lost.
+Rendering never happens inside ``Simulation.step()``.
+
+Everything goes into a fresh temporary folder beside the output folder, moved into place
+at the end (``output.rundir``), so a reused output folder never mixes two runs. SIGINT and
+SIGTERM (``output.signals``) stop the run at the end of the current step: every recorder
+is closed, ``final.png`` and ``summary.json`` (``stop_reason`` ``"interrupted"`` and the
+``signal``) are written and the folder is moved into place, as for a finished run.
 """
 
 from __future__ import annotations
 
+import signal
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from mresim_phys.metrics import StepRecord
-from mresim_phys.output.recorders import SnapshotSource, make_recorders, summarise
+from mresim_phys.output.recorders import Recorder, SnapshotSource, make_recorders, summarise
+from mresim_phys.output.rundir import StagedRun
+from mresim_phys.output.signals import StopRequest, stop_on_signals
 from mresim_phys.sim import Simulation
 from mresim_phys.snapshot import Snapshot
+
+INTERRUPTED = "interrupted"
 
 
 def once(build: SnapshotSource) -> SnapshotSource:
@@ -34,34 +44,104 @@ def once(build: SnapshotSource) -> SnapshotSource:
 
 @dataclass
 class Outcome:
-    """What a session produced."""
+    """What a session produced (``signal``: the signal that interrupted it, if any)."""
 
     summary: dict[str, object]
     out_dir: Path
     video: Path | None
     reason: str
+    signal: str | None = None
+    exit_status: int = 0
 
 
 def run_session(
-    sim: Simulation, out_dir: Path, on_step: Callable[[StepRecord], None] | None = None
+    sim: Simulation,
+    out_dir: Path,
+    on_step: Callable[[StepRecord], None] | None = None,
+    *,
+    overwrite: bool = False,
+    stop: StopRequest | None = None,
+    finish: Callable[[Path], object] | None = None,
 ) -> Outcome:
-    """Run ``sim`` to its end, feeding every recorder; write summary.json."""
-    writer, recorders, video = make_recorders(sim, out_dir)
-    started, reason = time.perf_counter(), "interrupted"
+    """Run ``sim`` to its end (or to a stop signal) into ``out_dir``, feeding every recorder.
+
+    Args:
+        sim: The simulation, at step 0.
+        out_dir: The run folder; refused (MresimError) if it holds a run of another
+            scenario or is no run folder, unless ``overwrite``.
+        on_step: Called with every step's record (a progress bar).
+        overwrite: Replace ``out_dir`` whatever it holds.
+        stop: A StopRequest whose signal handlers the caller installed; None: install
+            handlers for SIGINT and SIGTERM for the session (and restore them after).
+        finish: Called with the (temporary) run folder once summary.json is written, before
+            the folder moves into place (the CLI draws its plots there).
+    """
+    if stop is None:
+        with stop_on_signals() as own:
+            return run_session(sim, out_dir, on_step, overwrite=overwrite, stop=own, finish=finish)
+    staged = StagedRun(out_dir, sim.scenario.name, overwrite)
     try:
-        for record in sim.iterate():
-            snapshot = once(sim.snapshot)
-            for recorder in recorders:
-                recorder.on_step(record, snapshot)
-            if on_step is not None:
-                on_step(record)
-        reason = sim.stop_reason() or "steps"
-    except KeyboardInterrupt:
-        pass
+        outcome = record_run(sim, staged.folder, on_step, stop)
+        if finish is not None:
+            finish(staged.folder)
+        staged.commit()
+    except BaseException:
+        staged.discard()
+        raise
+    return replace(outcome, out_dir=Path(out_dir))
+
+
+def record_run(
+    sim: Simulation,
+    folder: Path,
+    on_step: Callable[[StepRecord], None] | None,
+    stop: StopRequest,
+) -> Outcome:
+    """Feed every step to the recorders writing into ``folder``; close them; write the summary."""
+    writer, recorders, video = make_recorders(sim, folder)
+    started = time.perf_counter()
+    try:
+        step_until_stopped(sim, recorders, on_step, stop)
+    except KeyboardInterrupt:  # no handler of ours was installed (not the main thread, ...)
+        stop.signum = stop.signum or int(signal.SIGINT)
     finally:
-        for recorder in recorders:
-            recorder.close()
+        close_all(recorders)
     elapsed = time.perf_counter() - started
+    natural = sim.stop_reason()
+    reason = natural if natural is not None else INTERRUPTED
     summary = summarise(sim.scenario, sim.record, sim.milestones, elapsed, reason, sim.comm_totals)
+    interrupted = reason == INTERRUPTED
+    if interrupted:
+        summary["signal"] = stop.name
     writer.write_summary(summary)
-    return Outcome(summary, out_dir, video, reason)
+    status = stop.exit_status if interrupted else 0
+    return Outcome(summary, folder, video, reason, stop.name if interrupted else None, status)
+
+
+def close_all(recorders: list[Recorder]) -> None:
+    """Close every recorder, even when one fails; then raise the first failure."""
+    failure: Exception | None = None
+    for recorder in recorders:
+        try:
+            recorder.close()
+        except Exception as exc:
+            failure = failure or exc
+    if failure is not None:
+        raise failure
+
+
+def step_until_stopped(
+    sim: Simulation,
+    recorders: list[Recorder],
+    on_step: Callable[[StepRecord], None] | None,
+    stop: StopRequest,
+) -> None:
+    """Hand every step to the recorders until the run ends or a stop signal arrived."""
+    for record in sim.iterate():
+        snapshot = once(sim.snapshot)
+        for recorder in recorders:
+            recorder.on_step(record, snapshot)
+        if on_step is not None:
+            on_step(record)
+        if stop.requested:
+            return

@@ -7,11 +7,13 @@ machine with a free core the simulation steps on while the last frame is encoded
 ``QUEUED_FRAMES`` frames wait, then ``write`` blocks. The codec follows the file extension:
 ``.mp4`` -> ``mp4v``, ``.webm`` -> ``VP80``, ``.avi`` -> ``MJPG``. opencv-python-headless
 ships no H.264 encoder; re-encode an mp4v file with an external ffmpeg if a browser needs
-H.264.
+H.264. Frames go to a temporary sibling of the video file (``output.files``), renamed onto
+its name at :meth:`VideoRecorder.close`, so a video file is always a finished one.
 """
 
 from __future__ import annotations
 
+import os
 import queue
 import threading
 from pathlib import Path
@@ -21,6 +23,7 @@ import cv2
 import numpy as np
 
 from mresim_phys.errors import MresimError
+from mresim_phys.output.files import atomic_path, temp_sibling
 
 FOURCC = {".mp4": "mp4v", ".webm": "VP80", ".avi": "MJPG"}
 QUEUED_FRAMES = 4  # frames waiting for the background encoder (~1.4 MB each at 800x600)
@@ -46,12 +49,13 @@ def write_png(path: Path, frame: np.ndarray) -> None:
     """
     path = Path(path)
     _make_parent(path)
-    try:
-        ok = cv2.imwrite(str(path), frame)
-    except cv2.error as exc:
-        raise MresimError(f"cannot write image {path}: {exc.msg or exc}") from exc
-    if not ok:
-        raise MresimError(f"cannot write image {path} (unwritable path or unknown extension)")
+    with atomic_path(path) as tmp:
+        try:
+            ok = cv2.imwrite(str(tmp), frame)
+        except cv2.error as exc:
+            raise MresimError(f"cannot write image {path}: {exc.msg or exc}") from exc
+        if not ok:
+            raise MresimError(f"cannot write image {path} (unwritable path or unknown extension)")
 
 
 class VideoRecorder:
@@ -92,12 +96,15 @@ class VideoRecorder:
             raise MresimError(f"video {self.path}: fps and frame size must be positive")
         self.fourcc = fourcc or FOURCC[suffix]
         _make_parent(self.path)
+        self.partial = temp_sibling(self.path)  # renamed onto path by close()
         code = cv2.VideoWriter.fourcc(*self.fourcc)
         self._writer: cv2.VideoWriter | None = cv2.VideoWriter(
-            str(self.path), code, self.fps, self.frame_size
+            str(self.partial), code, self.fps, self.frame_size
         )
-        if not self._writer.isOpened():
+        if not self._writer.isOpened() or self.path.is_dir():
+            self._writer.release()
             self._writer = None
+            self.partial.unlink(missing_ok=True)
             raise MresimError(
                 f"cannot open video {self.path} with codec {self.fourcc!r}: the path may be "
                 "unwritable, or the codec is missing from this OpenCV build (H.264 is not "
@@ -149,10 +156,10 @@ class VideoRecorder:
             raise MresimError(f"video {self.path}: encoding failed: {self._failure}")
 
     def close(self) -> None:
-        """Encode the queued frames and finish the file (idempotent).
+        """Encode the queued frames, finish the file and give it its name (idempotent).
 
         Raises:
-            MresimError: If encoding a frame failed.
+            MresimError: If encoding a frame failed (the unfinished file is deleted).
         """
         writer, self._writer = self._writer, None
         if writer is None:
@@ -161,7 +168,11 @@ class VideoRecorder:
             self._queue.put(None)
             self._encoder.join()
         writer.release()
-        self._raise_failure()
+        if self._failure is not None:
+            self.partial.unlink(missing_ok=True)
+            self._raise_failure()
+        if self.partial.exists():
+            os.replace(self.partial, self.path)
 
     def __enter__(self) -> VideoRecorder:
         return self
