@@ -37,9 +37,9 @@ def test_run_writes_video_snapshots_final_picture_and_log(
     width, height = capture.get(cv2.CAP_PROP_FRAME_WIDTH), capture.get(cv2.CAP_PROP_FRAME_HEIGHT)
     capture.release()
     assert frames == 21  # step 0 and 20 steps
-    assert (width, height) == (80, 60)
+    assert (width, height) == (640, 480)  # an 80x60 map, scaled up to a 640-pixel side
     for name in ("step-00005.png", "step-00010.png", "final.png"):
-        assert read_png(tmp_path / "run" / name).shape == (60, 80, 3)
+        assert read_png(tmp_path / "run" / name).shape == (480, 640, 3)
     assert (tmp_path / "run" / "log").is_dir()
 
 
@@ -132,7 +132,7 @@ def test_replay_renders_a_video_with_other_layers(
     assert int(capture.get(cv2.CAP_PROP_FRAME_COUNT)) in (13, 0)  # webm may not report a count
     ok, frame = capture.read()
     capture.release()
-    assert ok and frame.shape == (60, 80, 3)
+    assert ok and frame.shape == (480, 640, 3)
 
 
 def test_bad_layers_and_missing_logs_are_clear_errors(
