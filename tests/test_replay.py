@@ -165,3 +165,42 @@ def test_summary_still_written_with_video(scenario_file: ScenarioFile, tmp_path:
     run(scenario_file(steps=5), out, "--video", str(tmp_path / "v.mp4"))
     summary = json.loads((out / "summary.json").read_text())
     assert summary["steps"] == 5
+
+
+@pytest.mark.parametrize(
+    ("change", "fragment"),
+    [
+        pytest.param({"chunk_steps": 0}, "chunk_steps 0", id="chunk-0"),
+        pytest.param({"steps": "5"}, "steps '5'", id="steps-text"),
+        pytest.param({"shape": [1]}, "shape [1]", id="shape"),
+        pytest.param({"agents": [1, 2]}, "agent 1", id="agents"),
+        pytest.param({"starts": [[1]]}, "starts", id="starts"),
+        pytest.param({"name": None}, "name None", id="name"),
+    ],
+)
+def test_a_damaged_log_is_a_clear_error(
+    scenario_file: ScenarioFile,
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    change: dict[str, object],
+    fragment: str,
+) -> None:
+    out = tmp_path / "run"
+    run(scenario_file(steps=3), out)
+    meta_path = out / "log" / "meta.json"
+    meta_path.write_text(json.dumps(json.loads(meta_path.read_text()) | change))
+    capsys.readouterr()
+    assert main(["replay", str(out), "--metrics"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("mresim: error:") and "meta.json" in err and fragment in err
+
+
+def test_a_damaged_render_block_is_a_clear_error(
+    scenario_file: ScenarioFile, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "run"
+    run(scenario_file(steps=3), out)
+    (out / "scenario.yaml").write_text("render: 5\n")
+    capsys.readouterr()
+    assert main(["replay", str(out), "--metrics"]) == 2
+    assert "scenario.yaml: 'render' is 5" in capsys.readouterr().err

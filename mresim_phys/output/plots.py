@@ -1,23 +1,39 @@
 """Plots (output edge): exploration curves, distances and links of one or more runs.
 
-Reads each run folder's ``metrics.csv`` (pandas) and draws with matplotlib's
+Reads each run folder (``output.rundata``: ``metrics.csv``, ``summary.json`` and the
+failures and blackouts of its log, all checked) and draws with matplotlib's
 non-interactive Agg backend: ``exploration.png`` (explored and known-at-base vs
-step), ``distance.png`` (per-robot distance vs step) and ``links.png`` (linked
-pairs and alive robots vs step). Several runs share each figure, one colour per
-run. matplotlib and pandas are the optional ``plot`` extra
-(``pip install -e ".[plot]"``); without them plotting is skipped with a message.
+step, with the 50, 90 and 95 % levels), ``distance.png`` (per-robot distance vs step) and
+``links.png`` (linked pairs and alive robots vs step); failures (dotted) and blackouts
+(dash-dotted, from start to end, shaded between) are vertical lines on the exploration
+and links figures. Several runs share each figure, one colour per run. matplotlib and
+pandas are the optional ``plot`` extra (``pip install -e ".[plot]"``); without them
+plotting is skipped with a message.
 """
 
 from __future__ import annotations
 
-import json
+from collections.abc import Sequence
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from mresim_phys.errors import MresimError
+from mresim_phys.output.files import atomic_path
+from mresim_phys.output.rundata import RunEvent, read_metrics, run_events, run_label
 
 FIGURE_SIZE = (8.0, 4.5)
 DPI = 120
+LEVELS = (0.5, 0.9, 0.95)  # the milestones of summary.json
+
+
+@dataclass(frozen=True)
+class PlottedRun:
+    """One run's label, metrics (a DataFrame) and failures and blackouts."""
+
+    label: str
+    df: Any
+    events: Sequence[RunEvent] = ()
 
 
 def plotting_available() -> bool:
@@ -30,28 +46,6 @@ def plotting_available() -> bool:
     return True
 
 
-def run_label(run_dir: Path) -> str:
-    """``name seed N`` from the run's summary, else the folder path."""
-    summary = run_dir / "summary.json"
-    if summary.exists():
-        data = json.loads(summary.read_text(encoding="utf-8"))
-        return f"{data.get('name', run_dir.name)} seed {data.get('seed', '?')}"
-    return str(run_dir)
-
-
-def read_metrics(run_dir: Path) -> Any:
-    """The run's metrics as a DataFrame; MresimError if the folder holds none."""
-    import pandas as pd
-
-    path = run_dir / "metrics.csv"
-    if not path.is_file():
-        raise MresimError(
-            f"{run_dir} is not a run folder: it has no metrics.csv. Give the folder that"
-            " 'mresim run' wrote (e.g. runs/<name>/seed-<seed>)."
-        )
-    return pd.read_csv(path)
-
-
 def plot_runs(run_dirs: list[Path], out_dir: Path) -> list[Path]:
     """Draw the three figures for ``run_dirs`` into ``out_dir``; return the PNG paths."""
     if not plotting_available():
@@ -59,7 +53,10 @@ def plot_runs(run_dirs: list[Path], out_dir: Path) -> list[Path]:
     import matplotlib
 
     matplotlib.use("Agg")
-    runs = [(run_label(d), read_metrics(d)) for d in run_dirs]
+    runs = []
+    for run_dir in run_dirs:
+        df = read_metrics(run_dir)
+        runs.append(PlottedRun(run_label(run_dir), df, run_events(run_dir, df)))
     out_dir.mkdir(parents=True, exist_ok=True)
     return [
         draw_exploration(runs, out_dir / "exploration.png"),
@@ -86,33 +83,67 @@ def save(fig: Any, ax: Any, path: Path) -> Path:
 
     ax.legend(loc="best", fontsize="small")
     fig.tight_layout()
-    fig.savefig(path)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp)
     plt.close(fig)
     return path
 
 
-def draw_exploration(runs: list[tuple[str, Any]], path: Path) -> Path:
-    """Explored (solid) and known at base (dashed) fractions vs step, one colour per run."""
+def draw_events(ax: Any, run: PlottedRun, colour: str) -> None:
+    """Failures (dotted) and blackouts (dash-dotted start and end, shaded) as vertical lines."""
+    labelled: set[str] = set()
+    for event in run.events:
+        style = ":" if event.kind == "failure" else "-."
+        label = None if event.kind in labelled else f"{run.label}: {event.kind}"
+        labelled.add(event.kind)
+        ax.axvline(event.step, color=colour, linestyle=style, linewidth=1, label=label)
+        if event.kind == "blackout" and event.until is not None:
+            ax.axvline(event.until, color=colour, linestyle=style, linewidth=1)
+            ax.axvspan(event.step, event.until, color=colour, alpha=0.08)
+
+
+def draw_levels(ax: Any) -> None:
+    """Horizontal lines at the 50, 90 and 95 % milestones, labelled at the right edge."""
+    for level in LEVELS:
+        ax.axhline(level, color="grey", linestyle="--", linewidth=0.7, alpha=0.6)
+        ax.annotate(
+            f"{level:.0%}",
+            (1.0, level),
+            xycoords=("axes fraction", "data"),
+            xytext=(2, 0),
+            textcoords="offset points",
+            va="center",
+            fontsize="x-small",
+            color="grey",
+        )
+
+
+def draw_exploration(runs: list[PlottedRun], path: Path) -> Path:
+    """Explored (solid) and known at base (dashed) fractions vs step, one colour per run,
+    with the milestone levels and each run's failures and blackouts."""
     fig, ax = new_axes("Exploration", "fraction of reachable free space")
-    for i, (label, df) in enumerate(runs):
-        colour = f"C{i % 10}"
-        ax.plot(df["step"], df["explored"], color=colour, label=f"{label}: explored")
+    for i, run in enumerate(runs):
+        colour, df = f"C{i % 10}", run.df
+        ax.plot(df["step"], df["explored"], color=colour, label=f"{run.label}: explored")
         ax.plot(
             df["step"],
             df["known_at_base"],
             color=colour,
             linestyle="--",
-            label=f"{label}: known at base",
+            label=f"{run.label}: known at base",
         )
+        draw_events(ax, run, colour)
+    draw_levels(ax)
     ax.set_ylim(0, 1.02)
     return save(fig, ax, path)
 
 
-def draw_distance(runs: list[tuple[str, Any]], path: Path) -> Path:
+def draw_distance(runs: list[PlottedRun], path: Path) -> Path:
     """Distance travelled by every robot vs step."""
     fig, ax = new_axes("Distance travelled", "cells")
     styles = ["-", "--", ":", "-."]
-    for i, (label, df) in enumerate(runs):
+    for i, run in enumerate(runs):
+        label, df = run.label, run.df
         robots = [c.removeprefix("distance_") for c in df.columns if c.startswith("distance_")]
         for j, robot in enumerate(robots):
             ax.plot(
@@ -125,11 +156,12 @@ def draw_distance(runs: list[tuple[str, Any]], path: Path) -> Path:
     return save(fig, ax, path)
 
 
-def draw_links(runs: list[tuple[str, Any]], path: Path) -> Path:
-    """Linked pairs (solid) and alive robots (dotted) vs step."""
+def draw_links(runs: list[PlottedRun], path: Path) -> Path:
+    """Linked pairs (solid) and alive robots (dotted) vs step, and failures and blackouts."""
     fig, ax = new_axes("Communication links", "count")
-    for i, (label, df) in enumerate(runs):
-        colour = f"C{i % 10}"
+    for i, run in enumerate(runs):
+        colour, label, df = f"C{i % 10}", run.label, run.df
+        draw_events(ax, run, colour)
         ax.step(df["step"], df["links"], where="post", color=colour, label=f"{label}: links")
         ax.step(
             df["step"],

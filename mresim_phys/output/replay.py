@@ -22,6 +22,7 @@ from mresim_phys.build import region_probe
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.errors import MresimError, ScenarioError
 from mresim_phys.metrics import csv_header
+from mresim_phys.output.files import atomic_path
 from mresim_phys.output.recorders import checked_layers, frame_recorder, given
 from mresim_phys.output.runlog import Replay, RunLog, recompute_metrics
 from mresim_phys.scenario.load import validate_scenario
@@ -47,6 +48,11 @@ def render_spec(run_dir: Path, overrides: dict[str, Any], default_video: bool) -
     """
     resolved = run_dir / "scenario.yaml"
     logged = read_yaml_mapping(resolved).get("render", {}) if resolved.is_file() else {}
+    if not isinstance(logged, dict):
+        raise MresimError(
+            f"{resolved}: 'render' is {logged!r}, not a mapping; the run folder is damaged."
+            " Fix or remove its scenario.yaml (replay then uses the default render settings)."
+        )
     wants_frames = "video" in overrides or "snapshots" in overrides
     merged = {**logged, "snapshots": [], "video": default_video and not wants_frames}
     merged.update(overrides)
@@ -114,7 +120,7 @@ def replay_frames(
 def replay_metrics(log: RunLog, run_dir: Path) -> tuple[list[str], bool]:
     """Write metrics-replayed.csv from the log and compare it with metrics.csv."""
     out = run_dir / "metrics-replayed.csv"
-    with out.open("w", newline="", encoding="utf-8") as handle:
+    with atomic_path(out) as tmp, tmp.open("w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle, lineterminator="\n")
         writer.writerow(csv_header(log.names[1:]))
         for record in recompute_metrics(log):
