@@ -24,3 +24,10 @@ class UnknownPluginError(MresimError, KeyError):
 
     def __str__(self) -> str:
         return str(self.args[0]) if self.args else ""
+
+
+class UnknownRobotError(MresimError, KeyError):
+    """A robot name that the run's team does not have (``Simulation.robot``)."""
+
+    def __str__(self) -> str:
+        return str(self.args[0]) if self.args else ""

@@ -107,8 +107,14 @@ class Simulation:
         return [self.base, *self.robots]
 
     def robot(self, name: str) -> Robot:
-        """The robot called ``name``."""
-        return next(r for r in self.robots if r.name == name)
+        """The robot called ``name``; UnknownRobotError (a KeyError) naming the team if none."""
+        from mresim_phys.errors import UnknownRobotError
+
+        for robot in self.robots:
+            if robot.name == name:
+                return robot
+        team = ", ".join(repr(r.name) for r in self.robots)
+        raise UnknownRobotError(f"no robot {name!r} in this run; its robots are {team}")
 
     def step(self, actions: Mapping[str, Decision] | None = None) -> StepRecord:
         """Advance one time step and return its measurements.

@@ -7,6 +7,7 @@ import json
 import subprocess
 import sys
 from collections.abc import Callable
+from importlib import metadata
 from pathlib import Path
 from typing import Any
 
@@ -14,7 +15,10 @@ import pytest
 import yaml
 
 from mresim_phys.cli import main
-from mresim_phys.scenario.load import load_scenario
+from mresim_phys.output.bench import DEFAULT_MAP, row_starts, team_scenario
+from mresim_phys.render.layers import GLOBAL_LAYERS, ROBOT_LAYERS
+from mresim_phys.scenario.load import load_scenario, validate_scenario
+from mresim_phys.sim import Simulation
 
 MakeScenario = Callable[..., Path]
 
@@ -386,3 +390,65 @@ def test_outputs_are_written_under_temporary_names_and_renamed(
     assert quiet_run(capsys, scenario_file(steps=3), out, "--video", str(video))[0] == 0
     assert [p.name for p in video.parent.iterdir()] == ["v.mp4"]
     assert list(out.rglob(".*")) == []  # no temporary file left
+
+
+# --- flags, bench, progress bar ---------------------------------------------------------
+
+
+def test_version_comes_from_the_installed_package(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit) as info:
+        main(["--version"])
+    assert info.value.code == 0
+    assert capsys.readouterr().out.strip() == f"mresim {metadata.version('mresim_phys')}"
+
+
+def test_layers_help_lists_every_layer(capsys: pytest.CaptureFixture[str]) -> None:
+    with pytest.raises(SystemExit):
+        main(["run", "--help"])
+    text = " ".join(capsys.readouterr().out.split())  # argparse wraps lines
+    for name in (*GLOBAL_LAYERS, *ROBOT_LAYERS):
+        assert name in text
+
+
+@pytest.mark.parametrize("counts", ["", ",", "4,,0"])
+def test_bench_needs_team_sizes(capsys: pytest.CaptureFixture[str], counts: str) -> None:
+    with pytest.raises(SystemExit) as info:
+        main(["bench", "--robots", counts])
+    assert info.value.code == 2
+    assert "--robots" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("robots", [1, 16, 32, 100])
+def test_bench_teams_of_any_size_start_clear_of_walls(robots: int) -> None:
+    scenario = validate_scenario(team_scenario(robots, DEFAULT_MAP, steps=1))
+    sim = Simulation(scenario)  # checks every start against the walls
+    positions = [r.position for r in sim.robots]
+    assert len(set(positions)) == robots
+    if robots <= 16:  # the usual teams keep their rows of eight
+        assert positions == row_starts(robots)
+
+
+def test_bench_runs_32_robots(capsys: pytest.CaptureFixture[str]) -> None:
+    code, out, err = cli(capsys, "bench", "--robots", "32", "--warmup", "0", "--steps", "1")
+    assert code == 0, err
+    assert out.splitlines()[2].split()[0] == "32"
+
+
+def test_the_progress_bar_ends_at_the_steps_run(
+    scenario_file: MakeScenario, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = scenario_file(steps=200, stop={"explored": 0.6})
+    code, _, err = cli(capsys, "run", path, "--no-plots", "--out", tmp_path / "o")
+    assert code == 0
+    steps = json.loads((tmp_path / "o" / "summary.json").read_text())["steps"]
+    assert 0 < steps < 200
+    last = err.replace("\r", "\n").strip().splitlines()[-1]
+    assert f"{steps}/{steps}" in last and "100%" in last
+
+
+def test_an_unknown_robot_is_a_key_error_naming_the_team(scenario_file: MakeScenario) -> None:
+    sim = Simulation.from_yaml(scenario_file(steps=1))
+    assert sim.robot("B").name == "B"
+    with pytest.raises(KeyError) as info:
+        sim.robot("Z")
+    assert str(info.value) == "no robot 'Z' in this run; its robots are 'A', 'B'"

@@ -1,12 +1,17 @@
 """Benchmark (output edge): ``mresim bench``, median milliseconds per step and where they go.
 
-Builds a frontier-exploration team of 4, 8 and 16 robots (speed 3, radius 2,
+Builds a frontier-exploration team of 4, 8 and 16 robots (or any size; speed 3, radius 2,
 range 100, disk comm 150) on an 800x600 floor plan, runs warm-up steps, then times
 each step and reports the median and 90th percentile per step and the median
 cost of each phase per step (sensing = ray casting, mapping = map updates,
 planning = strategy decisions incl. frontiers and distance fields,
 communication = links and merges, metrics; "motion" is the rest: path following
 and swept-circle checks). Medians, not means: the machine may be shared.
+
+Robots start in rows of eight beside the base (:func:`row_starts`); a start that would
+touch a wall, and every robot past the rows' room, goes to the nearest free spot (every
+``SPACING`` cells, clear of walls by the robot's radius, reachable from the first start)
+by a search over the map (:func:`team_starts`), so teams of any size fit.
 """
 
 from __future__ import annotations
@@ -22,12 +27,18 @@ import numpy as np
 
 from mresim_phys.errors import MresimError
 from mresim_phys.scenario.load import validate_scenario
+from mresim_phys.scenario.readers import load_image_map
 from mresim_phys.sim import PHASES, Simulation
+from mresim_phys.types import BoolGrid
+from mresim_phys.world.maps import connected_to, seed_cells
+from mresim_phys.world.space import World
 
 PACKAGE_DATA = Path(__file__).resolve().parent.parent / "data"  # installed with the package
 DEFAULT_MAP = PACKAGE_DATA / "office.png"
 DEFAULT_BASE = (25.0, 300.0)
 DEFAULT_START = (40.0, 300.0)
+RADIUS = 2.0
+SPACING = 8  # cells between neighbouring starts
 
 
 @dataclass(frozen=True)
@@ -41,10 +52,49 @@ class BenchResult:
     explored: float
 
 
-def team_scenario(robots: int, map_path: Path, steps: int) -> dict[str, Any]:
-    """A frontier team of ``robots`` starting in a row near the base."""
+def row_starts(robots: int) -> list[tuple[float, float]]:
+    """The preferred starts: rows of eight, ``SPACING`` apart, beside the base."""
     x, y = DEFAULT_START
-    starts = [[x + 8 * (i % 8), y + 8 * (i // 8) - 4] for i in range(robots)]
+    return [(x + SPACING * (i % 8), y + SPACING * (i // 8) - SPACING / 2) for i in range(robots)]
+
+
+def spots_near(occupied: BoolGrid, origin: tuple[float, float]) -> list[tuple[float, float]]:
+    """Points every ``SPACING`` cells on free cells reachable from ``origin``, nearest first."""
+    reachable = connected_to(~occupied, seed_cells([list(origin)], occupied.shape))
+    rows, cols = np.nonzero(reachable[::SPACING, ::SPACING])
+    xs, ys = cols * SPACING + origin[0] % SPACING, rows * SPACING + origin[1] % SPACING
+    order = np.argsort(np.hypot(xs - origin[0], ys - origin[1]), kind="stable")
+    return [(float(xs[k]), float(ys[k])) for k in order]
+
+
+def team_starts(robots: int, occupied: BoolGrid) -> list[tuple[float, float]]:
+    """``robots`` starts clear of walls and ``SPACING`` apart: the rows first, then the free
+    spots nearest the first start; MresimError if the map has no room for them all."""
+    world = World(occupied, [])
+    chosen: list[tuple[float, float]] = []
+
+    def fits(p: tuple[float, float]) -> bool:
+        far = all(abs(p[0] - q[0]) >= SPACING or abs(p[1] - q[1]) >= SPACING for q in chosen)
+        return far and not world.overlaps_wall(p, RADIUS)
+
+    chosen += [p for p in row_starts(robots) if fits(p)]
+    if len(chosen) < robots:
+        for p in spots_near(occupied, DEFAULT_START):
+            if fits(p):
+                chosen.append(p)
+                if len(chosen) == robots:
+                    break
+    if len(chosen) < robots:
+        raise MresimError(
+            f"the benchmark map has room for {len(chosen)} robots {SPACING} cells apart near"
+            f" {list(DEFAULT_START)}, not {robots}; give fewer --robots or another --map."
+        )
+    return chosen[:robots]
+
+
+def team_scenario(robots: int, map_path: Path, steps: int) -> dict[str, Any]:
+    """A frontier team of ``robots`` starting beside the base (:func:`team_starts`)."""
+    starts = team_starts(robots, load_image_map(map_path).occupied)
     return {
         "name": f"bench-{robots}",
         "seed": 1,
@@ -52,8 +102,8 @@ def team_scenario(robots: int, map_path: Path, steps: int) -> dict[str, Any]:
         "stop": {"all_done": False, "stalled_for": None},
         "map": {"image": str(map_path)},
         "base_station": {"position": list(DEFAULT_BASE), "comm_range": 150},
-        "team": {"speed": 3, "radius": 2, "sensor": {"range": 100}, "comm_range": 150},
-        "robots": [{"name": f"R{i}", "start": s} for i, s in enumerate(starts)],
+        "team": {"speed": 3, "radius": RADIUS, "sensor": {"range": 100}, "comm_range": 150},
+        "robots": [{"name": f"R{i}", "start": list(s)} for i, s in enumerate(starts)],
     }
 
 
