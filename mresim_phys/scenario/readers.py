@@ -224,23 +224,82 @@ def load_text_map(path: Path) -> LoadedMap:
     return _finish(codes == ord("1"), path)
 
 
+class UniqueKeyLoader(yaml.SafeLoader):
+    """PyYAML's safe loader, except that a key given twice in one mapping is an error.
+
+    Plain PyYAML keeps the last of two ``seed:`` lines silently; here the second one is
+    a :class:`yaml.constructor.ConstructorError` naming the key and both lines. Keys
+    merged in with ``<<: *anchor`` may still be overridden, as YAML intends.
+    """
+
+    def construct_mapping(self, node: yaml.Node, deep: bool = False) -> dict[Any, Any]:
+        if isinstance(node, yaml.MappingNode):
+            self._check_unique_keys(node)
+        return super().construct_mapping(node, deep=deep)  # type: ignore[arg-type]
+
+    def construct_object(self, node: yaml.Node, deep: bool = False) -> Any:
+        """A value, or a ConstructorError at its line (PyYAML raises a bare ValueError
+        for an impossible date such as ``2001-13-01``)."""
+        try:
+            return super().construct_object(node, deep=deep)
+        except (ValueError, TypeError, OverflowError) as exc:
+            what = f" {node.value!r}" if isinstance(node, yaml.ScalarNode) else ""
+            raise yaml.constructor.ConstructorError(
+                None, None, f"cannot read the value{what}: {exc}", node.start_mark
+            ) from None
+
+    def _check_unique_keys(self, node: yaml.MappingNode) -> None:
+        seen: dict[Any, yaml.Node] = {}
+        for key_node, _ in node.value:
+            if not isinstance(key_node, yaml.ScalarNode) or key_node.tag.endswith(":merge"):
+                continue
+            key = self.construct_object(key_node)
+            try:
+                first = seen.setdefault(key, key_node)
+            except TypeError:  # an unhashable key: the base loader reports it
+                continue
+            if first is not key_node:
+                raise yaml.constructor.ConstructorError(
+                    "while reading a mapping",
+                    node.start_mark,
+                    f"key {key!r} appears twice (first at line {first.start_mark.line + 1});"
+                    " keep only one",
+                    key_node.start_mark,
+                )
+
+
+def parse_yaml(text: str) -> Any:
+    """The YAML document in ``text``, read safely with :class:`UniqueKeyLoader`."""
+    return yaml.load(text, Loader=UniqueKeyLoader)  # a SafeLoader: no arbitrary objects
+
+
+def _yaml_problem(exc: Exception) -> str:
+    """What went wrong reading YAML, as the end of a sentence: ``' at line 3, ...: ...'``."""
+    if isinstance(exc, RecursionError):
+        return ": it is nested too deeply to read (thousands of levels); flatten it"
+    if not isinstance(exc, yaml.YAMLError):  # e.g. a date like 2001-13-01
+        return f": {type(exc).__name__}: {exc}; fix that value"
+    mark = getattr(exc, "problem_mark", None)
+    where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
+    problem = getattr(exc, "problem", None) or str(exc)
+    if isinstance(exc, yaml.constructor.ConstructorError):
+        return f"{where}: {problem}"
+    return f"{where}: {problem}. Fix the syntax there (indentation, ':' after keys, quotes)"
+
+
 def _yaml_mapping(path: Path, what: str, error: type[MresimError]) -> dict[str, Any]:
     """Read a YAML file holding a mapping at top level, raising ``error`` on any problem."""
     _require_file(path, what, error)
     try:
-        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
     except OSError as exc:
         raise error(f"{what} {path} cannot be read ({exc}). Check its permissions.") from exc
     except UnicodeDecodeError as exc:
         raise error(f"{what} {path} is not UTF-8 text ({exc}). Save it as UTF-8.") from exc
-    except yaml.YAMLError as exc:
-        mark = getattr(exc, "problem_mark", None)
-        where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-        problem = getattr(exc, "problem", None) or str(exc)
-        raise error(
-            f"{what} {path} is not valid YAML{where}: {problem}. Fix the syntax "
-            "there (indentation, ':' after keys, quotes)."
-        ) from exc
+    try:
+        data = parse_yaml(text)
+    except Exception as exc:  # PyYAML's constructors raise more than YAMLError
+        raise error(f"{what} {path} is not valid YAML{_yaml_problem(exc)}.") from None
     if not isinstance(data, dict):
         kind = "empty" if data is None else f"a {type(data).__name__}, not a mapping"
         raise error(f"{what} {path} is {kind}. It must hold 'key: value' pairs at top level.")
