@@ -29,6 +29,7 @@ class Registry(Generic[T]):
         self.kind = kind
         self.entry_point_group = entry_point_group
         self._classes: dict[str, type[T]] = {}
+        self._broken: dict[str, str] = {}  # entry points that failed to load: why
         self._discovered = False
 
     def register(self, cls: type[T]) -> type[T]:
@@ -61,6 +62,8 @@ class Registry(Generic[T]):
         if ":" in name:
             return self._import(name)
         self._discover()
+        if name in self._broken:
+            raise UnknownPluginError(self._broken[name])
         if name not in self._classes:
             raise UnknownPluginError(self._unknown_message(name))
         return self._classes[name]
@@ -74,25 +77,44 @@ class Registry(Generic[T]):
         )
 
     def _import(self, reference: str) -> type[T]:
+        """The class a ``package.module:Class`` reference names; any failure is an
+        :class:`UnknownPluginError` saying what went wrong and how the reference reads."""
         module_name, _, attr = reference.partition(":")
+        if not module_name.strip() or not attr.strip():
+            raise UnknownPluginError(self._bad_reference(reference, "a part is empty"))
         try:
             module = importlib.import_module(module_name)
-        except ImportError as exc:
+        except Exception as exc:  # ImportError, a relative name, or the module's own error
             raise UnknownPluginError(
-                f"cannot import {self.kind} {reference!r}: {exc}. Check that the module is"
-                " installed or on PYTHONPATH and that the reference reads 'package.module:Class'."
+                self._bad_reference(reference, f"cannot import {module_name!r}: {exc}")
+                + " Check that the module is installed or on PYTHONPATH."
             ) from None
         cls = getattr(module, attr, None)
         if not isinstance(cls, type):
+            found = "no" if cls is None else f"a {type(cls).__name__} but no"
             raise UnknownPluginError(
-                f"module {module_name!r} has no class {attr!r} for {self.kind} {reference!r}."
+                self._bad_reference(reference, f"module {module_name!r} has {found} class {attr!r}")
             )
         return cls
 
+    def _bad_reference(self, reference: str, problem: str) -> str:
+        return (
+            f"{self.kind} {reference!r} cannot be used: {problem}. A class of your own is"
+            " given as 'package.module:ClassName'."
+        )
+
     def _discover(self) -> None:
+        """Add the classes of installed entry points; a broken one is named when asked for."""
         if self._discovered:
             return
         self._discovered = True
         for ep in entry_points(group=self.entry_point_group):
-            if ep.name not in self._classes:
+            if ep.name in self._classes:
+                continue
+            try:
                 self._classes[ep.name] = ep.load()
+            except Exception as exc:  # a broken third-party package must not stop the rest
+                self._broken[ep.name] = (
+                    f"{self.kind} {ep.name!r} (entry point {ep.value!r}) cannot be loaded:"
+                    f" {type(exc).__name__}: {exc}. Reinstall or fix the package providing it."
+                )
