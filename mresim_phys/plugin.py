@@ -11,13 +11,14 @@ from __future__ import annotations
 
 from typing import ClassVar
 
-from pydantic import BaseModel, ConfigDict
+from pydantic import BaseModel
+
+from mresim_phys.strict import Strict
 
 
-class PluginParams(BaseModel):
-    """Base for every plugin's parameters: unknown keys are errors, values are immutable."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True)
+class PluginParams(Strict):
+    """Base for every plugin's parameters: unknown keys are errors, values are immutable,
+    numbers finite, bounded and never booleans (:mod:`mresim_phys.strict`)."""
 
 
 class Plugin:

@@ -19,6 +19,7 @@ sys.path.insert(0, str(ROOT))
 from mresim_phys import COMM_MODELS, STRATEGIES  # noqa: E402
 from mresim_phys.planning import PLANNERS  # noqa: E402
 from mresim_phys.scenario import schema  # noqa: E402
+from mresim_phys.strict import MAX_FLOAT, MAX_INT, UNIT_BOUNDS, bounds_text  # noqa: E402
 from mresim_phys.world.events import EVENTS  # noqa: E402
 
 SECTIONS: list[tuple[str, type[BaseModel]]] = [
@@ -56,16 +57,16 @@ def default_text(field: Any) -> str:
 
 def table(model: type[BaseModel], own_only: bool = False) -> list[str]:
     """Markdown rows for a model's fields."""
-    rows = ["| key | type | default | meaning |", "|---|---|---|---|"]
+    rows = ["| key | type | default | allowed | meaning |", "|---|---|---|---|---|"]
     parents = [b for b in model.__mro__[1:] if isinstance(b, type) and issubclass(b, BaseModel)]
     inherited = set().union(*(b.model_fields for b in parents)) if own_only else set()
     for name, field in model.model_fields.items():
         if name in inherited:
             continue
         meaning = (field.description or "").replace("|", "/")
-        rows.append(
-            f"| `{name}` | {type_name(field.annotation)} | {default_text(field)} | {meaning} |"
-        )
+        allowed = bounds_text(name, field)
+        cells = [f"`{name}`", type_name(field.annotation), default_text(field), allowed, meaning]
+        rows.append("| " + " | ".join(cells) + " |")
     return rows
 
 
@@ -80,6 +81,8 @@ def render() -> str:
         "(metres per cell) is only used to report metres. Relative paths resolve against",
         "the YAML file. `team` gives every robot's defaults; a robot may override any",
         "field, and a robot's `sensor` keys merge into the team's.",
+        "",
+        *numbers_paragraph(),
         "",
     ]
     for title, model in SECTIONS:
@@ -101,6 +104,21 @@ def render() -> str:
     for kind, registry in registries:
         lines += [f"## {kind}", "", *plugin_tables(registry)]
     return "\n".join(lines).rstrip() + "\n"
+
+
+def numbers_paragraph() -> list[str]:
+    """How numbers are checked, in every model and every plugin's params alike."""
+    low, high = UNIT_BOUNDS["_dbm"]
+    return [
+        "Numbers are checked alike everywhere, plugin params included: every number is",
+        "finite (`.inf` and `.nan` are errors), `true`/`false` is not a number, and the",
+        "'allowed' column gives its bounds (x stands for the value, or each number of a",
+        f"list or point). A field in dBm (`*_dbm`) lies within {low:g} .. {high:g}; any other",
+        f"number without bounds of its own within +-{MAX_FLOAT:g} (floats) or +-{MAX_INT}",
+        "(integers): a value beyond is taken for a mistake. Names (of the scenario and",
+        "of robots) name output folders: letters, digits, `_`, `.` and `-`, not only dots.",
+        "A key given twice in one mapping is an error, as is a snapshot step past `steps`.",
+    ]
 
 
 def plugin_tables(registry: Any) -> list[str]:

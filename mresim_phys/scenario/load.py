@@ -16,10 +16,11 @@ from typing import Any, TypeVar, get_args
 from pydantic import BaseModel, ValidationError
 
 from mresim_phys.comms import COMM_MODELS
-from mresim_phys.errors import ScenarioError, UnknownPluginError
+from mresim_phys.errors import MapError, ScenarioError, UnknownPluginError
 from mresim_phys.knowledge.teammates import BASE_NAME
 from mresim_phys.planning import PLANNERS
 from mresim_phys.registry import Registry
+from mresim_phys.render.layers import parse_layers
 from mresim_phys.scenario.overrides import apply_overrides
 from mresim_phys.scenario.readers import read_yaml_mapping
 from mresim_phys.scenario.schema import (
@@ -44,7 +45,7 @@ def load_scenario(path: str | Path, **overrides: Any) -> Scenario:
     source = Path(path)
     data = apply_overrides(read_yaml_mapping(source), overrides, str(source))
     scenario = validate_scenario(data, str(source))
-    return resolve_map_path(scenario, source.resolve().parent)
+    return resolve_map_path(scenario, source.resolve().parent, str(source))
 
 
 def validate_scenario(data: dict[str, Any], source: str = "<scenario>") -> Scenario:
@@ -55,6 +56,7 @@ def validate_scenario(data: dict[str, Any], source: str = "<scenario>") -> Scena
     except ValidationError as exc:
         raise ScenarioError(describe_errors(source, exc)) from None
     check_event_robots(scenario, source)
+    check_layers(scenario, source)
     team = resolve_robot_plugins(scenario.team, source, "team")
     robots = [
         resolve_robot_plugins(r, source, f"robots[{i}]") for i, r in enumerate(scenario.robots)
@@ -70,6 +72,14 @@ def check_event_robots(scenario: Scenario, source: str) -> None:
         for where, name, base_allowed in event.agent_names():
             known = [BASE_NAME, *names] if base_allowed else names
             check_agent_name(name, known, source, f"events[{i}].{where}")
+
+
+def check_layers(scenario: Scenario, source: str) -> None:
+    """``render.layers`` must parse, and name only robots of the team (as a run checks)."""
+    try:
+        parse_layers(scenario.render.layers).check_agents([r.name for r in scenario.robots])
+    except ValueError as exc:
+        raise ScenarioError(f"{source}: render.layers: {exc}") from None
 
 
 def check_agent_name(name: str, names: list[str], source: str, where: str) -> None:
@@ -137,11 +147,24 @@ def resolve_params(
         ) from None
 
 
-def resolve_map_path(scenario: Scenario, folder: Path) -> Scenario:
-    """The scenario with its map path made absolute (relative paths are to the YAML file)."""
+def resolve_map_path(scenario: Scenario, folder: Path, source: str = "<scenario>") -> Scenario:
+    """The scenario with its map path made absolute (relative paths are to the YAML file).
+
+    The file must exist (its content is read when the run is built); a missing file or
+    a path the system cannot use is a :class:`MapError` naming ``source`` and the field.
+    """
     kind, value = scenario.map.source
-    absolute = str((folder / Path(value).expanduser()).resolve())
-    return scenario.model_copy(update={"map": scenario.map.model_copy(update={kind: absolute})})
+    try:
+        path = (folder / Path(value).expanduser()).resolve()
+        problem = None if path.is_file() else "is not a file" if path.exists() else "does not exist"
+    except (OSError, ValueError) as exc:  # a NUL byte, a name too long for the system
+        path, problem = Path(value), f"is not a usable path ({exc})"
+    if problem is not None:
+        raise MapError(
+            f"{source}: map.{kind}: {clip(str(path), 300)} {problem}. Check the path and its"
+            " spelling; a relative path is relative to the scenario file's folder."
+        )
+    return scenario.model_copy(update={"map": scenario.map.model_copy(update={kind: str(path)})})
 
 
 def describe_errors(
@@ -176,9 +199,25 @@ def describe_error(error: Any, prefix: str, keys: list[str] | None = None) -> st
         hint = f"; did you mean {close[0]!r}?" if close else "; remove it or check the spelling"
         return f"{path}: unknown key {key!r}{hint}"
     message = str(error["msg"]).removeprefix("Value error, ")
+    if not loc and not prefix and error["type"] == "value_error":
+        return message  # a whole-scenario rule: its message names the fields
     value = error.get("input")
     shown = error["type"] != "missing" and not isinstance(value, (dict, list))
-    return f"{path}: {message}" + (f" (got {value!r})" if shown else "")
+    return f"{path}: {message}" + (f" (got {shown_value(value)})" if shown else "")
+
+
+def shown_value(value: Any, width: int = 60) -> str:
+    """``repr(value)``, cut to ``width`` characters so a message stays one paragraph."""
+    return clip(repr(value), width)
+
+
+def clip(text: str, width: int) -> str:
+    """``text`` cut to ``width`` characters, ending in '...' when cut.
+
+    >>> clip("abcdefgh", 6)
+    'abc...'
+    """
+    return text if len(text) <= width else text[: width - 3] + "..."
 
 
 def untagged(loc: tuple[Any, ...]) -> tuple[tuple[Any, ...], type[BaseModel] | None]:

@@ -5,6 +5,8 @@ and sweeps:
 
 * a mapping merges into a mapping key by key, at any depth; anything else (a
   number, a string, a list) replaces what was there; ``None`` leaves it as is;
+  a mapping never replaces a number, boolean or list the file gave where a
+  mapping belongs (``render: 5`` stays, and validation reports it);
 * ``team`` changes the defaults AND every robot: a team override beats a field a
   robot set for itself (``team={"speed": 5}`` makes every robot's speed 5);
 * ``robots`` may be a mapping from robot name to that robot's changes
@@ -28,7 +30,7 @@ def deep_merge(base: Any, change: Any) -> Any:
     >>> deep_merge({"a": {"b": 1, "c": 2}}, {"a": {"c": 3}})
     {'a': {'b': 1, 'c': 3}}
     """
-    if change is None:
+    if change is None or (isinstance(change, Mapping) and malformed_section(base)):
         return base
     if isinstance(base, Mapping) and isinstance(change, Mapping):
         merged = dict(base)
@@ -36,6 +38,12 @@ def deep_merge(base: Any, change: Any) -> Any:
             merged[key] = deep_merge(base.get(key), value)
         return merged
     return copy.deepcopy(change)
+
+
+def malformed_section(value: Any) -> bool:
+    """A value no mapping should be merged over: a number, boolean or list where the
+    override expects a section (a string may be a shorthand such as ``strategy: frontier``)."""
+    return isinstance(value, (int, float, list))
 
 
 def expand_dotted(overrides: Mapping[str, Any]) -> dict[str, Any]:

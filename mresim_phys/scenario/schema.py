@@ -8,11 +8,11 @@ inherits; a robot entry may override any of them (nested ``sensor`` keys merge).
 
 from __future__ import annotations
 
+import re
 from typing import TYPE_CHECKING, Annotated, Any, Literal, Union
 
 from pydantic import (
-    BaseModel,
-    ConfigDict,
+    AfterValidator,
     Discriminator,
     Field,
     SerializeAsAny,
@@ -21,20 +21,30 @@ from pydantic import (
     model_validator,
 )
 
+from mresim_phys.strict import Strict
 from mresim_phys.world.events import EVENTS, EventParams
 
 Point = tuple[float, float]
+MAX_RANGE = 100_000.0  # cells: sensor and radio ranges (a 1000x map diagonal is far less)
+MAX_BODY = 1000.0  # cells: speed per step, body radius, planner margins
+NAME_PATTERN = re.compile(r"[A-Za-z0-9_.-]*[A-Za-z0-9_][A-Za-z0-9_.-]*")  # never '.' or '..'
+MAX_NAME = 64  # characters: a name becomes part of folder and file names
+NAME_RULE = f"1 to {MAX_NAME} letters, digits, '_', '.' or '-', not only dots"
+
+
+def check_name(name: str) -> str:
+    """A scenario or robot name: it names folders and files, so it cannot leave them."""
+    if len(name) > MAX_NAME or not NAME_PATTERN.fullmatch(name):
+        raise ValueError(f"a name is made of {NAME_RULE} (it names output folders and files)")
+    return name
+
+
+Name = Annotated[str, AfterValidator(check_name)]
 
 
 def shorthand(key: str, value: Any) -> Any:
     """A bare string ``x`` stands for ``{key: x}`` (``strategy: frontier``, ``model: disk``)."""
     return {key: value} if isinstance(value, str) else value
-
-
-class Strict(BaseModel):
-    """Base for every scenario model: unknown keys are errors, values are immutable."""
-
-    model_config = ConfigDict(extra="forbid", frozen=True)
 
 
 class MapSpec(Strict):
@@ -106,7 +116,7 @@ class ControlSpec(ChannelSpec):
     """The long-range, low-bandwidth control channel: teammate records only, no maps."""
 
     range: float = Field(
-        500.0, ge=0, description="Every agent's range (cells) on the control channel."
+        500.0, ge=0, le=MAX_RANGE, description="Every agent's range (cells) on the control channel."
     )
 
 
@@ -125,10 +135,12 @@ class CommSpec(ChannelSpec):
 class SensorSpec(Strict):
     """A planar laser scanner: ``rays`` rays evenly over ``fov_deg`` centred on the heading."""
 
-    range: float = Field(100.0, gt=0, description="Maximum range in cells.")
+    range: float = Field(100.0, gt=0, le=MAX_RANGE, description="Maximum range in cells.")
     fov_deg: float = Field(180.0, gt=0, le=360, description="Field of view in degrees.")
     rays: int = Field(181, ge=2, le=4096, description="Number of rays (181 = 1 degree apart).")
-    noise_std: float = Field(0.0, ge=0, description="Gaussian range noise (cells); 0 = exact.")
+    noise_std: float = Field(
+        0.0, ge=0, le=MAX_RANGE, description="Gaussian range noise (cells); 0 = exact."
+    )
     safe_fraction: float = Field(
         0.1, gt=0, le=1, description="Safe space = rays clipped to this fraction of the range."
     )
@@ -137,10 +149,12 @@ class SensorSpec(Strict):
 class RobotParams(Strict):
     """Everything a robot can have; ``team`` gives the defaults, a robot may override."""
 
-    speed: float = Field(3.0, gt=0, description="Cells moved at most per step.")
-    radius: float = Field(2.0, gt=0, description="Body radius in cells.")
+    speed: float = Field(3.0, gt=0, le=MAX_BODY, description="Cells moved at most per step.")
+    radius: float = Field(2.0, gt=0, le=MAX_BODY, description="Body radius in cells.")
     sensor: SensorSpec = Field(default_factory=SensorSpec)
-    comm_range: float = Field(150.0, ge=0, description="Communication range in cells.")
+    comm_range: float = Field(
+        150.0, ge=0, le=MAX_RANGE, description="Communication range in cells."
+    )
     comm_power_dbm: float | None = Field(
         None, description="path_loss: signal (dBm) at comm_range; None = the model's default."
     )
@@ -150,7 +164,10 @@ class RobotParams(Strict):
         description="Exploration strategy: a name or {name, params}.",
     )
     wall_margin: float = Field(
-        1.0, ge=0, description="Extra clearance (cells) the planner keeps from known walls."
+        1.0,
+        ge=0,
+        le=MAX_BODY,
+        description="Extra clearance (cells) the planner keeps from known walls.",
     )
     planner: PluginSpec = Field(
         default_factory=lambda: PluginSpec(name="astar"),
@@ -161,7 +178,7 @@ class RobotParams(Strict):
 class RobotSpec(RobotParams):
     """One robot: its name, start pose and any overridden team fields."""
 
-    name: str = Field(pattern=r"^[A-Za-z0-9_.-]+$", description="Unique robot name.")
+    name: Name = Field(description=f"Unique robot name: {NAME_RULE}.")
     start: Point = Field(description="Start position [x, y] in cells (x = column, y = row).")
     heading_deg: float = Field(0.0, description="Start heading; 0 = +x, 90 = +y (down).")
 
@@ -170,7 +187,9 @@ class BaseStationSpec(Strict):
     """The static base station collecting what reaches it."""
 
     position: Point = Field(description="[x, y] in cells.")
-    comm_range: float = Field(150.0, ge=0, description="Communication range in cells.")
+    comm_range: float = Field(
+        150.0, ge=0, le=MAX_RANGE, description="Communication range in cells."
+    )
     comm_power_dbm: float | None = Field(
         None, description="path_loss: signal (dBm) at comm_range; None = the model's default."
     )
@@ -251,8 +270,9 @@ class RenderSpec(Strict):
         "default", description="Layers to draw, e.g. 'default', 'all', 'default,B:free_space'."
     )
     scale: float = Field(1.0, gt=0, le=8, description="Frame scale (2 = twice the map size).")
-    snapshots: list[int] = Field(
-        default_factory=list, description="Steps at which to write PNG frames."
+    snapshots: list[Annotated[int, Field(ge=0)]] = Field(
+        default_factory=list,
+        description="Steps at which to write PNG frames (0 .. steps).",
     )
     final_png: bool = Field(True, description="Write final.png of the last step.")
     log: bool = Field(True, description="Write the run log (for replay without re-running).")
@@ -298,8 +318,8 @@ else:
 class Scenario(Strict):
     """A whole run: map, base station, team, communication and events."""
 
-    name: str = Field(pattern=r"^[A-Za-z0-9_.-]+$", description="Names the output folder.")
-    seed: int = Field(0, ge=0, description="Seeds every random stream of the run.")
+    name: Name = Field(description=f"Names the output folder: {NAME_RULE}.")
+    seed: int = Field(0, ge=0, le=2**63 - 1, description="Seeds every random stream of the run.")
     steps: int = Field(3000, ge=1, description="Hard cap on the number of steps.")
     stop: StopSpec = Field(default_factory=StopSpec, description="Early stop rules.")
     map: MapSpec = Field(description="The ground-truth map.")
@@ -330,6 +350,16 @@ class Scenario(Strict):
             return data
         robots = [_inherit(team, r) if isinstance(r, dict) else r for r in data["robots"]]
         return {**data, "robots": robots}
+
+    @model_validator(mode="after")
+    def _snapshots_within_steps(self) -> Scenario:
+        late = [s for s in self.render.snapshots if s > self.steps]
+        if late:
+            raise ValueError(
+                f"render.snapshots: step{'s' if len(late) > 1 else ''} {late} past the step cap"
+                f" (steps: {self.steps}); give snapshot steps from 0 to {self.steps}"
+            )
+        return self
 
     @field_validator("robots")
     @classmethod
