@@ -67,7 +67,7 @@ def check_start(world: World, robot: RobotSpec) -> None:
 
 
 def check_base(world: World, base: BaseStationSpec) -> None:
-    """The base station must stand inside the map."""
+    """The base station must stand inside the map, on a free cell."""
     rows, cols = world.shape
     x, y = base.position
     if not (0 <= x < cols and 0 <= y < rows):
@@ -75,6 +75,37 @@ def check_base(world: World, base: BaseStationSpec) -> None:
             f"base_station.position {[x, y]} is outside the {cols}x{rows} map;"
             " give 0 <= x < columns and 0 <= y < rows."
         )
+    if world.occupied[int(y), int(x)]:
+        raise ScenarioError(
+            f"base_station.position {[x, y]} is inside a wall (cell column {int(x)}, row"
+            f" {int(y)} is an obstacle); move the base station into free space."
+        )
+
+
+MAX_PAIRS_SHOWN = 5  # overlapping start pairs named in the message
+
+
+def check_apart(robots: list[RobotSpec]) -> None:
+    """With ``simulation.robots_block``, no two robots' bodies may overlap at their starts."""
+    starts = np.array([r.start for r in robots], dtype=np.float64).reshape(-1, 2)
+    radii = np.array([r.radius for r in robots], dtype=np.float64)
+    pairs: list[tuple[int, int]] = []
+    for i in range(len(robots) - 1):
+        gaps = np.hypot(*(starts[i + 1 :] - starts[i]).T) - radii[i + 1 :] - radii[i]
+        pairs += [(i, i + 1 + int(j)) for j in np.flatnonzero(gaps < 0)]
+    if pairs:
+        raise ScenarioError(
+            f"robots {pair_names(robots, pairs)} start with overlapping bodies, which"
+            " simulation.robots_block: true does not allow; place every start at least the"
+            " sum of the two radii from every other."
+        )
+
+
+def pair_names(robots: list[RobotSpec], pairs: list[tuple[int, int]]) -> str:
+    """``'A' and 'B', 'A' and 'C' (and 7 more pairs)``: the first few pairs by name."""
+    shown = [f"{robots[i].name!r} and {robots[j].name!r}" for i, j in pairs[:MAX_PAIRS_SHOWN]]
+    extra = len(pairs) - len(shown)
+    return ", ".join(shown) + (f" (and {extra} more pairs)" if extra else "")
 
 
 def laser_of(spec: SensorSpec) -> Laser:
@@ -294,6 +325,8 @@ def build_setup(scenario: Scenario) -> Setup:
     vary = scenario.simulation.vary_with_seed
     jitter = scenario.simulation.start_jitter if vary else None
     robots = make_team(scenario.robots, streams, world, jitter)
+    if scenario.simulation.robots_block:
+        check_apart(scenario.robots)
     check_base(world, scenario.base_station)
     starts = [r.position for r in robots]
     events = [make_event(e) for e in scenario.events]
