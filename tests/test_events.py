@@ -112,6 +112,31 @@ def test_events_at_step_zero_act_before_the_first_scan(scenario_file: ScenarioFi
     assert sim.record.alive == 1
 
 
+@pytest.mark.parametrize(
+    ("part", "may_move", "may_scan"),
+    [("robot", False, False), ("drive", False, True), ("sensor", True, False)],
+)
+def test_a_failure_at_step_zero_holds_from_the_first_scan_on(
+    scenario_file: ScenarioFile, part: str, may_move: bool, may_scan: bool
+) -> None:
+    """Failed at step 0, B never moves (robot, drive) or never scans (robot, sensor)."""
+    quiet = {"speed": 2, "radius": 1.0, "sensor": {"range": 30}, "comm_range": 0}
+    path = scenario_file(
+        events=[{"step": 0, "fail": "B", "part": part}],
+        team=quiet,  # no radio: each robot's map holds only what it scanned itself
+        base_station={"position": [8, 30], "comm_range": 0},
+    )
+    sim = Simulation.from_yaml(path)
+    b, a = sim.robot("B"), sim.robot("A")
+    start, a_start = b.position, a.position
+    for _ in range(10):
+        sim.step()
+    if not may_move:
+        assert b.position == start and b.distance == 0
+    assert bool(np.any(b.belief == FREE)) == may_scan
+    assert a.position != a_start and np.any(a.belief == FREE)  # the run itself goes on
+
+
 def test_blackout_lines_are_logged_at_start_and_end(scenario_file: ScenarioFile) -> None:
     path = scenario_file(events=[{"step": 2, "until": 4, "blackout": ["A"], "channel": "main"}])
     sim = Simulation.from_yaml(path)

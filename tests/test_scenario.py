@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 import sys
 from collections.abc import Callable, Iterator
 from pathlib import Path
@@ -354,3 +355,207 @@ def test_user_strategy_class_without_params_is_a_scenario_error(
 ) -> None:
     message = load_error(scenario_file(team=team(strategy=f"{plugin_module}:NoParams")))
     assert "Params" in message
+
+
+def test_a_third_party_params_model_gets_the_same_number_checks(
+    scenario_file: MakeScenario, plugin_module: str
+) -> None:
+    for patience, fragment in [(True, "not true or false"), (10**10, "from -1000000000 to")]:
+        strategy = {"name": f"{plugin_module}:Stay", "params": {"patience": patience}}
+        message = load_error(scenario_file(team=team(strategy=strategy)))
+        assert "team.strategy.params.patience" in message and fragment in message
+
+
+# --- numbers: finite, bounded, never booleans ----------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("changes", "expected"),
+    [
+        pytest.param(
+            {"team": team(speed=float("inf"))}, "team.speed: Input should be a finite", id="inf"
+        ),
+        pytest.param({"team": team(speed=True)}, "team.speed: expected a number", id="bool"),
+        pytest.param({"team": team(speed=1001)}, "team.speed", id="speed-bound"),
+        pytest.param(
+            {"robots": [robot("A", heading_deg=2e6)]},
+            "robots[0].heading_deg: expected a number from -1e+06 to 1e+06",
+            id="generic-float-bound",
+        ),
+        pytest.param({"steps": 2 * 10**9}, "steps: expected a number of at most", id="int-bound"),
+        pytest.param({"render": {"snapshots": [1, True]}}, "render.snapshots", id="bool-in-list"),
+        pytest.param(
+            {"base_station": {"position": [8, 30], "comm_power_dbm": -301}},
+            "base_station.comm_power_dbm: expected a number from -300 to 300",
+            id="dbm",
+        ),
+        pytest.param(
+            {"communication": {"model": "line_of_sight", "params": {"clearance": float("nan")}}},
+            "communication.params.clearance",
+            id="plugin-nan",
+        ),
+        pytest.param(
+            {"events": [{"step": 3, "cells": [40, 25, 42, True]}]}, "events[0].cells", id="event"
+        ),
+    ],
+)
+def test_numbers_must_be_finite_bounded_and_not_booleans(
+    scenario_file: MakeScenario, changes: dict[str, Any], expected: str
+) -> None:
+    message = load_error(scenario_file(**changes))
+    assert expected in message, message
+
+
+def test_booleans_stay_valid_where_a_field_takes_them(scenario_file: MakeScenario) -> None:
+    render = {"video": False, "final_png": False, "log": True}
+    scenario = load_scenario(scenario_file(render=render, map={"image": "rooms.png", "negate": 0}))
+    assert scenario.render.video is False and scenario.map.negate is False
+
+
+def test_bounds_text_reads_own_and_generic_bounds() -> None:
+    from mresim_phys.scenario.schema import RobotParams, RobotSpec
+    from mresim_phys.strict import bounds_text
+
+    fields = {**RobotParams.model_fields, **RobotSpec.model_fields}
+    assert bounds_text("speed", fields["speed"]) == "0 < x <= 1000"
+    assert bounds_text("heading_deg", fields["heading_deg"]) == "-1e+06 <= x <= 1e+06"
+    assert bounds_text("comm_power_dbm", fields["comm_power_dbm"]) == "-300 <= x <= 300"
+    assert bounds_text("name", fields["name"]) == ""
+
+
+@pytest.mark.parametrize("name", [".", "..", "...", "-", ".-.", "a/b", "a b", "x" * 65, ""])
+def test_names_that_could_leave_the_run_folder_are_rejected(
+    scenario_file: MakeScenario, name: str
+) -> None:
+    assert "name" in load_error(scenario_file(name=name))
+    assert "robots[1].name" in load_error(scenario_file(robots=[robot("A"), robot(name)]))
+
+
+@pytest.mark.parametrize("name", ["a", "_", "..a", "run.2", "-x-", "x" * 64])
+def test_names_with_a_letter_digit_or_underscore_are_fine(
+    scenario_file: MakeScenario, name: str
+) -> None:
+    assert load_scenario(scenario_file(name=name)).name == name
+
+
+def test_snapshots_past_the_step_cap_are_an_error_after_overrides(
+    scenario_file: MakeScenario,
+) -> None:
+    path = scenario_file(steps=60, render={"snapshots": [0, 30, 60]})
+    assert load_scenario(path).render.snapshots == [0, 30, 60]
+    with pytest.raises(ScenarioError, match=r"render\.snapshots: steps \[30, 60\] past"):
+        load_scenario(path, steps=20)
+    assert "render.snapshots[0]" in load_error(scenario_file(render={"snapshots": [-1]}))
+
+
+# --- YAML: duplicate keys, depth, odd values -----------------------------------------------
+
+
+def write_text(tmp_path: Path, text: str) -> Path:
+    path = tmp_path / "raw.yaml"
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+@pytest.mark.parametrize(
+    ("text", "expected"),
+    [
+        pytest.param("name: a\nseed: 1\nseed: 2\n", "line 3, column 1: key 'seed'", id="top"),
+        pytest.param(
+            "name: a\nteam:\n  speed: 1\n  radius: 1\n  speed: 2\n",
+            "key 'speed' appears twice (first at line 3)",
+            id="nested",
+        ),
+        pytest.param("robots: [{name: A, name: B}]\n", "key 'name' appears twice", id="flow"),
+        pytest.param("a: " + "[" * 5000 + "]" * 5000 + "\n", "nested too deeply", id="deep"),
+        pytest.param("seed: 2001-13-01\n", "line 1, column 7: cannot read the value", id="date"),
+        pytest.param("seed: !!python/object:os.system ls\n", "line 1", id="python-tag"),
+    ],
+)
+def test_yaml_problems_are_scenario_errors_with_a_place(
+    tmp_path: Path, text: str, expected: str
+) -> None:
+    message = load_error(write_text(tmp_path, text))
+    assert expected in message and str(tmp_path) in message, message
+
+
+def test_merge_keys_are_not_duplicates() -> None:
+    from mresim_phys.scenario.readers import parse_yaml
+
+    text = "a: &x {p: 1, q: 2}\nb:\n  <<: *x\n  q: 3\n"
+    assert parse_yaml(text) == {"a": {"p": 1, "q": 2}, "b": {"p": 1, "q": 3}}
+
+
+# --- plugin references ---------------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    ("reference", "expected"),
+    [
+        (":", "a part is empty"),
+        ("a:", "a part is empty"),
+        (":Frontier", "a part is empty"),
+        (" : ", "a part is empty"),
+        ("..relative:X", "cannot import '..relative'"),
+        ("no_such_pkg.sub:X", "cannot import 'no_such_pkg.sub'"),
+        ("os:path", "has a module but no class 'path'"),
+        ("mresim_phys.cli:main", "has a function but no class 'main'"),
+        ("mresim_phys.cli:Nope", "has no class 'Nope'"),
+        ("a\x00b:C", "cannot import"),
+    ],
+)
+def test_every_bad_class_reference_is_an_unknown_plugin_error(
+    reference: str, expected: str
+) -> None:
+    from mresim_phys.errors import UnknownPluginError
+    from mresim_phys.strategies import STRATEGIES
+
+    with pytest.raises(UnknownPluginError, match=re.escape(expected)):
+        STRATEGIES.get(reference)
+
+
+def test_a_broken_entry_point_is_named_when_asked_for(monkeypatch: pytest.MonkeyPatch) -> None:
+    import mresim_phys.registry as registry_module
+    from mresim_phys.errors import UnknownPluginError
+
+    class Broken:
+        name, value = "broken", "gone_pkg:Thing"
+
+        def load(self) -> type:
+            raise ImportError("No module named 'gone_pkg'")
+
+    monkeypatch.setattr(registry_module, "entry_points", lambda group: [Broken()])
+    things: registry_module.Registry[object] = registry_module.Registry("thing", "test.group")
+    assert things.names() == []
+    with pytest.raises(UnknownPluginError, match=r"'broken' \(entry point 'gone_pkg:Thing'\)"):
+        things.get("broken")
+
+
+# --- the base station and robot bodies against the world ---------------------------------
+
+
+@pytest.mark.parametrize(
+    ("position", "fragment"), [((1, 1), "inside a wall"), ((40, 10), "inside a wall")]
+)
+def test_a_base_station_inside_a_wall_is_rejected(
+    scenario_file: MakeScenario, position: tuple[int, int], fragment: str
+) -> None:
+    message = build_error(scenario_file(base_station={"position": list(position)}))
+    assert "base_station.position" in message and fragment in message
+
+
+def test_overlapping_starts_are_rejected_only_when_robots_block(
+    scenario_file: MakeScenario,
+) -> None:
+    crowd = [robot(f"R{i}", (8, 20)) for i in range(40)]
+    path = scenario_file(robots=crowd, simulation={"robots_block": True})
+    message = build_error(path)
+    assert "'R0' and 'R1'" in message and "more pairs" in message and "robots_block" in message
+    Simulation(load_scenario(scenario_file(robots=crowd)))  # without blocking: allowed
+    apart = [robot("A", (8, 20)), robot("B", (8, 22))]  # radius 1: touching, not overlapping
+    Simulation(load_scenario(scenario_file(robots=apart, simulation={"robots_block": True})))
+
+
+def test_an_override_does_not_hide_a_malformed_section(scenario_file: MakeScenario) -> None:
+    with pytest.raises(ScenarioError, match=r"render: Input should be a valid dictionary"):
+        load_scenario(scenario_file(render=5), render={"plots": False})  # as `run --no-plots`
