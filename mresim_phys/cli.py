@@ -193,7 +193,8 @@ def run_command(args: argparse.Namespace) -> int:
     SIGINT and SIGTERM are handled from the start (building the simulation included): the
     run stops after the current step and still writes everything (``output.session``).
     """
-    with stop_on_signals(StopRequest(notice=not args.quiet)) as stop:
+    linger = getattr(args, "program", False)  # see main()
+    with stop_on_signals(StopRequest(notice=not args.quiet), linger=linger) as stop:
         fixed = {"simulation": {"vary_with_seed": False}} if args.fixed else {}
         sim = Simulation.from_yaml(
             args.scenario, seed=args.seed, steps=args.steps, render=render_overrides(args), **fixed
@@ -296,8 +297,15 @@ COMMANDS = {
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Entry point of the ``mresim`` console script."""
+    """Entry point of the ``mresim`` console script.
+
+    Without ``argv`` (the process's own command line: the console script, ``python -m``)
+    mresim is about to exit when this returns, so after a run stopped by a signal, further
+    stop signals stay ignored (``stop_on_signals(linger=True)``); called with ``argv`` (in
+    process), the previous handlers always come back.
+    """
     args = make_parser().parse_args(argv)
+    args.program = argv is None
     handler = COMMANDS[args.command]
     try:
         return handler(args)

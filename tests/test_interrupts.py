@@ -30,6 +30,8 @@ trials = importlib.util.module_from_spec(spec)
 sys.modules[spec.name] = trials  # its dataclasses look their module up
 spec.loader.exec_module(trials)
 
+STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
 
 @pytest.mark.parametrize(
     ("sig", "bar", "double"),
@@ -70,10 +72,10 @@ def test_a_killed_run_leaves_the_previous_run_whole(tmp_path: Path) -> None:
 def test_handlers_are_restored_after_a_session(
     scenario_file: Callable[..., Path], tmp_path: Path
 ) -> None:
-    before = [signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)]
+    before = [signal.getsignal(s) for s in STOP_SIGNALS]
     sim = Simulation.from_yaml(scenario_file(steps=3))
     run_session(sim, tmp_path / "out")
-    assert [signal.getsignal(s) for s in (signal.SIGINT, signal.SIGTERM)] == before
+    assert [signal.getsignal(s) for s in STOP_SIGNALS] == before
 
 
 def test_a_signal_inside_a_session_stops_it_after_the_step(
@@ -129,3 +131,18 @@ def test_an_ignored_signal_stays_ignored() -> None:
         assert signal.getsignal(signal.SIGTERM) is signal.SIG_IGN
     finally:
         signal.signal(signal.SIGTERM, previous)
+
+
+def test_a_stopped_program_keeps_ignoring_stop_signals_until_it_exits() -> None:
+    before = [signal.getsignal(s) for s in STOP_SIGNALS]
+    try:
+        with stop_on_signals(StopRequest(notice=False), linger=True):
+            pass  # no signal: the handlers come back
+        assert [signal.getsignal(s) for s in STOP_SIGNALS] == before
+        with stop_on_signals(StopRequest(notice=False), linger=True):
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(0.01)
+        assert [signal.getsignal(s) for s in STOP_SIGNALS] == [signal.SIG_IGN] * 2
+    finally:
+        for s, handler in zip(STOP_SIGNALS, before, strict=True):
+            signal.signal(s, handler)

@@ -62,8 +62,15 @@ class StopRequest:
 
 
 @contextmanager
-def stop_on_signals(stop: StopRequest | None = None) -> Iterator[StopRequest]:
-    """Route SIGINT and SIGTERM to ``stop`` (a new StopRequest if None) inside the block."""
+def stop_on_signals(
+    stop: StopRequest | None = None, *, linger: bool = False
+) -> Iterator[StopRequest]:
+    """Route SIGINT and SIGTERM to ``stop`` (a new StopRequest if None) inside the block.
+
+    Afterwards the previous handlers come back; with ``linger`` (a process that exits right
+    after the block), if a stop signal arrived, both signals stay ignored instead, so a
+    second Ctrl-C cannot kill the process while it exits with 128 + the first signal.
+    """
     stop = stop or StopRequest()
     previous: dict[int, Handler] = {}
     if threading.current_thread() is threading.main_thread():
@@ -76,4 +83,7 @@ def stop_on_signals(stop: StopRequest | None = None) -> Iterator[StopRequest]:
         yield stop
     finally:
         for number, handler in previous.items():  # None: a handler set from C; use the default
-            signal.signal(number, signal.SIG_DFL if handler is None else handler)
+            if linger and stop.requested:
+                signal.signal(number, signal.SIG_IGN)
+            else:
+                signal.signal(number, signal.SIG_DFL if handler is None else handler)
