@@ -149,6 +149,11 @@ REJECTED: list[Any] = [
     ),
     pytest.param(crowd, "'R0' and 'R1'", id="robots-overlap"),
     pytest.param(setting("map.image", "gone.png"), "map.image", id="map-missing"),
+    pytest.param(
+        setting("communication", {"model": "path_loss", "params": {"exponent": 1e-30}}),
+        "communication.params.exponent",
+        id="path-loss-exponent-tiny",
+    ),
 ]
 
 
@@ -236,23 +241,13 @@ ACCEPTED: list[Any] = [
             {"model": "path_loss", "params": {"reference_dbm": 300, "cutoff_dbm": -300}},
         ),
         id="dbm-bounds",
-        marks=pytest.mark.xfail(
-            reason="known, outside the input layer: a 600 dB path-loss budget gives comm"
-            " regions 1e25 cells wide, which render/draw.py casts to int32 (overflow)",
-            raises=RuntimeWarning,
-        ),
     ),
     pytest.param(
         setting(
             "communication",
-            {"model": "path_loss", "params": {"exponent": 1e-30, "reference_dbm": -80}},
+            {"model": "path_loss", "params": {"exponent": 1.0, "reference_dbm": 300}},
         ),
-        id="path-loss-exponent-tiny",
-        marks=pytest.mark.xfail(
-            reason="known, outside the input layer: comms/path_loss.py accepts any exponent"
-            " > 0, and 10 ** (budget / exponent) overflows for a tiny one",
-            raises=RuntimeWarning,
-        ),
+        id="path-loss-exponent-smallest",
     ),
     pytest.param(setting("render.snapshots", [0, 3]), id="snapshots-within"),
     pytest.param(setting("simulation", {"robots_block": True}), id="robots-apart"),

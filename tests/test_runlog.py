@@ -25,7 +25,7 @@ from mresim_phys.output.runlog import (
     reachable_from,
     recompute_metrics,
 )
-from mresim_phys.render import LayerSpec, Renderer
+from mresim_phys.render import LayerSpec, Renderer, frame_scale
 from mresim_phys.render.draw import robot_label
 from mresim_phys.scenario.schema import RenderSpec
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot
@@ -395,7 +395,8 @@ def change_world(sim: Simulation, cells: tuple[slice, slice], occupied: bool) ->
 
 def test_replay_follows_truth_changes(scenario_file: ScenarioFile, tmp_path: Path) -> None:
     sim = Simulation.from_yaml(scenario_file(robots=THREE_ROBOTS), steps=30)
-    renderer = Renderer(sim.world.shape, LayerSpec.all(), 2.0)
+    # the scale run outputs use on this small map (scaled up to a 640-pixel side)
+    renderer = Renderer(sim.world.shape, LayerSpec.all(), frame_scale(sim.world.shape, 2.0))
     snap = sim.snapshot()
     writer = RunLogWriter(tmp_path / "log", snap, name="tiny", seed=3, chunk_steps=8)
     snaps, rows, frames = [kept(snap)], [sim.record.csv_row()], [renderer.render(snap)]

@@ -47,7 +47,12 @@ class PathLossParams(CommParams):
     reference_dbm: float = Field(
         -93.0, description="Signal (dBm) at the reference distance, i.e. at the agent's comm_range."
     )
-    exponent: float = Field(2.5, gt=0, description="Path-loss exponent n.")
+    exponent: float = Field(
+        2.5,
+        ge=1.0,
+        le=10.0,
+        description="Path-loss exponent n (2 in free space, 1.6-6 indoors).",
+    )
     wall_db: float = Field(3.65, ge=0, description="Attenuation per wall crossed (WAF, dB).")
     max_walls: float = Field(125, ge=0, description="Cap C on the walls (or wall cells) counted.")
     cutoff_dbm: float = Field(-93.0, description="Weakest signal (dBm) that still links.")

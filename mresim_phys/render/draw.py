@@ -29,6 +29,7 @@ LEGEND = {"walls": "wall", "unexplored": "unexplored", "team_known": "team_known
 LEGEND["known_at_base"] = "known_at_base"  # global layer -> Style colour, in legend order
 TRIANGLE_TURNS = np.array((0.0, 2.4, -2.4))  # radians from the heading: tip, two corners
 TRIANGLE_REACH = np.array((1.6, 1.0, 1.0))  # in robot glyph sizes
+FAR_PX = 2**24  # fixed-point pixels (a million whole pixels): farther points are clipped here
 CROSS_ARMS = np.array(((1, 1), (1, -1)), dtype=np.int32) * ONE  # half-diagonals of an 'x'
 
 
@@ -49,7 +50,10 @@ class Overlay:
     def px(self, xy: Sequence[float] | np.ndarray) -> np.ndarray:
         """World (x, y) points -> fixed-point output pixel coordinates (int32, 4 bits)."""
         pixels: np.ndarray = np.round(np.asarray(xy, dtype=float) * self.to_px - ONE / 2)
-        return pixels.astype(np.int32)
+        # far-away points (a comm region of a huge path-loss budget) are pulled in to a
+        # million pixels off the frame: cv2 clips what it draws there, int32 must not wrap
+        clipped: np.ndarray = np.clip(pixels, -FAR_PX, FAR_PX).astype(np.int32)
+        return clipped
 
     def draw(
         self, image: np.ndarray, snap: Snapshot, regions: Sequence[np.ndarray | None] = ()
