@@ -14,7 +14,7 @@ import subprocess
 import sys
 import threading
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
@@ -31,6 +31,16 @@ sys.modules[spec.name] = trials  # its dataclasses look their module up
 spec.loader.exec_module(trials)
 
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
+
+
+@pytest.fixture(autouse=True)
+def ctrl_c_reaches_children() -> Iterator[None]:
+    """Runs started by a pytest in a shell's background would ignore SIGINT."""
+    before = signal.getsignal(signal.SIGINT)
+    trials.ctrl_c_reaches_children()
+    yield
+    if before is not None:
+        signal.signal(signal.SIGINT, before)
 
 
 @pytest.mark.parametrize(

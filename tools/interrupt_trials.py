@@ -64,6 +64,14 @@ class Trial:
     lost: list[str] = field(default_factory=list)
 
 
+def ctrl_c_reaches_children() -> None:
+    """Let SIGINT reach the runs: a process started in the background of a shell ignores it,
+    and so would its children; an ignored signal stays ignored in ``mresim run`` (by design).
+    Call from the main thread before starting trials."""
+    if signal.getsignal(signal.SIGINT) is signal.SIG_IGN:
+        signal.signal(signal.SIGINT, signal.default_int_handler)
+
+
 def mresim(*args: str | Path) -> list[str]:
     """The command line of ``mresim`` run from this interpreter."""
     return [sys.executable, "-m", "mresim_phys.cli", *map(str, args)]
@@ -142,6 +150,7 @@ def main(argv: list[str] | None = None) -> int:
         for bar in (True, False)
         for n in range(args.trials)
     ]
+    ctrl_c_reaches_children()
     delays = random.Random(0)
     started = time.monotonic()
     with tempfile.TemporaryDirectory() as tmp, ThreadPoolExecutor(args.jobs) as pool:
