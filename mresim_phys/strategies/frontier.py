@@ -153,6 +153,8 @@ class FrontierExploration(Plugin):
         self._ignored: BoolGrid | None = None
         self._chasing: IntArray | None = None
         self._home: tuple[float, float] | None = None
+        self._goal_was_met = False  # the done rule sent this robot home
+        self._delivered = False  # ... and its map has reached the base since
 
     def decide(self, view: RobotView) -> Decision:
         """Pick the frontier this robot wins in the auction and plan a path to it."""
@@ -190,13 +192,23 @@ class FrontierExploration(Plugin):
 
     def _goal_met(self, view: RobotView) -> bool:
         """The original's mission-complete rule: after ``done_after`` steps, the robot's own
-        map holds ``done_fraction`` of the building's free area (known before the mission)."""
+        map holds ``done_fraction`` of the building's free area (known before the mission).
+
+        It sends a robot out of the base's reach home once: when its map has reached the
+        base, it explores on until no frontier is left (the original parks it there; a
+        rule that fired again on every loss of contact kept robots shuttling between the
+        edge of the base's reach and the far frontiers, never reaching them)."""
         fraction = self.params.done_fraction
         if fraction is None or view.free_area <= 0 or view.step < self.params.done_after:
             return False
         if view.base_contact >= view.step - 1:  # its data reaches the base: nothing to carry
+            self._delivered = self._delivered or self._goal_was_met
             return False
-        return int(np.count_nonzero(view.belief == FREE)) >= fraction * view.free_area
+        if self._delivered:  # it brought its map home once: it explores on to the end
+            return False
+        met = int(np.count_nonzero(view.belief == FREE)) >= fraction * view.free_area
+        self._goal_was_met = self._goal_was_met or met
+        return met
 
     def _frontiers(self, view: RobotView) -> Frontiers:
         """This robot's frontier clusters, without the cells it has given up on."""
