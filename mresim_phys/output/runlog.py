@@ -6,7 +6,8 @@ line per step (``steps.jsonl``: poses, states, goals, distances, links, events, 
 world's version); grids (beliefs, safe space, skeletons, and the truth when the world
 changed) as deltas since the previous logged step and paths and rendezvous points in
 compressed chunks of ``chunk_steps`` steps (``deltas-NNNNN.npz``); static data
-(``meta.json``, ``truth.npz``) once. :class:`RunLog` opens a log; :class:`Replay` rebuilds
+(``meta.json``, read back and checked by ``output.logmeta``; ``truth.npz``) once.
+:class:`RunLog` opens a log; :class:`Replay` rebuilds
 every snapshot in order, equal to the live one field by field, with each step's metrics
 recomputed by the live code (``metrics.measure_step``); :func:`recompute_metrics` gives
 the rows of ``metrics.csv`` from the log alone. Layout: ``docs/run-log-format.md``.
@@ -29,7 +30,6 @@ from mresim_phys.output.files import write_json_atomic
 from mresim_phys.output.logformat import (
     AGENT_LINE,
     FORMAT,
-    READABLE,
     SNAPSHOT_LINE,
     STATIC_AGENT,
     TRUTH,
@@ -42,11 +42,12 @@ from mresim_phys.output.logformat import (
     new_parts,
     point,
 )
+from mresim_phys.output.logmeta import META, damaged, read_meta
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
 from mresim_phys.types import FREE, BoolGrid, IntArray
 from mresim_phys.world.maps import connected_to, free_components_mask, seed_cells
 
-META, TRUTH_FILE, STEPS = "meta.json", "truth.npz", "steps.jsonl"
+TRUTH_FILE, STEPS = "truth.npz", "steps.jsonl"
 
 
 def chunk_file(index: int) -> str:
@@ -150,11 +151,6 @@ class RunLogWriter:
         self.close()
 
 
-def damaged(log_dir: Path, what: str) -> MresimError:
-    """The error for an unreadable log."""
-    return MresimError(f"{log_dir}: the run log is damaged ({what}); re-run to write a new one.")
-
-
 class RunLog:
     """A run log opened for reading: static data at once, steps streamed by :meth:`snapshots`."""
 
@@ -215,66 +211,6 @@ class RunLog:
         arrays, overwritten by the next step (copy what you keep)."""
         for snap, _ in Replay(self).run():
             yield snap
-
-
-def read_meta(log_dir: Path) -> dict[str, Any]:
-    """meta.json, checked for format, version and required keys."""
-    try:
-        meta = json.loads((log_dir / META).read_text(encoding="utf-8"))
-    except (OSError, ValueError) as exc:
-        raise damaged(log_dir, f"{META}: {exc}") from None
-    if not isinstance(meta, dict) or meta.get("format") != FORMAT:
-        raise damaged(log_dir, f"{META} is not a {FORMAT} file")
-    if meta.get("version") not in READABLE:
-        versions = " and ".join(map(str, READABLE))
-        raise MresimError(
-            f"{log_dir}: run log format version {meta.get('version')!r}; this mresim reads"
-            f" versions {versions}. Re-run the scenario or use a matching mresim."
-        )
-    missing = {"name", "seed", "shape", "chunk_steps", "agents", "starts", "steps"} - meta.keys()
-    if missing:
-        raise damaged(log_dir, f"{META} lacks {sorted(missing)}")
-    problem = meta_problem(meta)
-    if problem is not None:
-        raise damaged(log_dir, f"{META}: {problem}")
-    return meta
-
-
-def whole(value: Any, least: int) -> bool:
-    """Whether ``value`` is an integer (not a bool) >= ``least``."""
-    return isinstance(value, int) and not isinstance(value, bool) and value >= least
-
-
-def is_point(value: Any) -> bool:
-    """Whether ``value`` is an ``[x, y]`` pair of numbers."""
-    return (
-        isinstance(value, list)
-        and len(value) == 2
-        and all(isinstance(v, int | float) and not isinstance(v, bool) for v in value)
-    )
-
-
-def meta_problem(meta: dict[str, Any]) -> str | None:
-    """What is wrong with the values of a meta.json that has every key (None: nothing)."""
-    shape, agents, starts = meta["shape"], meta["agents"], meta["starts"]
-    if not (isinstance(shape, list) and len(shape) == 2 and all(whole(v, 1) for v in shape)):
-        return f"shape {shape!r} is not [rows, columns]"
-    for key, least in (("chunk_steps", 1), ("steps", 0), ("seed", 0)):
-        if not whole(meta[key], least):
-            return f"{key} {meta[key]!r} is not a whole number >= {least}"
-    if not isinstance(meta["name"], str):
-        return f"name {meta['name']!r} is not a text"
-    if not isinstance(agents, list) or not agents:
-        return f"agents {agents!r} is not a list of agents"
-    for agent in agents:
-        try:
-            decode_line(STATIC_AGENT, AgentSnapshot, agent, len(agents))
-        except (AttributeError, KeyError, TypeError, ValueError):
-            return f"agent {agent!r} lacks a name, kind, radius or comm_range"
-    robots = sum(1 for a in agents if a["kind"] == "robot")
-    if not (isinstance(starts, list) and len(starts) == robots and all(map(is_point, starts))):
-        return f"starts {starts!r} are not {robots} [x, y] points"
-    return None
 
 
 def read_truth(log_dir: Path, meta: dict[str, Any]) -> BoolGrid:
