@@ -28,7 +28,7 @@ import numpy as np
 from mresim_phys.agents import Agent, Robot
 from mresim_phys.build import Scenario, Setup, build_setup, load_scenario
 from mresim_phys.comms.ledger import box_around
-from mresim_phys.errors import ScenarioError
+from mresim_phys.errors import ScenarioError, UnknownRobotError
 from mresim_phys.event_context import RunEventContext
 from mresim_phys.knowledge.mapping import integrate_scan
 from mresim_phys.knowledge.teammates import presumed_lost
@@ -108,7 +108,6 @@ class Simulation:
 
     def robot(self, name: str) -> Robot:
         """The robot called ``name``; UnknownRobotError (a KeyError) naming the team if none."""
-        from mresim_phys.errors import UnknownRobotError
 
         for robot in self.robots:
             if robot.name == name:
