@@ -108,7 +108,6 @@ class Simulation:
 
     def robot(self, name: str) -> Robot:
         """The robot called ``name``; UnknownRobotError (a KeyError) naming the team if none."""
-
         for robot in self.robots:
             if robot.name == name:
                 return robot
