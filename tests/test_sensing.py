@@ -86,3 +86,46 @@ def test_ray_ending_just_past_a_wall_still_hits_it(rooms: np.ndarray) -> None:
     result = world.cast_rays((60.0, 30.0), np.array([angle]), 60.0, walls_only(world))
     assert result.wall_hit[0]
     assert result.ranges[0] == pytest.approx(math.hypot(58.0, 44.87361696714561 - 30.0))
+
+
+def test_scans_agree_with_chipmunk_queries_of_the_space(
+    rooms: np.ndarray, rng: np.random.Generator
+) -> None:
+    """The compiled scan and a Chipmunk segment query of the Space find the same first hit
+    (walls and blocking robots alike): distance, surface normal and what was hit."""
+    world = World(rooms, [1.0, 1.5, 0.8])
+    centres = [(10.5, 10.5), (24.2, 12.7), (15.3, 30.1)]
+    world.place_robots(centres)
+    free = np.argwhere(~rooms)
+    for robots_block in (False, True):
+        shape_filter = world.query_filter(0, robots_block)
+        for row, col in free[rng.integers(0, len(free), 60)]:
+            origin = (col + rng.uniform(0.01, 0.99), row + rng.uniform(0.01, 0.99))
+            if min(math.dist(origin, c) for c in centres[1:]) < 2.0:
+                continue  # a robot never stands inside another one
+            angles = rng.uniform(-np.pi, np.pi, 30)  # not through cell corners
+            result = world.cast_rays(origin, angles, 80.0, shape_filter)
+            for k, angle in enumerate(angles):
+                end = (origin[0] + 80 * math.cos(angle), origin[1] + 80 * math.sin(angle))
+                hit = world.first_hit(origin, end, 0.0, shape_filter)
+                if hit is None:
+                    assert result.ranges[k] == 80.0 and not result.wall_hit[k]
+                    continue
+                assert result.ranges[k] == pytest.approx(hit.alpha * 80, abs=1e-9)
+                assert result.normals[k] == pytest.approx(hit.normal, abs=1e-9)
+                assert result.wall_hit[k] == hit.is_wall
+
+
+def test_a_ray_through_a_wall_corner_stops_there(rooms: np.ndarray) -> None:
+    """A 45 degree ray through the corner where two wall cells touch diagonally does not
+    slip between them, and a ray grazing a wall's corner touches it."""
+    grid = np.zeros((10, 10), dtype=bool)
+    grid[4, 5] = grid[5, 4] = True  # touching at the corner (5, 5)
+    world = World(grid, [])
+    through = world.cast_rays((3.5, 3.5), np.array([math.pi / 4]), 20.0, walls_only(world))
+    assert through.wall_hit[0] and through.ranges[0] == pytest.approx(1.5 * math.sqrt(2))
+    grid = np.zeros((10, 10), dtype=bool)
+    grid[4, 5] = True  # its lower-left corner is (5, 5)
+    world = World(grid, [])
+    grazing = world.cast_rays((3.5, 6.5), np.array([-math.pi / 4]), 20.0, walls_only(world))
+    assert grazing.wall_hit[0] and grazing.ranges[0] == pytest.approx(1.5 * math.sqrt(2))

@@ -4,7 +4,8 @@ The stateful property test drives a World through random sequences of cell chang
 movable obstacles against a plain numpy model, and after every step checks that the truth
 grid is the model's, that the Space holds exactly the unit edges ``wall_segments`` builds
 from it (maximally merged, each with the category of its occupied side), that rays cast
-in pymunk stop where a grid traversal of ``world.occupied`` stops, that each Change
+(the scan kernel and a Chipmunk query of the Space) stop where a grid traversal of
+``world.occupied`` stops, that each Change
 reports exactly the flipped cells and the overlapped robots, and that the reachable set
 followed across the changes equals a full labelling.
 """
@@ -210,6 +211,10 @@ class ChangingWorld(RuleBasedStateMachine):
                 truth, near_vertex = dda_first_hit(grid, *origin, math.cos(angle), math.sin(angle))
                 if not near_vertex:
                     assert hit and abs(distance - truth) < RAY_TOL, (origin, angle, distance, truth)
+                    # the Space's segments (a Chipmunk query) stop the ray there too
+                    end = (origin[0] + 100 * math.cos(angle), origin[1] + 100 * math.sin(angle))
+                    found = self.world.first_hit(origin, end, 0.0, walls)
+                    assert found is not None and abs(found.alpha * 100 - truth) < RAY_TOL
 
     @invariant()
     def truth_is_the_model(self) -> None:

@@ -53,6 +53,7 @@ from mresim_phys.world.changes import (
     join_boxes,
 )
 from mresim_phys.world.maps import wall_segments
+from mresim_phys.world.raycast import cast_fan
 from mresim_phys.world.wallset import (
     MOVABLE_CATEGORY,
     OBSTACLE_CATEGORIES,
@@ -77,14 +78,10 @@ __all__ = [
 ]
 
 ALL_BITS = 0xFFFFFFFF
+NO_CIRCLES = np.zeros((0, 3))
 
 Point = tuple[float, float]
 QueryFilter = tuple[int, int, int]  # Chipmunk shape filter: (group, categories, mask)
-
-
-def is_wall_shape(shape: object) -> bool:
-    """Whether a Chipmunk shape pointer is an obstacle of the truth grid (not a robot)."""
-    return bool(lib.cpShapeGetFilter(shape).categories & OBSTACLE_CATEGORIES)
 
 
 @dataclass(frozen=True)
@@ -138,6 +135,7 @@ class World:
         self._walls = WallSet(self.space, wall_segments(occupied))
         self.bodies = [self._add_robot(i, r) for i, r in enumerate(robot_radii)]
         self._radii = np.asarray(robot_radii, dtype=np.float64)
+        self._robot_xy = np.array([tuple(b.position) for b in self.bodies], dtype=np.float64)
         self._info = ffi.new("cpSegmentQueryInfo *")
         self.version = 0  # bumped by every change of the truth after step 0
         self._layers: Layers | None = None  # built by the first change
@@ -248,6 +246,7 @@ class World:
         for body, position in zip(self.bodies, positions, strict=True):
             body.position = position
             self.space.reindex_shapes_for_body(body)
+        self._robot_xy = np.array([tuple(b.position) for b in self.bodies], dtype=np.float64)
 
     def query_filter(self, robot_index: int | None, robots_block: bool) -> QueryFilter:
         """The Chipmunk filter for queries by ``robot_index``: walls and movable obstacles
@@ -315,35 +314,35 @@ class World:
         max_range: float,
         shape_filter: QueryFilter,
     ) -> Scan:
-        """Cast one ray per angle from ``origin``; exact distance to the first hit."""
-        ox, oy = origin
-        xs = (ox + max_range * np.cos(angles)).tolist()
-        ys = (oy + max_range * np.sin(angles)).tolist()
-        # cdata structs built once per scan: converting Python tuples on every call
-        # costs as much as Chipmunk's query itself
-        ends = ffi.new("cpVect[]", list(zip(xs, ys, strict=True)))
-        start = ffi.new("cpVect *", origin)[0]
-        query_filter = ffi.new("cpShapeFilter *", shape_filter)[0]
-        hits: list[tuple[int, float, float, float, bool]] = []
-        info, space, query, null = (
-            self._info,
-            self.space._space,
-            lib.cpSpaceSegmentQueryFirst,
-            ffi.NULL,
+        """Cast one ray per angle from ``origin``; exact distance to the first hit.
+
+        One compiled call (``world/raycast.py``): a traversal of the truth grid, whose
+        cell boundaries are exactly the Space's wall segments, plus the robot circles
+        the filter lets block (every robot but the filter's group).
+        """
+        n = len(angles)
+        ranges, normals, wall_hit = np.empty(n), np.empty((n, 2)), np.empty(n, dtype=np.bool_)
+        cast_fan(
+            self.occupied,
+            float(origin[0]),
+            float(origin[1]),
+            np.ascontiguousarray(angles, dtype=np.float64),
+            float(max_range),
+            self._blocking_circles(shape_filter),
+            ranges,
+            normals,
+            wall_hit,
         )
-        only_walls = not shape_filter[2] & ROBOT_CATEGORY
-        for i in range(len(xs)):
-            if query(space, start, ends[i], 0.0, query_filter, info) != null:
-                is_wall = only_walls or is_wall_shape(info.shape)
-                hits.append((i, info.alpha, info.normal.x, info.normal.y, is_wall))
-        alphas = np.ones(len(angles))
-        normals = np.zeros((len(angles), 2))
-        wall_hit = np.zeros(len(angles), dtype=bool)
-        if hits:
-            table = np.array(hits)
-            index = table[:, 0].astype(np.intp)
-            alphas[index], normals[index], wall_hit[index] = table[:, 1], table[:, 2:4], table[:, 4]
-        return Scan(origin, angles, alphas * max_range, normals, wall_hit, max_range)
+        return Scan(origin, angles, ranges, normals, wall_hit, max_range)
+
+    def _blocking_circles(self, shape_filter: QueryFilter) -> FloatArray:
+        """(k, 3) rows (x, y, radius) of the robot bodies ``shape_filter`` collides with."""
+        group, _, mask = shape_filter
+        if not mask & ROBOT_CATEGORY or not self.bodies:
+            return NO_CIRCLES
+        keep = np.arange(len(self.bodies)) != group - 1  # a robot's own body never blocks
+        circles: FloatArray = np.column_stack((self._robot_xy, self._radii))[keep]
+        return circles
 
     def blocked(
         self,
