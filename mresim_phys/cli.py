@@ -19,7 +19,7 @@ from tqdm import tqdm
 
 from mresim_phys.errors import MresimError
 from mresim_phys.metrics import StepRecord
-from mresim_phys.output.bench import run_bench
+from mresim_phys.output.bench import PRESETS, run_bench
 from mresim_phys.output.plots import plot_runs, plotting_available
 from mresim_phys.output.recorders import default_run_dir
 from mresim_phys.output.replay import replay_run
@@ -112,9 +112,21 @@ def make_parser() -> argparse.ArgumentParser:
         default=(4, 8, 16),
         help="comma-separated team sizes (default 4,8,16)",
     )
-    bench.add_argument("--warmup", type=non_negative_int, default=50, help="untimed steps")
-    bench.add_argument("--steps", type=positive_int, default=200, help="timed steps")
-    bench.add_argument("--map", type=Path, help="an 800x600 floor plan (default maps/office.png)")
+    bench.add_argument(
+        "--preset",
+        choices=sorted(PRESETS),
+        default="office",
+        help="office: speed 3, laser 100, comm 150 on the office floor (default); original:"
+        " the original MRESim's settings (speed 10, laser 200, comm 200, radius 0.5) on its"
+        " library layout; rooms: the same on its rooms layout",
+    )
+    bench.add_argument(
+        "--warmup", type=non_negative_int, help="untimed steps (default: office 50, others 10)"
+    )
+    bench.add_argument(
+        "--steps", type=positive_int, help="timed steps (default: office 200, others 100)"
+    )
+    bench.add_argument("--map", type=Path, help="another 800x600 floor plan for the preset")
     return parser
 
 
@@ -183,7 +195,7 @@ def robot_counts(text: str) -> tuple[int, ...]:
 
 def bench_command(args: argparse.Namespace) -> int:
     """``mresim bench``: time full steps and print the cost split."""
-    print(run_bench(args.robots, args.map, args.warmup, args.steps))
+    print(run_bench(args.robots, args.map, args.warmup, args.steps, args.preset))
     return 0
 
 

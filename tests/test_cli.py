@@ -15,7 +15,7 @@ import pytest
 import yaml
 
 from mresim_phys.cli import main
-from mresim_phys.output.bench import DEFAULT_MAP, row_starts, team_scenario
+from mresim_phys.output.bench import DEFAULT_MAP, PRESETS, row_starts, team_scenario
 from mresim_phys.render.layers import GLOBAL_LAYERS, ROBOT_LAYERS
 from mresim_phys.scenario.load import load_scenario, validate_scenario
 from mresim_phys.sim import Simulation
@@ -452,3 +452,21 @@ def test_an_unknown_robot_is_a_key_error_naming_the_team(scenario_file: MakeScen
     with pytest.raises(KeyError) as info:
         sim.robot("Z")
     assert str(info.value) == "no robot 'Z' in this run; its robots are 'A', 'B'"
+
+
+@pytest.mark.parametrize("preset", ["original", "rooms"])
+def test_bench_presets_at_the_originals_settings(
+    capsys: pytest.CaptureFixture[str], preset: str
+) -> None:
+    """The original's settings on its layouts, shipped with the package: any team fits."""
+    chosen = PRESETS[preset]
+    assert chosen.map_path.is_file() and chosen.team["speed"] == 10
+    scenario = validate_scenario(team_scenario(32, chosen.map_path, 1, chosen))
+    sim = Simulation(scenario)  # checks every start against the walls
+    assert len({r.position for r in sim.robots}) == 32
+    body = sim.robots[0].body
+    assert body is not None and body.laser.range == 200 and body.radius == 0.5
+    code, out, err = cli(capsys, "bench", "--preset", preset, "--robots", "2", "--warmup", "0",
+                         "--steps", "1")  # fmt: skip
+    assert code == 0, err
+    assert f"--preset {preset}" in out and out.splitlines()[2].split()[0] == "2"

@@ -1,7 +1,9 @@
 """Benchmark (output edge): ``mresim bench``, median milliseconds per step and where they go.
 
-Builds a frontier-exploration team of 4, 8 and 16 robots (or any size; speed 3, radius 2,
-range 100, disk comm 150) on an 800x600 floor plan, runs warm-up steps, then times
+Builds a frontier-exploration team of 4, 8 and 16 robots (or any size) from a preset
+(:data:`PRESETS`): ``office`` (speed 3, radius 2, range 100, disk comm 150 on the 800x600
+office floor), or the original MRESim's settings (speed 10, laser 200, comm 200, point-like
+robots of radius 0.5) on its ``library`` or ``rooms`` layout; runs warm-up steps, then times
 each step and reports the median and 90th percentile per step and the median
 cost of each phase per step (sensing = ray casting, mapping = map updates,
 planning = strategy decisions incl. frontiers and distance fields,
@@ -34,11 +36,61 @@ from mresim_phys.world.maps import connected_to, seed_cells
 from mresim_phys.world.space import World
 
 PACKAGE_DATA = Path(__file__).resolve().parent.parent / "data"  # installed with the package
-DEFAULT_MAP = PACKAGE_DATA / "office.png"
-DEFAULT_BASE = (25.0, 300.0)
-DEFAULT_START = (40.0, 300.0)
-RADIUS = 2.0
 SPACING = 8  # cells between neighbouring starts
+
+
+@dataclass(frozen=True)
+class Preset:
+    """A benchmark setting: map, base, where the team starts, the team's fields and the
+    steps warmed up and timed by default."""
+
+    name: str
+    map_file: str
+    base: tuple[float, float]
+    start: tuple[float, float]
+    team: dict[str, Any]
+    warmup: int
+    steps: int
+
+    @property
+    def map_path(self) -> Path:
+        """The preset's map, shipped with the package."""
+        return PACKAGE_DATA / self.map_file
+
+    @property
+    def radius(self) -> float:
+        """The robots' body radius."""
+        return float(self.team["radius"])
+
+
+ORIGINAL_TEAM = {  # the original MRESim's comparison settings (scenarios 11-13)
+    "speed": 10,
+    "radius": 0.5,
+    "wall_margin": 0.5,
+    "sensor": {"range": 200},
+    "comm_range": 200,
+}
+PRESETS = {
+    "office": Preset(
+        "office",
+        "office.png",
+        (25.0, 300.0),
+        (40.0, 300.0),
+        {"speed": 3, "radius": 2.0, "sensor": {"range": 100}, "comm_range": 150},
+        50,
+        200,
+    ),
+    # the exploring phase: library teams of 8-16 reach 95 % in 110-170 steps
+    "original": Preset(
+        "original", "library.png", (380.5, 520.5), (390.5, 520.5), ORIGINAL_TEAM, 10, 100
+    ),
+    "rooms": Preset("rooms", "rooms.png", (370.5, 520.5), (350.5, 520.5), ORIGINAL_TEAM, 10, 100),
+}
+OFFICE = PRESETS["office"]
+DEFAULT_MAP = OFFICE.map_path
+DEFAULT_BASE = OFFICE.base
+DEFAULT_START = OFFICE.start
+RADIUS = OFFICE.radius
 
 
 @dataclass(frozen=True)
@@ -52,9 +104,12 @@ class BenchResult:
     explored: float
 
 
-def row_starts(robots: int) -> list[tuple[float, float]]:
-    """The preferred starts: rows of eight, ``SPACING`` apart, beside the base."""
-    x, y = DEFAULT_START
+Point = tuple[float, float]
+
+
+def row_starts(robots: int, start: Point = DEFAULT_START) -> list[Point]:
+    """The preferred starts: rows of eight, ``SPACING`` apart, from ``start``."""
+    x, y = start
     return [(x + SPACING * (i % 8), y + SPACING * (i // 8) - SPACING / 2) for i in range(robots)]
 
 
@@ -67,7 +122,9 @@ def spots_near(occupied: BoolGrid, origin: tuple[float, float]) -> list[tuple[fl
     return [(float(xs[k]), float(ys[k])) for k in order]
 
 
-def team_starts(robots: int, occupied: BoolGrid) -> list[tuple[float, float]]:
+def team_starts(
+    robots: int, occupied: BoolGrid, preset: Preset = OFFICE
+) -> list[tuple[float, float]]:
     """``robots`` starts clear of walls and ``SPACING`` apart: the rows first, then the free
     spots nearest the first start; MresimError if the map has no room for them all."""
     world = World(occupied, [])
@@ -75,11 +132,11 @@ def team_starts(robots: int, occupied: BoolGrid) -> list[tuple[float, float]]:
 
     def fits(p: tuple[float, float]) -> bool:
         far = all(abs(p[0] - q[0]) >= SPACING or abs(p[1] - q[1]) >= SPACING for q in chosen)
-        return far and not world.overlaps_wall(p, RADIUS)
+        return far and not world.overlaps_wall(p, preset.radius)
 
-    chosen += [p for p in row_starts(robots) if fits(p)]
+    chosen += [p for p in row_starts(robots, preset.start) if fits(p)]
     if len(chosen) < robots:
-        for p in spots_near(occupied, DEFAULT_START):
+        for p in spots_near(occupied, preset.start):
             if fits(p):
                 chosen.append(p)
                 if len(chosen) == robots:
@@ -87,29 +144,34 @@ def team_starts(robots: int, occupied: BoolGrid) -> list[tuple[float, float]]:
     if len(chosen) < robots:
         raise MresimError(
             f"the benchmark map has room for {len(chosen)} robots {SPACING} cells apart near"
-            f" {list(DEFAULT_START)}, not {robots}; give fewer --robots or another --map."
+            f" {list(preset.start)}, not {robots}; give fewer --robots or another --map."
         )
     return chosen[:robots]
 
 
-def team_scenario(robots: int, map_path: Path, steps: int) -> dict[str, Any]:
+def team_scenario(
+    robots: int, map_path: Path, steps: int, preset: Preset = OFFICE
+) -> dict[str, Any]:
     """A frontier team of ``robots`` starting beside the base (:func:`team_starts`)."""
-    starts = team_starts(robots, load_image_map(map_path).occupied)
+    starts = team_starts(robots, load_image_map(map_path).occupied, preset)
     return {
         "name": f"bench-{robots}",
         "seed": 1,
         "steps": steps,
         "stop": {"all_done": False, "stalled_for": None},
         "map": {"image": str(map_path)},
-        "base_station": {"position": list(DEFAULT_BASE), "comm_range": 150},
-        "team": {"speed": 3, "radius": RADIUS, "sensor": {"range": 100}, "comm_range": 150},
+        "base_station": {"position": list(preset.base), "comm_range": preset.team["comm_range"]},
+        "team": preset.team,
         "robots": [{"name": f"R{i}", "start": list(s)} for i, s in enumerate(starts)],
     }
 
 
-def time_team(robots: int, map_path: Path, warmup: int, measured: int) -> BenchResult:
+def time_team(
+    robots: int, map_path: Path, warmup: int, measured: int, preset: Preset = OFFICE
+) -> BenchResult:
     """Run warm-up steps, then time ``measured`` steps of a team of ``robots``."""
-    sim = Simulation(validate_scenario(team_scenario(robots, map_path, warmup + measured)))
+    data = team_scenario(robots, map_path, warmup + measured, preset)
+    sim = Simulation(validate_scenario(data))
     for _ in range(warmup):
         sim.step()
     totals: list[float] = []
@@ -133,28 +195,41 @@ def time_team(robots: int, map_path: Path, warmup: int, measured: int) -> BenchR
     )
 
 
-def report(results: Sequence[BenchResult], map_path: Path) -> str:
+def report(results: Sequence[BenchResult], map_path: Path, preset: Preset = OFFICE) -> str:
     """The results as a text table."""
     names = [*PHASES, "motion"]
-    head = f"{'robots':>6} {'median':>8} {'p90':>8} " + " ".join(f"{n:>13}" for n in names)
-    lines = [f"mresim bench: frontier team on {map_path.name}, ms per step", head]
+    head = f"{'robots':>6} {'median':>8} {'p90':>8} {'per robot':>9} " + " ".join(
+        f"{n:>13}" for n in names
+    )
+    lines = [
+        f"mresim bench --preset {preset.name}: frontier team on {map_path.name}, ms per step",
+        head,
+    ]
     for r in results:
         split = " ".join(f"{r.phase_ms[n]:13.2f}" for n in names)
-        lines.append(f"{r.robots:>6} {r.median_ms:8.2f} {r.p90_ms:8.2f} {split}")
+        per_robot = r.median_ms / r.robots
+        lines.append(f"{r.robots:>6} {r.median_ms:8.2f} {r.p90_ms:8.2f} {per_robot:9.2f} {split}")
     lines.append("(phase columns are per-step medians; they need not add up to the median)")
     return "\n".join(lines)
 
 
 def run_bench(
-    robot_counts: Sequence[int], map_path: Path | None, warmup: int, measured: int
+    robot_counts: Sequence[int],
+    map_path: Path | None,
+    warmup: int | None,
+    measured: int | None,
+    preset_name: str = "office",
 ) -> str:
-    """Time every team size and return the report."""
-    path = map_path or DEFAULT_MAP
+    """Time every team size with a preset (its map unless ``map_path``) and return the report."""
+    preset = PRESETS[preset_name]
+    path = map_path or preset.map_path
     if not path.is_file():
         raise MresimError(
             f"benchmark map {path} not found; give one with --map (an 800x600 floor plan whose"
-            f" free space contains {list(DEFAULT_BASE)} and the row of starts from"
-            f" {list(DEFAULT_START)})."
+            f" free space contains {list(preset.base)} and the starts from"
+            f" {list(preset.start)})."
         )
-    results = [time_team(n, path, warmup, measured) for n in robot_counts]
-    return report(results, path)
+    warm = preset.warmup if warmup is None else warmup
+    steps = preset.steps if measured is None else measured
+    results = [time_team(n, path, warm, steps, preset) for n in robot_counts]
+    return report(results, path, preset)
