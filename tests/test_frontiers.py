@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from scipy import ndimage
 
 from mresim_phys.knowledge.frontiers import (
-    _raster_ranks,
+    label_cells,
     find_frontiers,
     frontier_mask,
     frontier_targets,
@@ -106,12 +106,16 @@ def test_two_separate_runs_form_two_clusters_in_raster_order() -> None:
     assert fr.centroids[0][0] > 10 > fr.centroids[1][0]
 
 
-def test_labels_not_in_raster_order_are_reordered() -> None:
-    # cv2's block-based labellers number components out of raster order; SAUF does not,
-    # but the order is checked anyway. Labels 1..4 first seen in the order 3, 1, 4, 2.
-    ranks = _raster_ranks(np.array([3, 3, 1, 4, 1, 2, 3]), 5)
-    assert ranks.tolist() == [-1, 1, 3, 0, 2]
-    assert _raster_ranks(np.array([1, 2, 1, 3, 2]), 4).tolist() == [-1, 0, 1, 2]
+def test_labels_follow_the_raster_order_of_each_clusters_first_cell() -> None:
+    # a U: its right arm starts on row 0 left of nothing, joins the left arm on the last row
+    grid = np.zeros((4, 7), dtype=bool)
+    grid[0:4, 1] = grid[0:4, 4] = grid[3, 1:5] = True  # one cluster, two arms
+    grid[0, 6] = grid[1, 6] = True  # a second one, first seen after the U's first cell
+    flat = np.flatnonzero(grid)
+    labels = label_cells(flat, 7)
+    assert labels.tolist() == [0 if (f % 7) < 6 else 1 for f in flat]
+    assert label_cells(np.array([0, 8, 16], dtype=np.intp), 7).tolist() == [0, 0, 0]  # diagonal
+    assert label_cells(np.array([6, 7], dtype=np.intp), 7).tolist() == [0, 1]  # no wrap
 
 
 def test_fully_known_or_fully_unknown_map_has_no_frontiers() -> None:
