@@ -9,10 +9,10 @@ from hypothesis import strategies as st
 from scipy import ndimage
 
 from mresim_phys.knowledge.frontiers import (
-    label_cells,
     find_frontiers,
     frontier_mask,
     frontier_targets,
+    label_cells,
 )
 from mresim_phys.planning.fields import distance_field, traversable
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN

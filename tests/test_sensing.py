@@ -129,3 +129,17 @@ def test_a_ray_through_a_wall_corner_stops_there(rooms: np.ndarray) -> None:
     world = World(grid, [])
     grazing = world.cast_rays((3.5, 6.5), np.array([-math.pi / 4]), 20.0, walls_only(world))
     assert grazing.wall_hit[0] and grazing.ranges[0] == pytest.approx(1.5 * math.sqrt(2))
+
+
+def test_a_ray_along_a_cell_boundary_touches_walls_on_both_sides() -> None:
+    """A robot on a whole coordinate looking along an axis: its ray runs on the line
+    between two columns and stops at a wall on either side of it."""
+    grid = np.zeros((10, 10), dtype=bool)
+    grid[2, 4] = True  # left of the line x = 5
+    world = World(grid, [])
+    up = world.cast_rays((5.0, 8.0), np.array([-math.pi / 2]), 20.0, walls_only(world))
+    assert up.wall_hit[0] and up.ranges[0] == pytest.approx(5.0)
+    grid[2, 4], grid[6, 7] = False, True  # below the line y = 6
+    world = World(grid, [])
+    right = world.cast_rays((1.0, 6.0), np.array([0.0]), 20.0, walls_only(world))
+    assert right.wall_hit[0] and right.ranges[0] == pytest.approx(6.0)

@@ -11,7 +11,9 @@ occupied cell (likewise in y). A ray that passes exactly through a cell corner
 (to within 1e-9 cells, e.g. a 45 degree ray from a cell centre) stops there if any
 of the three cells beyond the corner is occupied: a ray does not slip between two
 diagonally touching wall cells, and a ray grazing a wall corner touches it, as a
-segment query touches a segment's end point. Outside the map is wall.
+segment query touches a segment's end point; likewise a ray running exactly along a cell
+boundary line (a robot on a whole coordinate looking along an axis) touches the cells on
+both sides of it. Outside the map is wall.
 
 Typical use (``World.cast_rays`` does this)::
 
@@ -29,6 +31,8 @@ from numba import njit
 from mresim_phys.types import BoolGrid, FloatArray
 
 CORNER_EPS = 1e-9  # crossings closer than this (in ray length) pass through a cell corner
+AXIS_EPS = 1e-12  # a direction component below this runs along a grid line
+NO_TWIN = -(2**31)  # no twin row or column
 
 
 @njit(cache=True, nogil=True)
@@ -60,6 +64,10 @@ def _grid_hit(
     sy = 1 if dy > 0 else (-1 if dy < 0 else 0)
     bx = col + (1 if sx > 0 else 0)  # the next vertical boundary x = bx
     by = row + (1 if sy > 0 else 0)  # the next horizontal boundary y = by
+    # a ray along a boundary line (x or y whole, the ray parallel to it) touches the
+    # cells on both sides of the line: the twin column (row) is checked too
+    twin_col = col - 1 if abs(dx) < AXIS_EPS and ox == col else NO_TWIN
+    twin_row = row - 1 if abs(dy) < AXIS_EPS and oy == row else NO_TWIN
     while True:
         tx = (bx - ox) / dx if sx != 0 else math.inf
         ty = (by - oy) / dy if sy != 0 else math.inf
@@ -69,12 +77,16 @@ def _grid_hit(
         if tx < ty - CORNER_EPS:
             col += sx
             bx += sx
-            if _occupied(grid, row, col):
+            if _occupied(grid, row, col) or (
+                twin_row != NO_TWIN and _occupied(grid, twin_row, col)
+            ):
                 return tx, float(-sx), 0.0
         elif ty < tx - CORNER_EPS:
             row += sy
             by += sy
-            if _occupied(grid, row, col):
+            if _occupied(grid, row, col) or (
+                twin_col != NO_TWIN and _occupied(grid, row, twin_col)
+            ):
                 return ty, 0.0, float(-sy)
         else:  # through a corner: stop if any of the three cells beyond it is a wall
             if _occupied(grid, row, col + sx):
