@@ -2,8 +2,8 @@
 
 A scan is ``rays`` rays spread evenly over ``fov_deg`` centred on the heading
 (181 rays over 180 degrees = 1 degree apart, as the original), each ending at the
-exact distance to the first wall (pymunk segment query) or at the maximum range.
-Noise-free unless the sensor has ``noise_std``; noise comes from the robot's own
+exact distance to the first wall (``world/raycast.py``: one compiled call per scan) or at
+the maximum range. Noise-free unless the sensor has ``noise_std``; noise comes from the robot's own
 ``sensing`` stream so it never shifts any other random draw.
 """
 

@@ -2,8 +2,10 @@
 
 The ground-truth grid becomes static pymunk segments lying exactly on the
 boundary between occupied and free cells (``maps.wall_segments``); robots are
-kinematic bodies with circle shapes. Rays (sensing, line of sight) and swept
-circles (motion checks) are pymunk segment queries. Only :class:`World` (through
+kinematic bodies with circle shapes. Swept circles (motion checks) are pymunk
+segment queries; scans (sensing, line of sight) are one compiled traversal of the
+truth grid (``world/raycast.py``), exact because the segments lie on its cell
+boundaries. Only :class:`World` (through
 the :class:`~mresim_phys.world.wallset.WallSet` it owns) mutates the Space:
 :meth:`World.place_robots`, once per step, after every robot has moved, and the
 changes of the world below.
