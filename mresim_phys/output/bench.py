@@ -88,9 +88,6 @@ PRESETS = {
 }
 OFFICE = PRESETS["office"]
 DEFAULT_MAP = OFFICE.map_path
-DEFAULT_BASE = OFFICE.base
-DEFAULT_START = OFFICE.start
-RADIUS = OFFICE.radius
 
 
 @dataclass(frozen=True)
@@ -107,7 +104,7 @@ class BenchResult:
 Point = tuple[float, float]
 
 
-def row_starts(robots: int, start: Point = DEFAULT_START) -> list[Point]:
+def row_starts(robots: int, start: Point = OFFICE.start) -> list[Point]:
     """The preferred starts: rows of eight, ``SPACING`` apart, from ``start``."""
     x, y = start
     return [(x + SPACING * (i % 8), y + SPACING * (i // 8) - SPACING / 2) for i in range(robots)]

@@ -137,7 +137,7 @@ class World:
         self._walls = WallSet(self.space, wall_segments(occupied))
         self.bodies = [self._add_robot(i, r) for i, r in enumerate(robot_radii)]
         self._radii = np.asarray(robot_radii, dtype=np.float64)
-        self._robot_xy = np.array([tuple(b.position) for b in self.bodies], dtype=np.float64)
+        self._robot_xy = self._body_positions()
         self._info = ffi.new("cpSegmentQueryInfo *")
         self.version = 0  # bumped by every change of the truth after step 0
         self._layers: Layers | None = None  # built by the first change
@@ -248,7 +248,11 @@ class World:
         for body, position in zip(self.bodies, positions, strict=True):
             body.position = position
             self.space.reindex_shapes_for_body(body)
-        self._robot_xy = np.array([tuple(b.position) for b in self.bodies], dtype=np.float64)
+        self._robot_xy = self._body_positions()
+
+    def _body_positions(self) -> FloatArray:
+        """(n, 2) positions of the robot bodies, for the scan kernel's blocking circles."""
+        return np.array([tuple(b.position) for b in self.bodies], dtype=np.float64).reshape(-1, 2)
 
     def query_filter(self, robot_index: int | None, robots_block: bool) -> QueryFilter:
         """The Chipmunk filter for queries by ``robot_index``: walls and movable obstacles
