@@ -6,7 +6,8 @@ extracts them with ``cv2.dilate`` (the frontier mask) and a union-find over the 
 cells alone (:func:`label_cells`): labelling the whole 800x600 grid with
 ``cv2.connectedComponentsWithStats`` cost ~2.5 ms a replan, most of a replan's frontier
 work. ``frontier_targets`` then picks, for every
-cluster, the cheapest cell of a ``DistanceField`` from which the cluster is within reach.
+cluster, the cheapest cell of a ``DistanceField`` from which the cluster is within reach,
+in one numba pass over the frontier cells.
 """
 
 from __future__ import annotations
@@ -22,7 +23,6 @@ from mresim_phys.types import FREE, UNKNOWN, BeliefGrid, BoolGrid, FloatArray, I
 
 _KERNEL_3X3 = np.ones((3, 3), dtype=np.uint8)
 _EARLIER = ((0, -1), (-1, 0), (-1, -1), (-1, 1))  # 8-neighbours before a cell in raster order
-_GATHER_CHUNK = 1 << 21  # elements per gather block in frontier_targets (bounds memory)
 
 
 @dataclass(frozen=True, eq=False)
@@ -134,12 +134,12 @@ def find_frontiers(
     frontier = frontier_mask(belief[r0:r1, c0:c1])
     if exclude is not None:
         frontier &= ~exclude[r0:r1, c0:c1]
-    if not frontier.any():  # (cv2.findNonZero gives None then)
+    flat = np.flatnonzero(frontier)  # raster order (5x faster than cv2.findNonZero)
+    if flat.size == 0:
         return _empty_frontiers()
-    xy = cv2.findNonZero(frontier.view(np.uint8)).reshape(-1, 2).astype(np.intp)  # raster order
-    rows, cols = xy[:, 1], xy[:, 0]
     width = c1 - c0
-    seq = label_cells(rows * width + cols, width)
+    rows, cols = np.divmod(flat, width)
+    seq = label_cells(flat, width)
     counts = np.bincount(seq)
     sizes = counts.astype(np.intp)
     keep = sizes >= min_size
@@ -167,54 +167,67 @@ def _disc(reach: float) -> IntArray:
     return np.column_stack((dr[inside], dc[inside]))
 
 
-def _candidate_costs(
-    field: DistanceField, passable: BoolGrid, rows: IntArray, cols: IntArray
-) -> FloatArray:
-    """Field costs at cells (rows, cols) of any shape; inf off the field or not passable."""
-    wr0, wc0 = field.origin  # the field's padded search window (inf on its border ring)
-    hp, wp = field.window_costs.shape
-    lr, lc = rows - wr0, cols - wc0
-    inside = (lr >= 0) & (lr < hp) & (lc >= 0) & (lc < wp)
-    values = np.full(rows.shape, np.inf)
-    values[inside] = field.window_costs[lr[inside], lc[inside]]
-    finite = np.isfinite(values)  # finite only on in-grid cells reached by the search
-    values[finite] = np.where(passable[rows[finite], cols[finite]], values[finite], np.inf)
-    return values
+@njit(cache=True, nogil=True)
+def _parent_direction(flat: IntArray, width: int) -> IntArray:
+    """Index in ``_EARLIER`` of each cell's first earlier 8-neighbour among the cells
+    ``flat`` (indices row * width + col of a grid padded by one column on each side,
+    ascending); 4 if it has none."""
+    group = np.full(len(flat), len(_EARLIER), dtype=np.int64)
+    for i in range(len(flat)):
+        for d in range(len(_EARLIER)):
+            dr, dc = _EARLIER[d]
+            wanted = flat[i] + dr * width + dc
+            j = np.searchsorted(flat[:i], wanted)  # every earlier neighbour comes before i
+            if j < i and flat[j] == wanted:
+                group[i] = d
+                break
+    return group
 
 
-def _best_in_offsets(
-    field: DistanceField, passable: BoolGrid, cells: IntArray, offsets: IntArray
+@njit(cache=True, nogil=True)
+def _cluster_targets(
+    cells: IntArray,
+    cluster_of: IntArray,
+    group: IntArray,
+    offsets: IntArray,
+    starts: IntArray,
+    window_costs: FloatArray,
+    origin: tuple[int, int],
+    passable: BoolGrid,
+    k: int,
 ) -> tuple[FloatArray, IntArray]:
-    """For each cell, the min candidate cost over ``cell + offsets`` and its flat index.
-
-    Ties go to the first offset; with raster-ordered offsets that is the smallest index.
-    """
+    """Per cluster, the least (cost, flat index) over the passable, reached cells at
+    ``cell + offsets[starts[g]:starts[g + 1]]`` of its cells (``g`` = the cell's group);
+    cost inf and index -1 where none qualifies."""
+    best = np.full(k, np.inf)
+    where = np.full(k, -1, dtype=np.int64)
+    hp, wp = window_costs.shape
     width = passable.shape[1]
-    best = np.empty(len(cells))
-    where = np.empty(len(cells), dtype=np.intp)
-    chunk = max(_GATHER_CHUNK // len(offsets), 1)
-    for lo in range(0, len(cells), chunk):  # loop over blocks of cells, not cells
-        rows = cells[lo : lo + chunk, :1] + offsets[:, 0]
-        cols = cells[lo : lo + chunk, 1:] + offsets[:, 1]
-        values = _candidate_costs(field, passable, rows, cols)
-        arg = np.argmin(values, axis=1)
-        pick = np.arange(len(arg))
-        best[lo : lo + chunk] = values[pick, arg]
-        where[lo : lo + chunk] = rows[pick, arg] * width + cols[pick, arg]
+    for i in range(len(cells)):
+        row, col, j = cells[i, 0], cells[i, 1], cluster_of[i]
+        for o in range(starts[group[i]], starts[group[i] + 1]):
+            r, c = row + offsets[o, 0], col + offsets[o, 1]
+            lr, lc = r - origin[0], c - origin[1]
+            if lr < 0 or lr >= hp or lc < 0 or lc >= wp:
+                continue
+            cost = window_costs[lr, lc]  # finite only on in-grid cells the search reached
+            if cost == np.inf or not passable[r, c]:
+                continue
+            flat = r * width + c
+            if cost < best[j] or (cost == best[j] and flat < where[j]):
+                best[j], where[j] = cost, flat
     return best, where
 
 
-def _parent_direction(cells: IntArray) -> IntArray:
-    """Index in ``_EARLIER`` of a cell's first earlier 8-neighbour in ``cells``; 4 if none."""
-    width = int(cells[:, 1].max()) + 3
-    flat = (cells[:, 0] + 1) * width + cells[:, 1] + 1
-    known = np.sort(flat)
-    group = np.full(len(cells), len(_EARLIER))
-    for d, (dr, dc) in reversed(list(enumerate(_EARLIER))):  # first listed direction wins
-        wanted = flat + dr * width + dc
-        at = np.minimum(np.searchsorted(known, wanted), len(known) - 1)
-        group[known[at] == wanted] = d
-    return group
+def _offsets_by_group(reach: float) -> tuple[IntArray, IntArray]:
+    """The disc's offsets for each parent direction (the disc minus the parent's disc;
+    the whole disc for a cell without an earlier neighbour), concatenated, and where each
+    group starts (5 + 1 entries)."""
+    disc = _disc(reach)
+    pieces = [disc[((disc - step) ** 2).sum(axis=1) > reach**2] for step in _EARLIER]
+    pieces.append(disc)
+    starts = np.cumsum([0] + [len(p) for p in pieces])
+    return np.concatenate(pieces).astype(np.int64), starts.astype(np.int64)
 
 
 def frontier_targets(
@@ -227,7 +240,9 @@ def frontier_targets(
     the smaller (row, col). The answer is exact. Each cell of the cluster contributes
     the disc of cells around it, minus the disc of an earlier 8-neighbour (in raster
     order) in the same cluster. Together these pieces cover the cluster's whole reach
-    area, and a piece holds about 2 * reach cells instead of pi * reach^2.
+    area, and a piece holds about 2 * reach cells instead of pi * reach^2. One compiled
+    pass (``_cluster_targets``) keeps each cluster's least (cost, flat index): ~0.1 ms a
+    call in a library run where the numpy gather it replaced took ~1 ms.
 
     Args:
         frontiers: Clusters from ``find_frontiers``.
@@ -244,23 +259,19 @@ def frontier_targets(
     costs = np.full(k, np.inf)
     if k == 0 or reach < 0 or field.start_rc is None:
         return targets, costs
-    disc = _disc(reach)
-    cells = frontiers.cells_rc
-    group = _parent_direction(cells)
-    best = np.full(len(cells), np.inf)
-    where = np.zeros(len(cells), dtype=np.intp)
-    for d in range(len(_EARLIER) + 1):
-        sel = np.flatnonzero(group == d)
-        offsets = disc
-        if d < len(_EARLIER):  # the parent's disc is already covered by the parent
-            offsets = disc[((disc - _EARLIER[d]) ** 2).sum(axis=1) > reach**2]
-        if sel.size and offsets.size:
-            best[sel], where[sel] = _best_in_offsets(field, passable, cells[sel], offsets)
-    # Grouped min per cluster by (cost, row-major index): first row of each cluster.
-    order = np.lexsort((where, best, frontiers.cluster_of))
-    pick = order[np.r_[True, np.diff(frontiers.cluster_of[order]) != 0]]
-    pick = pick[np.isfinite(best[pick])]
-    clusters = frontiers.cluster_of[pick]
-    costs[clusters] = best[pick]
-    targets[clusters] = np.column_stack(np.divmod(where[pick], passable.shape[1]))
+    cells = frontiers.cells_rc.astype(np.int64)
+    width = int(cells[:, 1].max()) + 3
+    flat = (cells[:, 0] + 1) * width + cells[:, 1] + 1
+    order = np.argsort(flat, kind="stable")
+    group = np.empty(len(cells), dtype=np.int64)
+    group[order] = _parent_direction(flat[order], width)
+    offsets, starts = _offsets_by_group(reach)
+    origin = (int(field.origin[0]), int(field.origin[1]))
+    best, where = _cluster_targets(
+        cells, frontiers.cluster_of.astype(np.int64), group, offsets, starts,
+        field.window_costs, origin, passable, k,
+    )  # fmt: skip
+    found = np.isfinite(best)
+    costs[found] = best[found]
+    targets[found] = np.column_stack(np.divmod(where[found], passable.shape[1]))
     return targets, costs
