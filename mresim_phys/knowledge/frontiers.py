@@ -82,21 +82,25 @@ def _find_root(parent: IntArray, i: int) -> int:
 def label_cells(flat: IntArray, width: int) -> IntArray:
     """8-connected components of the cells ``flat`` (indices row * width + col of a grid
     ``width`` wide, ascending): one label per cell, 0.. in raster order of each component's
-    first cell. Union-find over the cells alone, each looking up its four neighbours that
-    come earlier in raster order by binary search: O(k log k) for k cells, not O(grid)."""
+    first cell. Union-find over the cells alone, each joined with its four neighbours
+    that come earlier in raster order: the left one is the cell before it, the three
+    above are found by a pointer that only moves forward through the row above. O(k)
+    for k cells, not O(grid)."""
     k = len(flat)
     parent = np.arange(k)
+    above = 0  # first cell that may still be above-left of a later cell
     for i in range(k):
         col = flat[i] % width
-        for n in range(4):  # left, up-left, up, up-right: the neighbours labelled before
-            if (n < 2 and col == 0) or (n == 3 and col == width - 1):
-                continue
-            target = flat[i] - (1, width + 1, width, width - 1)[n]
-            j = np.searchsorted(flat[:i], target)
-            if j < i and flat[j] == target:
-                a, b = _find_root(parent, i), _find_root(parent, j)
-                if a != b:
-                    parent[max(a, b)] = min(a, b)  # the earlier cell's root stays the root
+        if col > 0 and i > 0 and flat[i - 1] == flat[i] - 1:
+            _join(parent, i, i - 1)
+        lowest = flat[i] - width - (1 if col > 0 else 0)
+        highest = flat[i] - width + (1 if col < width - 1 else 0)
+        while above < i and flat[above] < lowest:
+            above += 1
+        j = above
+        while j < i and flat[j] <= highest:
+            _join(parent, i, j)
+            j += 1
     labels = np.empty(k, dtype=np.intp)
     index = np.full(k, -1, dtype=np.intp)
     count = 0
@@ -107,6 +111,14 @@ def label_cells(flat: IntArray, width: int) -> IntArray:
             count += 1
         labels[i] = index[root]
     return labels
+
+
+@njit(cache=True, nogil=True)
+def _join(parent: IntArray, a: int, b: int) -> None:
+    """Merge the sets of ``a`` and ``b``; the earlier cell's root stays the root."""
+    ra, rb = _find_root(parent, a), _find_root(parent, b)
+    if ra != rb:
+        parent[max(ra, rb)] = min(ra, rb)
 
 
 def find_frontiers(

@@ -44,13 +44,13 @@ from numpy.typing import NDArray
 
 from mresim_phys.planning.grid import (
     DIAGONAL,
-    MOVES,
     SQRT2,
     STRAIGHT,
     Box,
     Window,
     bbox,
-    diagonal_ok,
+    flat_moves,
+    passes_corner,
 )
 from mresim_phys.types import FREE, OCCUPIED, BeliefGrid, BoolGrid, FloatArray, IntArray
 
@@ -173,6 +173,7 @@ def _dijkstra(
     sizes = np.zeros(3, dtype=np.int64)
     dist[source], queued[source] = 0.0, 0
     ring[0, 0], sizes[0] = source, 1
+    step, beside_row, beside_col = flat_moves(wp)
     band = 0
     while sizes[band % 3] + sizes[(band + 1) % 3] > 0:
         slot = band % 3
@@ -181,12 +182,12 @@ def _dijkstra(
             here = dist[u]
             if int(here) != band:
                 continue  # moved to an earlier band, already expanded
-            for dr, dc in MOVES:
-                v = u + dr * wp + dc
+            for k in range(len(step)):
+                v = u + step[k]
                 if not pad[v]:
                     continue
-                if dr != 0 and dc != 0:
-                    if not diagonal_ok(pad, wp, u, dr, dc):
+                if beside_row[k] != 0:  # a diagonal move
+                    if not passes_corner(pad[u + beside_row[k]], pad[u + beside_col[k]]):
                         continue
                     cost = here + DIAGONAL
                 else:
