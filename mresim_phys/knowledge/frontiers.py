@@ -13,12 +13,14 @@ in one numba pass over the frontier cells.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import cv2
 import numpy as np
 from numba import njit
 
 from mresim_phys.planning.fields import DistanceField
+from mresim_phys.planning.grid import bbox
 from mresim_phys.types import FREE, UNKNOWN, BeliefGrid, BoolGrid, FloatArray, IntArray
 
 _KERNEL_3X3 = np.ones((3, 3), dtype=np.uint8)
@@ -137,12 +139,11 @@ def find_frontiers(
     Returns:
         The kept clusters, ordered by their first cell in raster order.
     """
-    free_rows = np.flatnonzero((belief == FREE).any(axis=1))
-    if free_rows.size == 0:
+    box = bbox(belief == FREE)
+    if box is None:
         return _empty_frontiers()
-    r0, r1 = max(free_rows[0] - 1, 0), min(free_rows[-1] + 2, belief.shape[0])
-    free_cols = np.flatnonzero((belief[r0:r1] == FREE).any(axis=0))
-    c0, c1 = max(free_cols[0] - 1, 0), min(free_cols[-1] + 2, belief.shape[1])
+    r0, r1 = max(box[0] - 1, 0), min(box[1] + 1, belief.shape[0])
+    c0, c1 = max(box[2] - 1, 0), min(box[3] + 1, belief.shape[1])
     frontier = frontier_mask(belief[r0:r1, c0:c1])
     if exclude is not None:
         frontier &= ~exclude[r0:r1, c0:c1]
@@ -231,6 +232,7 @@ def _cluster_targets(
     return best, where
 
 
+@lru_cache(maxsize=16)
 def _offsets_by_group(reach: float) -> tuple[IntArray, IntArray]:
     """The disc's offsets for each parent direction (the disc minus the parent's disc;
     the whole disc for a cell without an earlier neighbour), concatenated, and where each
@@ -238,8 +240,10 @@ def _offsets_by_group(reach: float) -> tuple[IntArray, IntArray]:
     disc = _disc(reach)
     pieces = [disc[((disc - step) ** 2).sum(axis=1) > reach**2] for step in _EARLIER]
     pieces.append(disc)
-    starts = np.cumsum([0] + [len(p) for p in pieces])
-    return np.concatenate(pieces).astype(np.int64), starts.astype(np.int64)
+    starts = np.cumsum([0] + [len(p) for p in pieces]).astype(np.int64)
+    offsets = np.concatenate(pieces).astype(np.int64)
+    offsets.flags.writeable = starts.flags.writeable = False  # shared by the cache
+    return offsets, starts
 
 
 def frontier_targets(
@@ -277,7 +281,7 @@ def frontier_targets(
     order = np.argsort(flat, kind="stable")
     group = np.empty(len(cells), dtype=np.int64)
     group[order] = _parent_direction(flat[order], width)
-    offsets, starts = _offsets_by_group(reach)
+    offsets, starts = _offsets_by_group(float(reach))
     origin = (int(field.origin[0]), int(field.origin[1]))
     best, where = _cluster_targets(
         cells, frontiers.cluster_of.astype(np.int64), group, offsets, starts,
