@@ -309,11 +309,14 @@ def greedy_auction(bidders: list[Bidder], sizes: FloatArray, search: PathSearch)
     A pair whose cost is only a lower bound is refined before it can win: the
     teammate's path search runs to 1.5 times the bound (at least ``MIN_SEARCH``
     cells more), so a teammate far away by path is ruled out by a small search.
+    Utilities are one (bidders x frontiers) matrix; a refinement recomputes its row.
     """
-    assigned: set[int] = set()
+    u = utility(sizes[None, :], np.array([b.costs for b in bidders]))
+    ranks = np.array([b.rank for b in bidders])
+    active = np.ones(len(bidders), dtype=bool)
     taken = np.zeros(len(sizes), dtype=bool)
-    while len(assigned) < len(bidders) and not taken.all():
-        who, which = best_pair(bidders, sizes, assigned, taken)
+    while active.any() and not taken.all():
+        who, which = best_pair(u, ranks, active, taken)
         if who < 0:
             break
         bidder = bidders[who]
@@ -322,28 +325,30 @@ def greedy_auction(bidders: list[Bidder], sizes: FloatArray, search: PathSearch)
             limit = max(SEARCH_GROWTH * bound, bound + MIN_SEARCH)
             limit = np.inf if limit > MAX_BOUNDED_SEARCH else limit
             bidder.refine(search(bidder, limit), limit)
+            u[who] = utility(sizes, bidder.costs)
             continue
         if who == 0:
             return which
-        assigned.add(who)
+        active[who] = False
         taken[which] = True
     return int(np.argmax(utility(sizes, bidders[0].costs)))
 
 
 def best_pair(
-    bidders: list[Bidder], sizes: FloatArray, assigned: set[int], taken: BoolArray
+    u: FloatArray, ranks: IntArray, active: BoolArray, taken: BoolArray
 ) -> tuple[int, int]:
-    """The (bidder, frontier) pair with the highest utility; (-1, -1) if none is left.
+    """The (bidder, frontier) pair of highest utility in ``u`` among active bidders and
+    frontiers not taken; (-1, -1) if none is left.
 
-    Equal utilities go to the bidder of lower rank, so robots that see the same bids
-    (robots started on one spot) agree on who wins instead of each taking the tie.
+    Each bidder bids for its best frontier (the first of equal ones); equal bids go
+    to the bidder of lower rank (then the earlier bidder), so robots that see the same
+    bids (robots started on one spot) agree on who wins instead of each taking the tie.
     """
-    best, who, which = (-np.inf, 0), -1, -1
-    for i, bidder in enumerate(bidders):
-        if i in assigned:
-            continue
-        u = np.where(taken, -np.inf, utility(sizes, bidder.costs))
-        j = int(np.argmax(u))
-        if u[j] > -np.inf and (u[j], -bidder.rank) > best:
-            best, who, which = (u[j], -bidder.rank), i, j
-    return who, which
+    open_ = np.where(active[:, None] & ~taken[None, :], u, -np.inf)
+    which = np.argmax(open_, axis=1)
+    bids = open_[np.arange(len(u)), which]
+    if not (bids > -np.inf).any():
+        return -1, -1
+    best = bids == bids.max()
+    who = int(np.flatnonzero(best & (ranks == ranks[best].min()))[0])
+    return who, int(which[who])
