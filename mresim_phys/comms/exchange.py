@@ -24,7 +24,7 @@ Without it, each agent merges what its direct neighbours knew before the phase.
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import numpy as np
 from scipy.sparse import csr_matrix
@@ -104,7 +104,7 @@ def learn_records(
     for record in records:
         held = receiver.teammates.get(record.name)
         if record.name != receiver.name and (held is None or record.step > held.step):
-            receiver.teammates[record.name] = replace(record, learned=step)
+            receiver.teammates[record.name] = record.learned_at(step)
             learned.append(record)
     return learned
 

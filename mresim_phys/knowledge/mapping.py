@@ -342,8 +342,20 @@ class Coverage:
         self._pending.append((belief, update.row0, update.row0 + h, update.col0, update.col0 + w))
 
     def settle(self) -> None:
-        """Count the reachable cells now FREE in the touched windows, not counted before."""
+        """Count the reachable cells now FREE in the touched windows, not counted before.
+
+        The windows of one belief are examined as their union box (a robot's scans of
+        one step overlap almost entirely): a cell of the box outside every window did
+        not change in that belief by a scan, and a cell a merge made FREE was counted
+        when the robot that scanned it touched it, so the count is the same."""
+        boxes: dict[int, tuple[BeliefGrid, int, int, int, int]] = {}
         for belief, r0, r1, c0, c1 in self._pending:
+            held = boxes.get(id(belief))
+            if held is not None:
+                r0, r1 = min(r0, held[1]), max(r1, held[2])
+                c0, c1 = min(c0, held[3]), max(c1, held[4])
+            boxes[id(belief)] = (belief, r0, r1, c0, c1)
+        for belief, r0, r1, c0, c1 in boxes.values():
             self.add_cells(belief[r0:r1, c0:c1] == FREE, r0, c0)
         self._pending.clear()
 

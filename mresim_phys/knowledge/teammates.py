@@ -83,6 +83,15 @@ class TeammateInfo:
         extra = self.payload.nbytes() if self.payload is not None else 0
         return RECORD_BYTES + extra
 
+    def learned_at(self, step: int) -> TeammateInfo:
+        """This record as received at ``step``: ``dataclasses.replace(self, learned=step)``
+        without re-running ``__init__`` (0.4 vs 3 us; every exchange copies one record per
+        pair of linked agents and teammate, n^2 a step)."""
+        copy = object.__new__(TeammateInfo)
+        copy.__dict__.update(self.__dict__)
+        copy.__dict__["learned"] = step
+        return copy
+
 
 def presumed_lost(teammates: dict[str, TeammateInfo], step: int, silence: int) -> frozenset[str]:
     """Teammates whose newest record is older than ``silence`` steps (the base never counts).
