@@ -33,6 +33,8 @@ DOOR = 24  # cells: width of a doorway between neighbouring tiles
 def large_library(path: Path) -> Path:
     """Write the 2000x2000 tiled library to ``path`` and return it."""
     tile = cv2.imread(str(PRESETS["original"].map_path), cv2.IMREAD_GRAYSCALE)
+    if tile is None:
+        raise SystemExit(f"cannot read {PRESETS['original'].map_path}")
     reps = (-(-SIDE // TILE_ROWS), -(-SIDE // TILE_COLS))
     image = np.tile(tile, reps)[:SIDE, :SIDE].copy()
     for row in range(TILE_ROWS, SIDE, TILE_ROWS):  # doorways through horizontal seams
