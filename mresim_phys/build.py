@@ -14,7 +14,7 @@ picklable Scenario alone. ``sim`` reaches the input side only through here
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
@@ -41,9 +41,14 @@ from mresim_phys.scenario.schema import (
 )
 from mresim_phys.strategies import STRATEGIES
 from mresim_phys.types import FloatArray
-from mresim_phys.world.events import Event, make_event
+from mresim_phys.world.debris import RandomDebris
+from mresim_phys.world.doors import Door
+from mresim_phys.world.elements import build_elements
+from mresim_phys.world.events import Collapse, DoorEventParams, Event, make_event
+from mresim_phys.world.obstacles import MovingObstacle
 from mresim_phys.world.reach import Reachable
 from mresim_phys.world.sensing import Laser
+from mresim_phys.world.shapes import region_cells
 from mresim_phys.world.space import World
 
 __all__ = ["RunRules", "Scenario", "Setup", "build_setup", "load_scenario", "region_probe"]
@@ -267,6 +272,7 @@ class Setup:
     resolution: float | None  # metres per cell, for reports
     team_order: tuple[str, ...] = ()  # tie-break order of the robots in auctions
     free_area: int = 0  # free cells of the map (the original's total area), known to robots
+    elements: list[MovingObstacle | Door | RandomDebris] = field(default_factory=list)
 
     def sensing_streams(self) -> list[np.random.Generator]:
         """Each robot's laser-noise stream, in robot order."""
@@ -300,6 +306,23 @@ def check_event_boxes(scenario: Scenario, world: World) -> None:
                 )
 
 
+def check_world_events(scenario: Scenario, events: list[Event], world: World) -> None:
+    """Doors named by close / open events must exist; collapse regions must lie on the map
+    (their cells are fixed here, once)."""
+    doors = {d.name for d in scenario.doors}
+    for i, (params, event) in enumerate(zip(scenario.events, events, strict=True)):
+        if isinstance(params, DoorEventParams) and params.door() not in doors:
+            known = ", ".join(sorted(doors)) or "none: add a 'doors' list"
+            raise ScenarioError(
+                f"events[{i}]: there is no door called {params.door()!r} (doors: {known})."
+            )
+        if isinstance(event, Collapse):
+            try:
+                event.cells = region_cells(event.params.collapse, world.shape)
+            except ValueError as exc:
+                raise ScenarioError(f"events[{i}].collapse: {exc}") from None
+
+
 def run_rules(scenario: Scenario) -> RunRules:
     """The scenario's cycle and stop rules as plain values."""
     sim, stop = scenario.simulation, scenario.stop
@@ -331,6 +354,11 @@ def build_setup(scenario: Scenario) -> Setup:
     starts = [r.position for r in robots]
     events = [make_event(e) for e in scenario.events]
     check_event_boxes(scenario, world)
+    check_world_events(scenario, events, world)
+    bodies = np.array([(*r.position, r.radius) for r in robots], dtype=np.float64)
+    elements = build_elements(
+        scenario.obstacles, scenario.doors, scenario.random_debris, world, streams, bodies
+    )
     reachable = Reachable(truth.occupied, starts)
     return Setup(
         truth=truth,
@@ -347,4 +375,5 @@ def build_setup(scenario: Scenario) -> Setup:
         resolution=scenario.map.resolution or truth.resolution,
         team_order=team_order(scenario.robots, streams, vary),
         free_area=int(np.count_nonzero(~truth.occupied)),
+        elements=elements,
     )

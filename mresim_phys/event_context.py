@@ -9,6 +9,7 @@ each event draws only from its own named random stream.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 
 import numpy as np
@@ -17,6 +18,10 @@ from mresim_phys.agents import Agent, Robot
 from mresim_phys.comms.network import Blackout, Network
 from mresim_phys.knowledge.mapping import Coverage
 from mresim_phys.types import BoolGrid
+from mresim_phys.world.changes import Change, circles_cover
+from mresim_phys.world.debris import Crush
+from mresim_phys.world.doors import Door
+from mresim_phys.world.elements import WorldElement
 from mresim_phys.world.events import Box, Channels, Event, RobotPart
 from mresim_phys.world.reach import Reachable, follow_changes
 from mresim_phys.world.space import World
@@ -39,21 +44,27 @@ class RunEventContext:
         coverage: Coverage,
         reachable: Reachable,
         streams: Sequence[np.random.Generator],
+        elements: Sequence[WorldElement] = (),
     ) -> None:
         self.agents = {a.name: a for a in agents}
         self.network, self.world, self.coverage = network, world, coverage
         self.reachable = reachable
         self.streams = list(streams)
+        self.elements = list(elements)
+        self.doors = {e.params.name: e for e in self.elements if isinstance(e, Door)}
         self.lines: list[str] = []
         self._step = 0
         self._current = 0
 
     def run(self, events: Sequence[Event], step: int) -> list[str]:
-        """Apply every event (in scenario order) at ``step``; return the lines they logged."""
+        """Apply every event (in scenario order), then move every world element (moving
+        obstacles, doors, debris; in scenario order) at ``step``; return the lines logged."""
         self._step, self.lines = step, []
         for index, event in enumerate(events):
             self._current = index
             event.apply(self)
+        for element in self.elements:
+            element.apply(self)
         return self.lines
 
     @property
@@ -84,6 +95,77 @@ class RunEventContext:
         if change:
             follow_changes(self.coverage, self.reachable, self.world.occupied, [change])
 
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(rows, cols) of the map."""
+        return self.world.shape
+
+    def _follow(self, change: Change) -> None:
+        """The explored metric's reachable set follows a change of the truth."""
+        if change:
+            follow_changes(self.coverage, self.reachable, self.world.occupied, [change])
+
+    def change_cells(self, cells: BoolGrid, occupied: bool, crush: Crush) -> list[str]:
+        """Make the True cells of ``cells`` rubble or free; robots in the way are spared
+        (their cells stay free) or, with ``crush: fail``, buried and failed."""
+        robots = [a for a in self.agents.values() if isinstance(a, Robot)]
+        under = []
+        if occupied:
+            rows, cols = np.nonzero(cells)
+            centres = np.array([r.position for r in robots], dtype=np.float64).reshape(-1, 2)
+            radii = np.array([r.radius for r in robots], dtype=np.float64)
+            hit = circles_cover(centres, radii, np.column_stack((rows, cols)))
+            under = [r for r, h in zip(robots, hit, strict=True) if h]
+            if crush == "avoid" and under:
+                cells = cells & ~robot_cells(under, cells.shape)
+        self._follow(self.world.set_region(cells, occupied))
+        if crush == "fail":
+            for robot in under:
+                robot.fail("robot")
+        return [r.name for r in under]
+
+    def set_door(self, name: str, closed: bool) -> None:
+        """Ask door ``name`` to close or open (it closes once nothing is in its way)."""
+        self.doors[name].scheduled = closed
+
+    def place_obstacle(
+        self,
+        name: str,
+        footprint: BoolGrid,
+        at: tuple[int, int],
+        blocks_radio: bool = True,
+        over_walls: bool = False,
+    ) -> bool:
+        """Put or move obstacle ``name`` (False, and nothing changes, if it does not fit)."""
+        robots = [a for a in self.agents.values() if isinstance(a, Robot)]
+        bodies = np.array([(*r.position, r.radius) for r in robots], dtype=np.float64)
+        if not self.world.fits(footprint, at, bodies.reshape(-1, 3), name, over_walls):
+            return False
+        if name in self.world.movables:
+            self._follow(self.world.move_movable(name, at, footprint))
+        else:
+            self._follow(self.world.add_movable(name, footprint, at, blocks_radio))
+        return True
+
+    def remove_obstacle(self, name: str) -> None:
+        """Take obstacle ``name`` off the map."""
+        self._follow(self.world.remove_movable(name))
+
     def log(self, line: str) -> None:
         """Note what happened this step."""
         self.lines.append(line)
+
+
+def robot_cells(robots: Sequence[Robot], shape: tuple[int, int]) -> BoolGrid:
+    """A map-sized mask of the cells each robot's body overlaps."""
+    out = np.zeros(shape, dtype=bool)
+    for robot in robots:
+        x, y = robot.position
+        reach = math.ceil(robot.radius) + 1
+        r0, c0 = max(math.floor(y) - reach, 0), max(math.floor(x) - reach, 0)
+        rows, cols = np.mgrid[r0 : min(math.floor(y) + reach + 1, shape[0]),
+                              c0 : min(math.floor(x) + reach + 1, shape[1])]  # fmt: skip
+        dx = np.maximum(np.maximum(cols - x, 0.0), x - (cols + 1))
+        dy = np.maximum(np.maximum(rows - y, 0.0), y - (rows + 1))
+        out[rows, cols] |= dx * dx + dy * dy < robot.radius**2
+    return out

@@ -82,8 +82,9 @@ class Simulation:
         self.stall = StallWatch(s.rules.stalled_for, s.rules.stalled_gain)
         self._sensing_rngs = s.sensing_streams()
         self._events = RunEventContext(
-            self.agents, s.network, s.world, s.coverage, s.reachable, s.event_streams()
-        )
+            self.agents, s.network, s.world, s.coverage, s.reachable, s.event_streams(),
+            s.elements,
+        )  # fmt: skip
         self.move_rules = MoveRules(s.rules.scan_every_point, self.robot_filter)
         self.apply_events()
         for robot in self.robots:

@@ -20,6 +20,7 @@ from mresim_phys import COMM_MODELS, STRATEGIES  # noqa: E402
 from mresim_phys.planning import PLANNERS  # noqa: E402
 from mresim_phys.scenario import schema  # noqa: E402
 from mresim_phys.strict import MAX_FLOAT, MAX_INT, UNIT_BOUNDS, bounds_text  # noqa: E402
+from mresim_phys.world import debris, doors, obstacles, shapes  # noqa: E402
 from mresim_phys.world.events import EVENTS  # noqa: E402
 
 SECTIONS: list[tuple[str, type[BaseModel]]] = [
@@ -35,13 +36,50 @@ SECTIONS: list[tuple[str, type[BaseModel]]] = [
     ("simulation", schema.SimulationSpec),
     ("simulation.start_jitter", schema.StartJitterSpec),
     ("render", schema.RenderSpec),
+    ("obstacles[i]", obstacles.ObstacleParams),
+    ("obstacles[i].shape: one of", shapes.CircleShape),
+    ("", shapes.BoxShape),
+    ("", shapes.PolygonShape),
+    ("obstacles[i].motion: one of", obstacles.WaypointsMotion),
+    ("", obstacles.RandomWalkMotion),
+    ("", obstacles.StillMotion),
+    ("doors[i]", doors.DoorParams),
+    ("random_debris", debris.RandomDebrisParams),
+    ("regions (collapse, random_debris.region): one of", shapes.BoxRegion),
+    ("", shapes.CircleRegion),
+    ("", shapes.PolygonRegion),
+    ("", shapes.MaskRegion),
 ]
+NOTES = {
+    "obstacles[i]": (
+        "A moving obstacle's body is the cells whose centre lies inside its shape, standing"
+        " where its centre is; it moves in the events phase and never overlaps a wall,"
+        " another obstacle or a robot: when its next place is taken it waits that step"
+        " (a random walker then draws a new heading). Random walks draw from the stream"
+        " `obstacle/<name>` of the seed."
+    ),
+    "doors[i]": (
+        "A closed door is a wall for rays, motion, line of sight, path loss and the truth"
+        " grid: the cells its segment passes through (4-connected) and those within half"
+        " its thickness. It changes on `close` / `open` events or cycles (`period`,"
+        " `open_for`, from `offset`), and never closes on a robot: it waits, open, until"
+        " its doorway is clear."
+    ),
+    "random_debris": (
+        "Each step from `after` to `until`, a square piece falls with probability `rate`"
+        " (draws from the stream `debris` of the seed), centred on a random cell of"
+        " `region`. Rubble never lands on a robot: with `crush: avoid` its cells stay free;"
+        " with `crush: fail` the robot is buried and fails."
+    ),
+}
 
 
 def type_name(annotation: Any) -> str:
     """A short readable name of a field's type."""
     text = getattr(annotation, "__name__", None) or str(annotation)
     text = text.replace("typing.", "").replace("mresim_phys.scenario.schema.", "")
+    for module in ("shapes", "obstacles", "doors", "debris"):
+        text = text.replace(f"mresim_phys.world.{module}.", "")
     return text.replace(" | ", " or ")
 
 
@@ -86,7 +124,9 @@ def render() -> str:
         "",
     ]
     for title, model in SECTIONS:
-        lines += [f"## {title}", "", *table(model, own_only=model is schema.RobotSpec), ""]
+        head = [f"## {title}", ""] if title else []
+        note = [NOTES[title], ""] if title in NOTES else []
+        lines += [*head, *note, *table(model, own_only=model is schema.RobotSpec), ""]
     lines += [
         "## events[i]",
         "",

@@ -44,7 +44,7 @@ class LineOfSightComm(Plugin):
     def links(self, radios: Radios, world: World) -> np.ndarray:
         """Disk pairs whose sight line is clear of walls."""
         rows, cols = candidate_pairs(radios.positions, disk_reach(radios))
-        walls = world.query_filter(None, robots_block=False)
+        walls = world.radio_filter()  # walls and the movable obstacles that block radio
         points = [tuple(p) for p in radios.positions.tolist()]
         clear = [
             world.first_hit(points[i], points[j], self.params.clearance, walls) is None

@@ -103,7 +103,7 @@ class PathLossComm(Plugin):
         reach = self.free_reach(radios)
         rows, cols = candidate_pairs(radios.positions, np.minimum.outer(reach, reach))
         positions = radios.positions
-        runs, inside = walls_between(world.occupied, positions[rows], positions[cols])
+        runs, inside = walls_between(world.radio_occupied, positions[rows], positions[cols])
         distance = pair_distances(positions)[rows, cols]
         loss = self.attenuation(runs.astype(float), inside)
         weaker = np.minimum(
@@ -118,7 +118,7 @@ class PathLossComm(Plugin):
         per_cell = p.walls == "thickness"
         x, y = radios.positions[index]
         return reach_along_rays(
-            world.occupied,
+            world.radio_occupied,
             float(x),
             float(y),
             np.ascontiguousarray(angles, dtype=np.float64),

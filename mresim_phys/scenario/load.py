@@ -31,7 +31,8 @@ from mresim_phys.scenario.schema import (
     refresh_event_union,
 )
 from mresim_phys.strategies import STRATEGIES
-from mresim_phys.world.events import EVENTS
+from mresim_phys.world.events import EVENTS, CollapseParams
+from mresim_phys.world.shapes import MaskRegion, Region
 
 RobotT = TypeVar("RobotT", bound=RobotParams)
 
@@ -45,7 +46,8 @@ def load_scenario(path: str | Path, **overrides: Any) -> Scenario:
     source = Path(path)
     data = apply_overrides(read_yaml_mapping(source), overrides, str(source))
     scenario = validate_scenario(data, str(source))
-    return resolve_map_path(scenario, source.resolve().parent, str(source))
+    scenario = resolve_map_path(scenario, source.resolve().parent, str(source))
+    return resolve_mask_paths(scenario, source.resolve().parent)
 
 
 def validate_scenario(data: dict[str, Any], source: str = "<scenario>") -> Scenario:
@@ -165,6 +167,28 @@ def resolve_map_path(scenario: Scenario, folder: Path, source: str = "<scenario>
             " spelling; a relative path is relative to the scenario file's folder."
         )
     return scenario.model_copy(update={"map": scenario.map.model_copy(update={kind: str(path)})})
+
+
+def absolute_mask(region: Region | None, folder: Path) -> Region | None:
+    """``region`` with a mask image's path made absolute (relative to ``folder``)."""
+    if not isinstance(region, MaskRegion):
+        return region
+    return region.model_copy(update={"mask": (folder / region.mask.expanduser()).resolve()})
+
+
+def resolve_mask_paths(scenario: Scenario, folder: Path) -> Scenario:
+    """The scenario with the mask images of collapse events and random debris made
+    absolute (relative paths are to the YAML file), so the run can be built anywhere."""
+    events = [
+        e.model_copy(update={"collapse": absolute_mask(e.collapse, folder)})
+        if isinstance(e, CollapseParams)
+        else e
+        for e in scenario.events
+    ]
+    debris = scenario.random_debris
+    if debris is not None:
+        debris = debris.model_copy(update={"region": absolute_mask(debris.region, folder)})
+    return scenario.model_copy(update={"events": events, "random_debris": debris})
 
 
 def describe_errors(

@@ -22,7 +22,10 @@ from pydantic import (
 )
 
 from mresim_phys.strict import Strict
+from mresim_phys.world.debris import RandomDebrisParams
+from mresim_phys.world.doors import DoorParams
 from mresim_phys.world.events import EVENTS, EventParams
+from mresim_phys.world.obstacles import ObstacleParams
 
 Point = tuple[float, float]
 MAX_RANGE = 100_000.0  # cells: sensor and radio ranges (a 1000x map diagonal is far less)
@@ -338,6 +341,17 @@ class Scenario(Strict):
     events: EventList = Field(
         default_factory=list,
         description="Scheduled events (robot failures, blackouts, ...): see 'events' below.",
+    )
+    obstacles: list[ObstacleParams] = Field(
+        default_factory=list,
+        description="Moving obstacles (people, carts): shape, motion, life span; see below.",
+    )
+    doors: list[DoorParams] = Field(
+        default_factory=list,
+        description="Doors that close and open (by close / open events or by a cycle).",
+    )
+    random_debris: RandomDebrisParams | None = Field(
+        None, description="Rubble falling at random steps and places (null: none)."
     )
 
     @model_validator(mode="before")

@@ -4,7 +4,8 @@ The truth grid is ``static | movable footprints``: the static layer holds walls 
 rubble (changed by ``World.set_cells``), and every movable obstacle adds its
 footprint, a set of whole cells at a whole-cell offset, to a cover count (so
 footprints may overlap each other and the walls). :class:`Layers` keeps both and a
-padded *kinds* grid (0 free, 1 static wall, 2 cell covered only by movables; see
+padded *kinds* grid (0 free, 1 static wall, 2 cell covered only by movables, 3 only by
+movables radio passes through; see
 ``maps.edge_segments``), and :meth:`Layers.refresh` folds a window of them into the
 truth grid in place, reporting which cells' truth flipped (a :class:`Patch`) and
 which cells' kind changed (the window whose wall segments must be rebuilt).
@@ -141,6 +142,7 @@ class Movable:
     footprint: BoolGrid  # read-only
     row: int
     col: int
+    blocks_radio: bool = True  # False: line of sight and path loss pass through it
 
     @classmethod
     def make(
@@ -149,6 +151,7 @@ class Movable:
         footprint: BoolGrid | tuple[int, int],
         at: tuple[int, int],
         shape: tuple[int, int],
+        blocks_radio: bool = True,
     ) -> Movable:
         """A checked movable: ``footprint`` is a bool mask or (height, width) of a solid box."""
         cells = np.array(footprint, copy=True)
@@ -161,7 +164,7 @@ class Movable:
         cells.flags.writeable = False
         row, col = int(at[0]), int(at[1])
         check_box((row, row + cells.shape[0], col, col + cells.shape[1]), shape)
-        return cls(name, cells, row, col)
+        return cls(name, cells, row, col, blocks_radio)
 
     @property
     def box(self) -> Box:
@@ -177,7 +180,9 @@ class Layers:
         self.occupied = occupied  # the world's truth grid, written in place
         self.static = occupied.copy()
         self.cover = np.zeros(occupied.shape, dtype=np.uint16)
+        self.quiet = np.zeros(occupied.shape, dtype=np.uint16)  # cover radio passes through
         self.kinds: KindGrid = padded_kinds(occupied)
+        self.radio: BoolGrid | None = None  # what radio meets, once a quiet movable exists
 
     def set_static(self, box: Box, cells: BoolGrid) -> None:
         """Walls (True) or free space (False) in the static layer of ``box``."""
@@ -187,11 +192,36 @@ class Layers:
     def add_cover(self, movable: Movable, sign: int) -> None:
         """Add (sign +1) or take away (-1) a movable's footprint from the cover count."""
         row0, row1, col0, col1 = movable.box
-        window = self.cover[row0:row1, col0:col1]
-        if sign > 0:
-            window += movable.footprint
-        else:
-            window -= movable.footprint
+        windows = [self.cover[row0:row1, col0:col1]]
+        if not movable.blocks_radio:
+            windows.append(self.quiet[row0:row1, col0:col1])
+            if self.radio is None:
+                self.radio = self.occupied.copy()
+        for window in windows:
+            if sign > 0:
+                window += movable.footprint
+            else:
+                window -= movable.footprint
+
+    def clear(
+        self, footprint: BoolGrid, at: tuple[int, int], own: Movable | None, over_walls: bool
+    ) -> bool:
+        """Whether ``footprint`` at top-left cell ``at`` lies on the map and covers no cell
+        of another movable (``own``'s cells do not count) nor, unless ``over_walls``, a
+        static wall."""
+        row, col = at
+        h, w = footprint.shape
+        rows, cols = self.occupied.shape
+        if row < 0 or col < 0 or row + h > rows or col + w > cols:
+            return False
+        window = (slice(row, row + h), slice(col, col + w))
+        cover = self.cover[window].astype(np.int32)
+        if own is not None:
+            cover -= footprint_in(own, (row, row + h, col, col + w))
+        blocked = cover > 0
+        if not over_walls:
+            blocked |= self.static[window]
+        return not (blocked & footprint).any()
 
     def refresh(self, box: Box) -> tuple[Box | None, Patch | None]:
         """Fold the layers of ``box`` into the kinds and truth grids.
@@ -201,8 +231,11 @@ class Layers:
         """
         row0, row1, col0, col1 = box
         static = self.static[row0:row1, col0:col1]
-        covered = self.cover[row0:row1, col0:col1] > 0
-        kinds = np.where(static, 1, np.where(covered, 2, 0)).astype(np.int8)
+        cover, quiet = self.cover[row0:row1, col0:col1], self.quiet[row0:row1, col0:col1]
+        loud = cover > quiet  # covered by a movable that blocks radio
+        kinds = np.where(static, 1, np.where(loud, 2, np.where(cover > 0, 3, 0))).astype(np.int8)
+        if self.radio is not None:
+            self.radio[row0:row1, col0:col1] = static | loud
         old = self.kinds[row0 + 1 : row1 + 1, col0 + 1 : col1 + 1]
         flipped = (kinds > 0) != (old > 0)
         rebuild = bounding_box(kinds != old, row0, col0)
@@ -215,6 +248,36 @@ class Layers:
         local = (slice(r0 - row0, r1 - row0), slice(c0 - col0, c1 - col0))
         patch = Patch(r0, c0, flipped[local], self.occupied[r0:r1, c0:c1].copy())
         return rebuild, patch
+
+
+def footprint_in(movable: Movable, box: Box) -> IntArray:
+    """``movable``'s footprint cut to ``box`` (1 on the cells it covers there)."""
+    row0, row1, col0, col1 = box
+    out = np.zeros((row1 - row0, col1 - col0), dtype=np.intp)
+    r0, r1, c0, c1 = movable.box
+    a0, a1, b0, b1 = max(r0, row0), min(r1, row1), max(c0, col0), min(c1, col1)
+    if a0 < a1 and b0 < b1:
+        out[a0 - row0 : a1 - row0, b0 - col0 : b1 - col0] = movable.footprint[
+            a0 - r0 : a1 - r0, b0 - c0 : b1 - c0
+        ]
+    return out
+
+
+def circles_cover(centres: FloatArray, radii: FloatArray, cells: IntArray) -> BoolGrid:
+    """For each circle, whether it overlaps (not just touches) one of the (row, col) ``cells``."""
+    if len(cells) == 0 or len(centres) == 0:
+        return np.zeros(len(centres), dtype=bool)
+    row0, col0 = cells.min(axis=0)
+    row1, col1 = cells.max(axis=0) + 1
+    x, y, r = centres[:, 0], centres[:, 1], radii
+    near = np.flatnonzero((x + r > col0) & (x - r < col1) & (y + r > row0) & (y - r < row1))
+    out = np.zeros(len(centres), dtype=bool)
+    if len(near):
+        x, y, r = x[near, None], y[near, None], r[near, None]
+        dx = np.maximum(np.maximum(cells[:, 1] - x, 0.0), x - (cells[:, 1] + 1))
+        dy = np.maximum(np.maximum(cells[:, 0] - y, 0.0), y - (cells[:, 0] + 1))
+        out[near] = (dx * dx + dy * dy < r * r).any(axis=1)
+    return out
 
 
 def circles_on_cells(centres: FloatArray, radii: FloatArray, patch: Patch) -> IntArray:

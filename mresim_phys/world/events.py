@@ -22,6 +22,8 @@ from pydantic import Field, model_validator
 from mresim_phys.plugin import Plugin, PluginParams
 from mresim_phys.registry import Registry
 from mresim_phys.types import BoolGrid
+from mresim_phys.world.debris import Crush
+from mresim_phys.world.shapes import BoxRegion, Region
 
 RobotPart = Literal["robot", "drive", "sensor", "radio"]
 Channels = Literal["main", "control", "both"]
@@ -72,6 +74,16 @@ class EventContext(Protocol):
 
     def change_world(self, box: Box, occupied: BoolGrid | bool) -> None:
         """Set the true occupancy of ``box`` (walls appear or clear; rays and radio follow)."""
+        ...
+
+    def change_cells(self, cells: BoolGrid, occupied: bool, crush: Crush) -> list[str]:
+        """Make the True cells of the map-sized mask ``cells`` walls or free; rubble never
+        lands on a robot (``crush: avoid``: its cells stay free) unless ``crush: fail``
+        (the robot is buried and fails). Returns the robots spared or buried."""
+        ...
+
+    def set_door(self, name: str, closed: bool) -> None:
+        """Ask door ``name`` to close or open (it closes once nothing is in its way)."""
         ...
 
     def log(self, line: str) -> None:
@@ -213,6 +225,114 @@ class Cells(Plugin):
             context.change_world(p.boxes()[0][1], p.occupied)
             what = "walls" if p.occupied else "free"
             context.log(f"cells {list(p.cells)} {what}")
+
+
+class CollapseParams(EventParams):
+    """At ``step``, a region turns to rubble (or a wall gives way: ``becomes: free``)."""
+
+    collapse: Region = Field(
+        description="{box: [x0, y0, x1, y1]}, {circle: [x, y, r]}, {polygon: [[x, y], ...]}"
+        " or {mask: file.png} (dark pixels; the map's size; relative to the scenario file)."
+    )
+    becomes: Literal["obstacle", "free"] = Field("obstacle", description="What the region becomes.")
+    crush: Crush = Field(
+        "avoid", description="avoid: rubble lands around robots; fail: robots under it fail."
+    )
+
+    def boxes(self) -> list[tuple[str, Box]]:
+        """A box region, as (row0, row1, col0, col1)."""
+        if isinstance(self.collapse, BoxRegion):
+            x0, y0, x1, y1 = self.collapse.box
+            return [("collapse", (y0, y1, x0, x1))]
+        return []
+
+
+@EVENTS.register
+class Collapse(Plugin):
+    """Part of the building collapses (or opens up) at a step."""
+
+    name = "collapse"
+    Params: ClassVar[type[EventParams]] = CollapseParams
+    params: CollapseParams
+
+    def __init__(self, params: CollapseParams) -> None:
+        self.params = params
+        self.cells: BoolGrid | None = None  # the region on the map, set when the run is built
+
+    def apply(self, context: EventContext) -> None:
+        """Change the region at the event's step."""
+        p = self.params
+        if context.step != p.step or self.cells is None:
+            return
+        occupied = p.becomes == "obstacle"
+        robots = context.change_cells(self.cells, occupied, p.crush)
+        region = p.collapse.model_dump(mode="json")
+        line = f"collapse {region} {'rubble' if occupied else 'free'}"
+        if robots and occupied:
+            line += f" ({'buries' if p.crush == 'fail' else 'spares'} {', '.join(robots)})"
+        context.log(line)
+
+
+class DoorEventParams(EventParams):
+    """Base of the events that close or open a door."""
+
+    def door(self) -> str:
+        """The door's name."""
+        raise NotImplementedError
+
+
+class CloseParams(DoorEventParams):
+    """At ``step``, door ``close`` closes (as soon as nothing is in its way)."""
+
+    close: str = Field(description="Name of a door of the scenario's doors list.")
+
+    def door(self) -> str:
+        """The door's name."""
+        return self.close
+
+
+class OpenParams(DoorEventParams):
+    """At ``step``, door ``open`` opens."""
+
+    open: str = Field(description="Name of a door of the scenario's doors list.")
+
+    def door(self) -> str:
+        """The door's name."""
+        return self.open
+
+
+@EVENTS.register
+class Close(Plugin):
+    """A door closes."""
+
+    name = "close"
+    Params: ClassVar[type[EventParams]] = CloseParams
+    params: CloseParams
+
+    def __init__(self, params: CloseParams) -> None:
+        self.params = params
+
+    def apply(self, context: EventContext) -> None:
+        """Ask the door to close at the event's step."""
+        if context.step == self.params.step:
+            context.set_door(self.params.close, True)
+
+
+@EVENTS.register
+class Open(Plugin):
+    """A door opens."""
+
+    name = "open"
+    Params: ClassVar[type[EventParams]] = OpenParams
+    params: OpenParams
+
+    def __init__(self, params: OpenParams) -> None:
+        self.params = params
+
+    def apply(self, context: EventContext) -> None:
+        """Ask the door to open at the event's step."""
+        if context.step == self.params.step:
+            context.set_door(self.params.open, False)
 
 
 def make_event(params: EventParams) -> Event:

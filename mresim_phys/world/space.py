@@ -51,14 +51,17 @@ from mresim_phys.world.changes import (
     Movable,
     cells_of,
     check_box,
+    circles_cover,
     circles_on_cells,
     join_boxes,
 )
 from mresim_phys.world.maps import wall_segments
 from mresim_phys.world.raycast import cast_fan
 from mresim_phys.world.wallset import (
+    MOVABLE_CATEGORIES,
     MOVABLE_CATEGORY,
     OBSTACLE_CATEGORIES,
+    RADIO_CATEGORIES,
     ROBOT_CATEGORY,
     SHUFFLE_SEED,
     WALL_CATEGORY,
@@ -168,14 +171,30 @@ class World:
         self._truth_layers().set_static(box, cells_of(occupied, box))
         return self._commit([box])
 
+    def set_region(self, cells: BoolGrid, occupied: bool) -> Change:
+        """Make the True cells of the map-sized mask ``cells`` walls (rubble) or free,
+        leaving the other cells of their bounding box as they are."""
+        rows, cols = np.flatnonzero(cells.any(axis=1)), np.flatnonzero(cells.any(axis=0))
+        if len(rows) == 0:
+            return Change(self.version)
+        box = (int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1)
+        window = (slice(box[0], box[1]), slice(box[2], box[3]))
+        static = self._truth_layers().static[window]
+        return self.set_cells(box, static | cells[window] if occupied else static & ~cells[window])
+
     def add_movable(
-        self, name: str, footprint: BoolGrid | tuple[int, int], at: tuple[int, int]
+        self,
+        name: str,
+        footprint: BoolGrid | tuple[int, int],
+        at: tuple[int, int],
+        blocks_radio: bool = True,
     ) -> Change:
         """Put a movable obstacle called ``name`` on the map: ``footprint`` is a bool mask
-        or (height, width) of a solid box, ``at`` the (row, col) of its top-left cell."""
+        or (height, width) of a solid box, ``at`` the (row, col) of its top-left cell;
+        with ``blocks_radio`` false, line of sight and path loss pass through it."""
         if name in self._movables:
             raise ValueError(f"a movable obstacle called {name!r} is already on the map")
-        movable = Movable.make(name, footprint, at, self.shape)
+        movable = Movable.make(name, footprint, at, self.shape, blocks_radio)
         self._truth_layers().add_cover(movable, +1)
         self._movables[name] = movable
         return self._commit([movable.box])
@@ -186,7 +205,8 @@ class World:
         """Move ``name`` so its top-left cell is ``at`` (whole cells), optionally with a new
         footprint (a door leaf swinging from one position to the next)."""
         old = self._movable(name)
-        new = Movable.make(name, old.footprint if footprint is None else footprint, at, self.shape)
+        cells = old.footprint if footprint is None else footprint
+        new = Movable.make(name, cells, at, self.shape, old.blocks_radio)
         layers = self._truth_layers()
         layers.add_cover(old, -1)
         layers.add_cover(new, +1)
@@ -199,6 +219,35 @@ class World:
         self._truth_layers().add_cover(old, -1)
         del self._movables[name]
         return self._commit([old.box])
+
+    def fits(
+        self,
+        footprint: BoolGrid,
+        at: tuple[int, int],
+        robots: FloatArray,
+        moving: str | None = None,
+        over_walls: bool = False,
+    ) -> bool:
+        """Whether ``footprint`` with its top-left cell at ``at`` lies on the map clear of
+        the robots' bodies (``robots``: rows of x, y, radius), of every movable obstacle
+        but ``moving`` (the one being moved) and, unless ``over_walls``, of the static
+        walls and rubble."""
+        own = self._movables.get(moving) if moving is not None else None
+        if not self._truth_layers().clear(footprint, at, own, over_walls):
+            return False
+        cells = np.argwhere(footprint) + np.array([at[0], at[1]])
+        return not circles_cover(robots[:, :2], robots[:, 2], cells).any()
+
+    @property
+    def radio_occupied(self) -> BoolGrid:
+        """The truth grid as radio meets it: without the movable obstacles that do not
+        block radio (the truth grid itself while there are none)."""
+        layers = self._layers
+        return self.occupied if layers is None or layers.radio is None else layers.radio
+
+    def radio_filter(self) -> QueryFilter:
+        """The Chipmunk filter of what blocks radio: walls and radio-blocking movables."""
+        return (0, ALL_BITS, RADIO_CATEGORIES)
 
     def _movable(self, name: str) -> Movable:
         if name not in self._movables:
@@ -280,7 +329,7 @@ class World:
             (info.normal.x, info.normal.y),
             info.alpha,
             bool(categories & OBSTACLE_CATEGORIES),
-            bool(categories & MOVABLE_CATEGORY),
+            bool(categories & MOVABLE_CATEGORIES),
         )
 
     def _first_swept_hit(
@@ -310,7 +359,7 @@ class World:
             (best.normal.x, best.normal.y),
             best.alpha,
             bool(best.shape.filter.categories & OBSTACLE_CATEGORIES),
-            bool(best.shape.filter.categories & MOVABLE_CATEGORY),
+            bool(best.shape.filter.categories & MOVABLE_CATEGORIES),
         )
 
     def cast_rays(

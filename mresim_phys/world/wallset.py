@@ -2,7 +2,8 @@
 
 :class:`WallSet` owns every static ``pymunk.Segment`` of the world together with
 its endpoints, the grid line it lies on, the unit edges it covers along that line
-and the kind of its occupied side (1 static wall, 2 movable obstacle, see
+and the kind of its occupied side (1 static wall, 2 movable obstacle, 3 movable
+obstacle that radio passes through, see
 ``maps.edge_segments``). When cells change, :meth:`WallSet.rebuild` replaces
 exactly the segments whose unit edges touch the changed cells: a segment is
 run-length merged along its line, so a long wall may cross the window; the
@@ -26,9 +27,12 @@ from mresim_phys.world.maps import KindArray, KindGrid, edge_segments
 
 WALL_CATEGORY = 0b001
 ROBOT_CATEGORY = 0b010
-MOVABLE_CATEGORY = 0b100
-OBSTACLE_CATEGORIES = WALL_CATEGORY | MOVABLE_CATEGORY  # what the truth grid holds
-CATEGORY_OF_KIND = {1: WALL_CATEGORY, 2: MOVABLE_CATEGORY}
+MOVABLE_CATEGORY = 0b100  # movable obstacles that block radio (closed doors, by default)
+QUIET_CATEGORY = 0b1000  # movable obstacles radio passes through (blocks_radio: false)
+MOVABLE_CATEGORIES = MOVABLE_CATEGORY | QUIET_CATEGORY
+OBSTACLE_CATEGORIES = WALL_CATEGORY | MOVABLE_CATEGORIES  # what the truth grid holds
+RADIO_CATEGORIES = WALL_CATEGORY | MOVABLE_CATEGORY  # what line of sight and path loss count
+CATEGORY_OF_KIND = {1: WALL_CATEGORY, 2: MOVABLE_CATEGORY, 3: QUIET_CATEGORY}
 SHUFFLE_SEED = 0x5EED  # fixed: segment insertion order is part of the world, not of the run
 
 Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)
