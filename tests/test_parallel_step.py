@@ -21,6 +21,7 @@ import pytest
 import mresim_phys.sim as sim_module
 from mresim_phys.cli import main
 from mresim_phys.parallel import RobotPool, thread_count, usable_cores
+from mresim_phys.planning.topocache import MapCache
 from mresim_phys.sim import Simulation
 from mresim_phys.world.space import World
 
@@ -156,3 +157,28 @@ def test_world_queries_from_several_threads_match_one_thread(rooms: np.ndarray) 
     assert results == [expected] * 4
     world.place_robots([(22.0, 30.0), (60.0, 32.0)])  # the Space is not left locked
     assert world.bodies[0].position == (22.0, 30.0)
+
+
+def test_the_shared_map_cache_serves_several_threads(rooms: np.ndarray) -> None:
+    """Threads asking a small cache for more maps than it keeps get the serial builds."""
+    masks = [~rooms, ~np.roll(rooms, 3, axis=1), ~np.roll(rooms, 5, axis=0)]
+    expected = [MapCache().get(m, 6).labels for m in masks]
+    cache, failures = MapCache(capacity=2), []
+
+    def ask() -> None:
+        for k in range(30):
+            labels = cache.get(masks[k % 3], 6).labels
+            if not np.array_equal(labels, expected[k % 3]):
+                failures.append(k)
+
+    workers = [threading.Thread(target=ask) for _ in range(4)]
+    interval = sys.getswitchinterval()
+    sys.setswitchinterval(1e-6)  # threads take turns between almost any two bytecodes
+    try:
+        for worker in workers:
+            worker.start()
+        for worker in workers:
+            worker.join()
+    finally:
+        sys.setswitchinterval(interval)
+    assert not failures and len(cache._maps) == 2
