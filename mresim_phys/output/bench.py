@@ -10,6 +10,9 @@ planning = strategy decisions incl. frontiers and distance fields,
 communication = links and merges, metrics; "motion" is the rest: path following
 and swept-circle checks). Medians, not means: the machine may be shared.
 
+``--threads 1,2`` times one run per thread count (``simulation.threads``), the runs
+stepped in turn in one process; with threads the phase columns add up every thread's time.
+
 Robots start in rows of eight beside the base (:func:`row_starts`); a start that would
 touch a wall, and every robot past the rows' room, goes to the nearest free spot (every
 ``SPACING`` cells, clear of walls by the robot's radius, reachable from the first start)
