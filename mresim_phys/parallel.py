@@ -25,7 +25,7 @@ from __future__ import annotations
 import os
 import weakref
 from collections.abc import Callable, Sequence
-from concurrent.futures import ThreadPoolExecutor
+from concurrent.futures import ThreadPoolExecutor, wait
 from dataclasses import dataclass, field
 from typing import Literal, TypeVar
 
@@ -90,11 +90,19 @@ class RobotPool:
 
     def run(self, tasks: Sequence[Callable[[], T]]) -> list[T]:
         """Every task's result, in the order of ``tasks``; the first task's error (in that
-        order) is raised after all tasks have finished."""
+        order) is raised after all tasks have finished. Interrupted while waiting, it
+        cancels the tasks not yet started and waits for the running ones before raising."""
         if self.threads == 1 or len(tasks) <= 1:
             return [task() for task in tasks]
         futures = [self._pool().submit(task) for task in tasks]
-        errors = [f.exception() for f in futures]  # waits for every task
+        try:
+            wait(futures)
+        except BaseException:  # e.g. KeyboardInterrupt: no task may go on after we return
+            for future in futures:
+                future.cancel()  # those not started never start
+            wait(futures)
+            raise
+        errors = [f.exception() for f in futures]
         for error in errors:
             if error is not None:
                 raise error

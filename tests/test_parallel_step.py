@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 import pytest
 
+import mresim_phys.parallel as parallel
 import mresim_phys.sim as sim_module
 from mresim_phys.cli import main
 from mresim_phys.parallel import RobotPool, thread_count, usable_cores
@@ -131,6 +132,39 @@ def test_the_pool_keeps_task_order_and_raises_the_first_error() -> None:
         pool.run([task(k) for k in range(5)])
     pool.close()
     assert pool.run([task(0), task(1)]) == [0, 1]  # a closed pool starts new threads
+    pool.close()
+
+
+def test_an_interrupted_run_leaves_no_task_running(monkeypatch: pytest.MonkeyPatch) -> None:
+    """A KeyboardInterrupt while the robots run: the queued tasks never start, the running
+    ones finish before it propagates (nothing changes a robot after the step is given up)."""
+    real_wait, calls = parallel.wait, []
+
+    def interrupted(futures: Any) -> Any:
+        calls.append(1)
+        if len(calls) == 1:
+            raise KeyboardInterrupt
+        return real_wait(futures)
+
+    monkeypatch.setattr(parallel, "wait", interrupted)
+    started: list[int] = []
+    finished: list[int] = []
+
+    def task(k: int) -> Callable[[], int]:
+        def run() -> int:
+            started.append(k)
+            time.sleep(0.02)
+            finished.append(k)
+            return k
+
+        return run
+
+    pool = RobotPool(2)
+    with pytest.raises(KeyboardInterrupt):
+        pool.run([task(k) for k in range(6)])
+    assert sorted(finished) == sorted(started) and len(started) < 6
+    time.sleep(0.05)
+    assert len(started) == len(finished) < 6  # nothing started later
     pool.close()
 
 
