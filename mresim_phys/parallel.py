@@ -16,8 +16,11 @@ results, byte for byte, whatever the thread count and the threads' timing
 (``tests/test_parallel_step.py``).
 
 A strategy or planner plugin run on threads must keep no mutable state shared between
-robots (the built-in ones keep none beyond content-addressed caches); ``threads: 1``
-runs every task in the calling thread, in robot order.
+robots, nor scratch arrays shared between calls unless per thread (the built-in ones share
+only the topological map cache, which is locked and content-addressed, and keep their search
+arrays in ``threading.local``). ``threads: 1`` (the default) runs every task in the calling
+thread, in robot order. Only about half of a task's time is GIL-free, and on the 2-core
+development machine threads did not make a step faster (docs/performance.md).
 """
 
 from __future__ import annotations
