@@ -13,7 +13,7 @@ import sys
 from collections.abc import Callable, Sequence
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 from tqdm import tqdm
 
@@ -90,6 +90,12 @@ def make_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="the seed varies nothing by itself (simulation.vary_with_seed: false)",
     )
+    run.add_argument(
+        "--threads",
+        type=thread_setting,
+        metavar="N",
+        help="threads for the robots within a step (a number or auto; simulation.threads)",
+    )
     run.add_argument("--quiet", action="store_true", help="no progress bar or summary line")
     add_render_flags(run)
     run.add_argument("--no-log", action="store_true", help="do not write the run log")
@@ -127,6 +133,14 @@ def make_parser() -> argparse.ArgumentParser:
         "--steps", type=positive_int, help="timed steps (default: office 200, others 100)"
     )
     bench.add_argument("--map", type=Path, help="another 800x600 floor plan for the preset")
+    bench.add_argument(
+        "--threads",
+        type=thread_settings,
+        default=(1,),
+        metavar="N,N",
+        help="thread counts to compare, e.g. 1,2 or 1,auto (default 1): one run per count,"
+        " stepped in turn",
+    )
     return parser
 
 
@@ -193,10 +207,33 @@ def robot_counts(text: str) -> tuple[int, ...]:
     return counts
 
 
+def thread_setting(text: str) -> int | Literal["auto"]:
+    """argparse type: ``auto`` or a thread count >= 1."""
+    return "auto" if text.strip() == "auto" else positive_int(text)
+
+
+def thread_settings(text: str) -> tuple[int | Literal["auto"], ...]:
+    """argparse type: comma-separated thread settings (at least one)."""
+    settings = tuple(thread_setting(part) for part in text.split(",") if part.strip())
+    if not settings:
+        raise argparse.ArgumentTypeError(f"expected thread counts such as 1,2, got {text!r}")
+    return settings
+
+
 def bench_command(args: argparse.Namespace) -> int:
     """``mresim bench``: time full steps and print the cost split."""
-    print(run_bench(args.robots, args.map, args.warmup, args.steps, args.preset))
+    print(run_bench(args.robots, args.map, args.warmup, args.steps, args.preset, args.threads))
     return 0
+
+
+def simulation_overrides(args: argparse.Namespace) -> dict[str, Any]:
+    """The simulation-block fields given on the command line (as an override)."""
+    given: dict[str, Any] = {}
+    if args.fixed:
+        given["vary_with_seed"] = False
+    if args.threads is not None:
+        given["threads"] = args.threads
+    return {"simulation": given} if given else {}
 
 
 def run_command(args: argparse.Namespace) -> int:
@@ -207,9 +244,12 @@ def run_command(args: argparse.Namespace) -> int:
     """
     linger = getattr(args, "program", False)  # see main()
     with stop_on_signals(StopRequest(notice=not args.quiet), linger=linger) as stop:
-        fixed = {"simulation": {"vary_with_seed": False}} if args.fixed else {}
         sim = Simulation.from_yaml(
-            args.scenario, seed=args.seed, steps=args.steps, render=render_overrides(args), **fixed
+            args.scenario,
+            seed=args.seed,
+            steps=args.steps,
+            render=render_overrides(args),
+            **simulation_overrides(args),
         )
         out_dir = args.out or default_run_dir(sim.scenario)
         plotted: list[bool] = []

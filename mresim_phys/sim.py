@@ -11,14 +11,18 @@ moves up to its speed along its path, scanning after each path point and
 replanning mid-step when its path runs out (``motion``); then robot bodies are
 placed in the world; then links are found and knowledge exchanged (``comms``);
 then the step is measured (``metrics``). Robots act as if simultaneously: during
-the movement phase a robot reads and writes only its own state (teammate records
-change only in the communication phase, other robots' bodies stay where the step
-began), so the order in which robots are processed never changes the result.
+the decide and movement phases a robot reads and writes only its own state (teammate
+records change only in the communication phase, other robots' bodies stay where the
+step began), so the order in which robots are processed never changes the result.
+That is why a robot's due replan and its move run as one task per robot, on
+``simulation.threads`` threads (``parallel.py``), whose effects on shared state
+(team coverage, comm ledger, timers) are applied in robot order afterwards.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Iterator, Mapping
+from functools import partial
 from pathlib import Path
 from time import perf_counter
 from typing import Any
@@ -43,6 +47,7 @@ from mresim_phys.metrics import (
     update_known_at_base,
 )
 from mresim_phys.motion import MoveRules, take_step, wants_plan
+from mresim_phys.parallel import Effects, RobotPool, thread_count
 from mresim_phys.snapshot import (
     AgentSnapshot,
     CommSummary,
@@ -86,9 +91,12 @@ class Simulation:
             s.elements,
         )  # fmt: skip
         self.move_rules = MoveRules(s.rules.scan_every_point, self.robot_filter)
+        self.pool = RobotPool(thread_count(scenario.simulation.threads, len(self.robots)))
         self.apply_events()
+        effects = Effects()
         for robot in self.robots:
-            self.sense(robot)
+            self.sense(robot, effects)
+        self.apply(effects)
         self.communicate()
         self.record = self.measure()
 
@@ -123,8 +131,8 @@ class Simulation:
         """
         self.t += 1
         self.apply_events()
-        planned = self.decide(actions or {})
-        self.move_and_sense(planned)
+        given, due = self.decide(actions or {})
+        self.move_and_sense(given, due)
         self.world.place_robots([r.position for r in self.robots])
         self.communicate()
         self.record = self.measure()
@@ -170,16 +178,18 @@ class Simulation:
         """Events phase: every scheduled event acts through the run's event context."""
         self.events_now = self._events.run(self.setup.events, self.t)
 
-    def decide(self, actions: Mapping[str, Decision]) -> set[str]:
-        """Decide phase: supplied decisions are adopted, due replans asked of strategies.
+    def decide(self, actions: Mapping[str, Decision]) -> tuple[set[str], set[str]]:
+        """Decide phase: supplied decisions are adopted; returns (given, due).
 
-        Returns the robots that decided this step (their strategies are not asked again
-        before they move; a robot given an action is not asked at all this step).
+        ``given``: the robots a caller gave a decision (their strategies are not asked this
+        step); ``due``: the robots whose replan is due, asked by :meth:`move_and_sense`
+        before they move (a replan reads only the robot's own knowledge, so asking then is
+        the same as asking now).
         """
         unknown = sorted(set(actions) - {r.name for r in self.robots}) if actions else []
         if unknown:
             raise ValueError(f"actions name robots the team does not have: {unknown}")
-        planned = set(actions)
+        due: set[str] = set()
         for robot in self.robots:
             if not robot.can_move:
                 continue
@@ -187,29 +197,38 @@ class Simulation:
             if robot.name in actions:
                 robot.adopt(actions[robot.name], self.t)
             elif wants_plan(robot, self.t, robot.strategy.params.replan_interval):
-                self.replan(robot)
-                planned.add(robot.name)
-        return planned
+                due.add(robot.name)
+        return set(actions), due
 
-    def move_and_sense(self, planned: set[str]) -> None:
-        """Move phase: each robot moves up to its speed, scanning (and replanning) on the way."""
-        for robot in self.robots:
-            if robot.can_move:
-                take_step(
-                    robot,
-                    self.world,
-                    self.move_rules,
-                    robot.name in planned,
-                    self.replan,
-                    self.sense,
-                )
+    def move_and_sense(self, given: set[str], due: set[str]) -> None:
+        """Move phase: each robot replans if due, then moves up to its speed, scanning (and
+        replanning) on the way; one task per robot (on threads if ``simulation.threads``
+        allows), shared effects applied in robot order afterwards."""
+        movers = [r for r in self.robots if r.can_move]
+        tasks = [partial(self.robot_turn, r, r.name in due, r.name in given) for r in movers]
+        for effects in self.pool.run(tasks):
+            self.apply(effects)
+
+    def robot_turn(self, robot: Robot, due: bool, given: bool) -> Effects:
+        """One robot's decide and move phases; what they did to shared state, held back."""
+        effects = Effects()
+        if due:
+            self.replan(robot, effects)
+        replan, sense = partial(self.replan, effects=effects), partial(self.sense, effects=effects)
+        take_step(robot, self.world, self.move_rules, due or given, replan, sense)
+        return effects
+
+    def apply(self, effects: Effects) -> None:
+        """Fold one robot's held-back effects into the team coverage, ledger and timers."""
+        effects.apply(self.coverage.touch, self.network.note_scan, self.phase_times)
 
     def robot_filter(self, robot: Robot) -> tuple[int, int, int]:
         """What ``robot``'s rays and motion collide with."""
         return self.world.query_filter(robot.index - 1, self.rules.robots_block)
 
-    def sense(self, robot: Robot) -> None:
-        """Scan at the robot's pose and fold the scan into its map and the team coverage."""
+    def sense(self, robot: Robot, effects: Effects) -> None:
+        """Scan at the robot's pose and fold the scan into its map; note the touched window
+        for the team coverage and the ledger in ``effects``."""
         if not robot.can_sense or self.world.buried(robot.position):
             return
         assert robot.body is not None
@@ -225,21 +244,20 @@ class Simulation:
         )
         scanned = perf_counter()
         update = integrate_scan(robot.belief, robot.safe, result, laser.safe_fraction)
-        self.phase_times["sensing"] += scanned - started
-        self.phase_times["mapping"] += perf_counter() - scanned
+        effects.spend("sensing", scanned - started)
+        effects.spend("mapping", perf_counter() - scanned)
         if update is not None:
-            self.coverage.touch(robot.belief, update)
+            effects.touched.append((robot.belief, update))
             h, w = update.free.shape
-            self.network.note_scan(
-                robot.index, (update.row0, update.row0 + h, update.col0, update.col0 + w)
-            )
+            box = (update.row0, update.row0 + h, update.col0, update.col0 + w)
+            effects.scans.append((robot.index, box))
 
-    def replan(self, robot: Robot) -> None:
+    def replan(self, robot: Robot, effects: Effects) -> None:
         """Ask the robot's strategy for a new path from what the robot knows."""
         assert robot.strategy is not None
         started = perf_counter()
         robot.adopt(robot.strategy.decide(self.view_of(robot)), self.t)
-        self.phase_times["planning"] += perf_counter() - started
+        effects.spend("planning", perf_counter() - started)
 
     def view_of(self, robot: Robot) -> RobotView:
         """The robot's knowledge, read-only, as its strategy may see it."""

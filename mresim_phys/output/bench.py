@@ -10,6 +10,9 @@ planning = strategy decisions incl. frontiers and distance fields,
 communication = links and merges, metrics; "motion" is the rest: path following
 and swept-circle checks). Medians, not means: the machine may be shared.
 
+``--threads 1,2`` times one run per thread count (``simulation.threads``), the runs
+stepped in turn in one process; with threads the phase columns add up every thread's time.
+
 Robots start in rows of eight beside the base (:func:`row_starts`); a start that would
 touch a wall, and every robot past the rows' room, goes to the nearest free spot (every
 ``SPACING`` cells, clear of walls by the robot's radius, reachable from the first start)
@@ -23,7 +26,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from time import perf_counter
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 
@@ -92,13 +95,14 @@ DEFAULT_MAP = OFFICE.map_path
 
 @dataclass(frozen=True)
 class BenchResult:
-    """Per-step timings of one team size (milliseconds)."""
+    """Per-step timings of one team size at one thread count (milliseconds)."""
 
     robots: int
     median_ms: float
     p90_ms: float
     phase_ms: dict[str, float]
     explored: float
+    threads: int | str = 1
 
 
 Point = tuple[float, float]
@@ -147,7 +151,11 @@ def team_starts(
 
 
 def team_scenario(
-    robots: int, map_path: Path, steps: int, preset: Preset = OFFICE
+    robots: int,
+    map_path: Path,
+    steps: int,
+    preset: Preset = OFFICE,
+    threads: int | Literal["auto"] = 1,
 ) -> dict[str, Any]:
     """A frontier team of ``robots`` starting beside the base (:func:`team_starts`)."""
     starts = team_starts(robots, load_image_map(map_path).occupied, preset)
@@ -160,42 +168,71 @@ def team_scenario(
         "base_station": {"position": list(preset.base), "comm_range": preset.team["comm_range"]},
         "team": preset.team,
         "robots": [{"name": f"R{i}", "start": list(s)} for i, s in enumerate(starts)],
+        "simulation": {"threads": threads},
     }
 
 
-def time_team(
-    robots: int, map_path: Path, warmup: int, measured: int, preset: Preset = OFFICE
-) -> BenchResult:
-    """Run warm-up steps, then time ``measured`` steps of a team of ``robots``."""
-    data = team_scenario(robots, map_path, warmup + measured, preset)
-    sim = Simulation(validate_scenario(data))
-    for _ in range(warmup):
-        sim.step()
-    totals: list[float] = []
-    phases: dict[str, list[float]] = {name: [] for name in (*PHASES, "motion")}
-    for _ in range(measured):
+class StepTimes:
+    """One timed simulation's per-step totals and phase costs (seconds)."""
+
+    def __init__(self, sim: Simulation) -> None:
+        self.sim = sim
+        self.totals: list[float] = []
+        self.phases: dict[str, list[float]] = {name: [] for name in (*PHASES, "motion")}
+
+    def step(self) -> None:
+        """Time one step."""
+        sim = self.sim
         before = dict(sim.phase_times)
         started = perf_counter()
         sim.step()
         total = perf_counter() - started
-        totals.append(total)
+        self.totals.append(total)
         spent = {name: sim.phase_times[name] - before[name] for name in PHASES}
         for name, seconds in spent.items():
-            phases[name].append(seconds)
-        phases["motion"].append(max(total - sum(spent.values()), 0.0))
-    return BenchResult(
-        robots,
-        1e3 * statistics.median(totals),
-        1e3 * float(np.percentile(totals, 90)),
-        {name: 1e3 * statistics.median(v) for name, v in phases.items()},
-        sim.record.explored,
-    )
+            self.phases[name].append(seconds)
+        self.phases["motion"].append(max(total - sum(spent.values()), 0.0))
+
+    def result(self, robots: int, threads: int | str) -> BenchResult:
+        """Medians in milliseconds."""
+        return BenchResult(
+            robots,
+            1e3 * statistics.median(self.totals),
+            1e3 * float(np.percentile(self.totals, 90)),
+            {name: 1e3 * statistics.median(v) for name, v in self.phases.items()},
+            self.sim.record.explored,
+            threads,
+        )
+
+
+def time_team(
+    robots: int,
+    map_path: Path,
+    warmup: int,
+    measured: int,
+    preset: Preset = OFFICE,
+    threads: Sequence[int | Literal["auto"]] = (1,),
+) -> list[BenchResult]:
+    """Run warm-up steps, then time ``measured`` steps of a team of ``robots``, once per
+    thread count: the runs (identical but for their threads) step in turn, alternating
+    which goes first, so a busy spell on a shared machine hits them alike."""
+    timers = []
+    for count in threads:
+        data = team_scenario(robots, map_path, warmup + measured, preset, count)
+        timers.append(StepTimes(Simulation(validate_scenario(data))))
+    for timer in timers:
+        for _ in range(warmup):
+            timer.sim.step()
+    for k in range(measured):
+        for timer in timers if k % 2 == 0 else timers[::-1]:
+            timer.step()
+    return [timer.result(robots, count) for timer, count in zip(timers, threads, strict=True)]
 
 
 def report(results: Sequence[BenchResult], map_path: Path, preset: Preset = OFFICE) -> str:
     """The results as a text table."""
     names = [*PHASES, "motion"]
-    head = f"{'robots':>6} {'median':>8} {'p90':>8} {'per robot':>9} " + " ".join(
+    head = f"{'robots':>6} {'threads':>7} {'median':>8} {'p90':>8} {'per robot':>9} " + " ".join(
         f"{n:>13}" for n in names
     )
     lines = [
@@ -205,8 +242,10 @@ def report(results: Sequence[BenchResult], map_path: Path, preset: Preset = OFFI
     for r in results:
         split = " ".join(f"{r.phase_ms[n]:13.2f}" for n in names)
         per_robot = r.median_ms / r.robots
-        lines.append(f"{r.robots:>6} {r.median_ms:8.2f} {r.p90_ms:8.2f} {per_robot:9.2f} {split}")
-    lines.append("(phase columns are per-step medians; they need not add up to the median)")
+        times = f"{r.median_ms:8.2f} {r.p90_ms:8.2f} {per_robot:9.2f}"
+        lines.append(f"{r.robots:>6} {r.threads!s:>7} {times} {split}")
+    lines.append("(phase columns are per-step medians; they need not add up to the median;")
+    lines.append(" with threads they add up the time spent on every thread)")
     return "\n".join(lines)
 
 
@@ -216,6 +255,7 @@ def run_bench(
     warmup: int | None,
     measured: int | None,
     preset_name: str = "office",
+    threads: Sequence[int | Literal["auto"]] = (1,),
 ) -> str:
     """Time every team size with a preset (its map unless ``map_path``) and return the report."""
     preset = PRESETS[preset_name]
@@ -228,5 +268,5 @@ def run_bench(
         )
     warm = preset.warmup if warmup is None else warmup
     steps = preset.steps if measured is None else measured
-    results = [time_team(n, path, warm, steps, preset) for n in robot_counts]
+    results = [r for n in robot_counts for r in time_team(n, path, warm, steps, preset, threads)]
     return report(results, path, preset)

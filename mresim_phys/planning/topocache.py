@@ -7,6 +7,7 @@ and spacing, so robots whose maps were merged (or the base station's) reuse one 
 from __future__ import annotations
 
 import hashlib
+import threading
 from collections import OrderedDict
 
 import numpy as np
@@ -32,18 +33,28 @@ class MapCache:
         self.capacity = capacity
         self.builds = 0  # how many maps this cache has built (for tests and benchmarks)
         self._maps: OrderedDict[tuple[bytes, int], TopologicalMap] = OrderedDict()
+        self._lock = threading.Lock()
 
     def get(self, passable: BoolGrid, spacing: int) -> TopologicalMap:
-        """The map of ``passable``: an earlier identical build, or a new one."""
+        """The map of ``passable``: an earlier identical build, or a new one.
+
+        Safe to call from several threads (robots on ``simulation.threads``): the table is
+        read and changed under a lock, the build runs outside it; of two threads building
+        the same map at once, the first to finish stores its (identical) build.
+        """
         key = (digest(passable), spacing)
-        found = self._maps.get(key)
-        if found is None:
-            found = build_map(passable, spacing)
+        with self._lock:
+            found = self._maps.get(key)
+            if found is not None:
+                self._maps.move_to_end(key)
+                return found
+        built = build_map(passable, spacing)
+        with self._lock:
             self.builds += 1
-            self._maps[key] = found
-            if len(self._maps) > self.capacity:
+            found = self._maps.setdefault(key, built)
+            self._maps.move_to_end(key)
+            while len(self._maps) > self.capacity:
                 self._maps.popitem(last=False)
-        self._maps.move_to_end(key)
         return found
 
 

@@ -31,6 +31,7 @@ Point = tuple[float, float]
 MAX_RANGE = 100_000.0  # cells: sensor and radio ranges (a 1000x map diagonal is far less)
 MAX_BODY = 1000.0  # cells: speed per step, body radius, planner margins
 NAME_PATTERN = re.compile(r"[A-Za-z0-9_.-]*[A-Za-z0-9_][A-Za-z0-9_.-]*")  # never '.' or '..'
+MAX_THREADS = 1024  # simulation.threads: more than any machine's cores, fewer than a typo's
 MAX_NAME = 64  # characters: a name becomes part of folder and file names
 NAME_RULE = f"1 to {MAX_NAME} letters, digits, '_', '.' or '-', not only dots"
 
@@ -258,6 +259,14 @@ class SimulationSpec(Strict):
     start_jitter: StartJitterSpec = Field(
         default_factory=StartJitterSpec,
         description="Random shifts of the robots' starts (position and heading) per seed.",
+    )
+    threads: Annotated[int, Field(ge=1, le=MAX_THREADS)] | Literal["auto"] = Field(
+        1,
+        description=(
+            "Threads (a number, or auto = one per core) for the robots' replans, moves,"
+            " scans and map updates within a step; 1 = one robot after another. The results"
+            " are the same."
+        ),
     )
 
 

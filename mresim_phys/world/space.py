@@ -34,6 +34,7 @@ tests/test_sensing.py keeps that case).
 from __future__ import annotations
 
 import math
+import threading
 from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cached_property
@@ -142,6 +143,9 @@ class World:
         self._radii = np.asarray(robot_radii, dtype=np.float64)
         self._robot_xy = self._body_positions()
         self._info = ffi.new("cpSegmentQueryInfo *")
+        # Chipmunk locks a Space for a query by a counter, which concurrent queries would
+        # corrupt, and _info is one shared result struct: one query at a time
+        self._query_lock = threading.Lock()
         self.version = 0  # bumped by every change of the truth after step 0
         self._layers: Layers | None = None  # built by the first change
         self._movables: dict[str, Movable] = {}
@@ -317,9 +321,18 @@ class World:
         radius: float,
         shape_filter: QueryFilter,
     ) -> Hit | None:
-        """The first shape a segment (swept by ``radius``) from ``start`` to ``end`` touches."""
-        if radius > 0:
-            return self._first_swept_hit(start, end, radius, shape_filter)
+        """The first shape a segment (swept by ``radius``) from ``start`` to ``end`` touches.
+
+        Safe to call from several threads (they query one at a time)."""
+        with self._query_lock:
+            if radius > 0:
+                return self._first_swept_hit(start, end, radius, shape_filter)
+            return self._first_segment_hit(start, end, radius, shape_filter)
+
+    def _first_segment_hit(
+        self, start: Point, end: Point, radius: float, shape_filter: QueryFilter
+    ) -> Hit | None:
+        """Chipmunk's own segment query (no swept radius), into the one reused result struct."""
         info, space = self._info, self.space._space  # never keep the cdata beyond the Space
         if lib.cpSpaceSegmentQueryFirst(space, start, end, radius, shape_filter, info) == ffi.NULL:
             return None

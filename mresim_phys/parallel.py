@@ -1,0 +1,125 @@
+"""Decide and move phases on threads (phases 4-5): one task per robot, results in robot order.
+
+Within these phases a robot reads only its own state, what it heard in the last
+communication phase and the world as the step began (bodies are placed after every
+robot moved; ``sim.py``), so robots' replans, moves, scans and map updates are
+independent and can run side by side. The heavy parts release the GIL: the scan
+(``world/raycast.py``), the map update (``knowledge/mapping.py``) and the planning
+kernels are numba ``nogil`` functions, and Chipmunk's queries go through cffi (which
+``World`` serialises with a lock: a Chipmunk query locks its Space by a counter that
+concurrent queries would corrupt).
+
+What a robot's task does to shared state (the team coverage's touched windows, the
+comm ledger's scan boxes, the phase timers) is held in its :class:`Effects` and applied
+by the caller in robot order after every task has finished, so a run gives the same
+results, byte for byte, whatever the thread count and the threads' timing
+(``tests/test_parallel_step.py``).
+
+A strategy or planner plugin run on threads must keep no mutable state shared between
+robots, nor scratch arrays shared between calls unless per thread (the built-in ones share
+only the topological map cache, which is locked and content-addressed, and keep their search
+arrays in ``threading.local``). ``threads: 1`` (the default) runs every task in the calling
+thread, in robot order. Only about half of a task's time is GIL-free, and on the 2-core
+development machine threads did not make a step faster (docs/performance.md).
+"""
+
+from __future__ import annotations
+
+import os
+import weakref
+from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor, wait
+from dataclasses import dataclass, field
+from typing import Literal, TypeVar
+
+from mresim_phys.knowledge.mapping import Update
+from mresim_phys.types import BeliefGrid
+
+T = TypeVar("T")
+Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)
+
+
+@dataclass
+class Effects:
+    """What one robot's task did to shared state, held back until every robot is done."""
+
+    touched: list[tuple[BeliefGrid, Update]] = field(default_factory=list)  # coverage windows
+    scans: list[tuple[int, Box]] = field(default_factory=list)  # (agent index, box) for the ledger
+    seconds: dict[str, float] = field(default_factory=dict)  # phase -> time spent
+
+    def spend(self, phase: str, seconds: float) -> None:
+        """Add ``seconds`` to ``phase``'s timer."""
+        self.seconds[phase] = self.seconds.get(phase, 0.0) + seconds
+
+    def apply(
+        self,
+        touch: Callable[[BeliefGrid, Update], None],
+        note_scan: Callable[[int, Box], None],
+        timers: dict[str, float],
+    ) -> None:
+        """Pass the held-back windows on in the order they were noted; add the times."""
+        for belief, update in self.touched:
+            touch(belief, update)
+        for index, box in self.scans:
+            note_scan(index, box)
+        for phase, seconds in self.seconds.items():
+            timers[phase] += seconds
+
+
+def usable_cores() -> int:
+    """Cores this process may run on."""
+    if hasattr(os, "sched_getaffinity"):
+        return max(len(os.sched_getaffinity(0)), 1)
+    return max(os.cpu_count() or 1, 1)
+
+
+def thread_count(setting: int | Literal["auto"], robots: int) -> int:
+    """Worker threads for ``robots`` tasks: ``auto`` = one per usable core; never more
+    threads than robots, never fewer than one."""
+    wanted = usable_cores() if setting == "auto" else int(setting)
+    return max(1, min(wanted, robots))
+
+
+class RobotPool:
+    """Runs one task per robot on up to ``threads`` threads; results come back in task order.
+
+    The worker threads are started on the first parallel run and end when the pool is
+    closed or garbage-collected.
+    """
+
+    def __init__(self, threads: int) -> None:
+        self.threads = max(1, threads)
+        self._executor: ThreadPoolExecutor | None = None
+
+    def run(self, tasks: Sequence[Callable[[], T]]) -> list[T]:
+        """Every task's result, in the order of ``tasks``; the first task's error (in that
+        order) is raised after all tasks have finished. Interrupted while waiting, it
+        cancels the tasks not yet started and waits for the running ones before raising."""
+        if self.threads == 1 or len(tasks) <= 1:
+            return [task() for task in tasks]
+        futures = [self._pool().submit(task) for task in tasks]
+        try:
+            wait(futures)
+        except BaseException:  # e.g. KeyboardInterrupt: no task may go on after we return
+            for future in futures:
+                future.cancel()  # those not started never start
+            wait(futures)
+            raise
+        errors = [f.exception() for f in futures]
+        for error in errors:
+            if error is not None:
+                raise error
+        return [f.result() for f in futures]
+
+    def _pool(self) -> ThreadPoolExecutor:
+        if self._executor is None:
+            executor = ThreadPoolExecutor(self.threads, thread_name_prefix="mresim-robot")
+            weakref.finalize(self, executor.shutdown, wait=False)
+            self._executor = executor
+        return self._executor
+
+    def close(self) -> None:
+        """Stop the worker threads (a later run starts new ones)."""
+        if self._executor is not None:
+            self._executor.shutdown(wait=True)
+            self._executor = None
