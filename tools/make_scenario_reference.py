@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import sys
 from pathlib import Path
-from typing import Any
+from types import UnionType
+from typing import Annotated, Any, Literal, Union, get_args, get_origin
 
 from pydantic import BaseModel
 from pydantic_core import PydanticUndefined
@@ -76,6 +77,13 @@ NOTES = {
 
 def type_name(annotation: Any) -> str:
     """A short readable name of a field's type."""
+    members = get_args(annotation)
+    if get_origin(annotation) in (Union, UnionType) and members:
+        return " or ".join("None" if m is type(None) else type_name(m) for m in members)
+    if get_origin(annotation) is Annotated:
+        return type_name(members[0])
+    if get_origin(annotation) is Literal:
+        return " or ".join(repr(m) for m in members)
     text = getattr(annotation, "__name__", None) or str(annotation)
     text = text.replace("typing.", "").replace("mresim_phys.scenario.schema.", "")
     for module in ("shapes", "obstacles", "doors", "debris"):
