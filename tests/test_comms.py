@@ -6,7 +6,7 @@ import math
 
 import numpy as np
 import pytest
-from hypothesis import given, settings
+from hypothesis import assume, example, given, settings
 from hypothesis import strategies as st
 
 from mresim_phys import COMM_MODELS
@@ -159,22 +159,30 @@ def test_line_of_sight_region_stops_at_walls() -> None:
     assert reach[1] == pytest.approx(90.5)  # to the map border at x = 0
 
 
-def sampled_walls(occupied: np.ndarray, a: FloatArray, b: FloatArray) -> int:
-    """Reference: separate obstacle runs met by a finely sampled segment."""
+def sampled_walls(occupied: np.ndarray, a: FloatArray, b: FloatArray) -> int | None:
+    """Reference: separate obstacle runs met by a finely sampled segment; None when the
+    samples jump diagonally between cells (the segment clips a corner cell more finely
+    than the samples can see, so the reference cannot tell)."""
     t = np.linspace(0, 1, 40001)[:, None]
     xs, ys = (a + t * (b - a)).T
-    inside = occupied[np.floor(ys).astype(int), np.floor(xs).astype(int)].astype(int)
+    rows, cols = np.floor(ys).astype(int), np.floor(xs).astype(int)
+    if ((np.diff(rows) != 0) & (np.diff(cols) != 0)).any():
+        return None
+    inside = occupied[rows, cols].astype(int)
     return int(np.count_nonzero(np.diff(inside) == 1) + inside[0])
 
 
 @settings(max_examples=40, deadline=None)
 @given(st.integers(0, 2**32 - 1))
+@example(1207665)  # the segment clips a corner cell between two samples
 def test_wall_runs_match_a_finely_sampled_line(seed: int) -> None:
     rng = np.random.default_rng(seed)
     occupied = rng.random((30, 40)) < 0.3
     a, b = rng.uniform((0, 0), (40, 30), size=(2, 2))  # generic points: no exact corners
     runs, inside = segment_walls(occupied, a[0], a[1], b[0], b[1])
-    assert runs == sampled_walls(occupied, a, b)
+    expected = sampled_walls(occupied, a, b)
+    assume(expected is not None)
+    assert runs == expected
     assert 0.0 <= inside <= float(np.hypot(*(b - a))) + 1e-9
     assert (runs == 0) == (inside == 0.0)
 
