@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from typing import Literal
 
 import numpy as np
+from numpy.typing import NDArray
 
 from mresim_phys.knowledge.teammates import Payload, TeammateInfo
 from mresim_phys.planning import Planner
@@ -55,6 +56,8 @@ class Agent:
     teammates: dict[str, TeammateInfo] = field(default_factory=dict)
     last_base_contact: int = -1
     links: tuple[str, ...] = ()  # agents linked on the main channel at the last exchange
+    # step of each cell's latest observation (-1: never), kept when beliefs are 'latest'
+    observed: NDArray[np.int32] | None = None
 
     @property
     def alive(self) -> bool:
@@ -135,6 +138,12 @@ class Robot(Agent):
         return TeammateInfo(
             self.name, self.position, self.goal, self.state, self.role, step, payload=self.payload
         )
+
+    def stop_for_replan(self) -> None:
+        """Drop the path: something the robot now senses blocks it. It stands until its
+        replan, which is due at once (the next decide phase)."""
+        self.path = np.zeros((0, 2))
+        self.last_plan_step = -(10**9)
 
     def adopt(self, decision: Decision, step: int) -> None:
         """Take a decision (its strategy's or a controller's) as the path to follow from now on."""

@@ -44,7 +44,15 @@ from mresim_phys.types import FloatArray
 from mresim_phys.world.debris import RandomDebris
 from mresim_phys.world.doors import Door
 from mresim_phys.world.elements import build_elements
-from mresim_phys.world.events import Collapse, DoorEventParams, Event, make_event
+from mresim_phys.world.events import (
+    Cells,
+    Close,
+    Collapse,
+    DoorEventParams,
+    Event,
+    Open,
+    make_event,
+)
 from mresim_phys.world.obstacles import MovingObstacle
 from mresim_phys.world.reach import Reachable
 from mresim_phys.world.sensing import Laser
@@ -205,7 +213,9 @@ def radio_ranges(scenario: Scenario) -> tuple[FloatArray, FloatArray]:
     return ranges, powers
 
 
-def build_network(scenario: Scenario, streams: Streams, shape: tuple[int, int]) -> Network:
+def build_network(
+    scenario: Scenario, streams: Streams, shape: tuple[int, int], latest: bool = False
+) -> Network:
     """The communication phase of ``scenario``: its channels, ledger and exchange rules."""
     spec = scenario.communication
     ranges, powers = radio_ranges(scenario)
@@ -224,7 +234,7 @@ def build_network(scenario: Scenario, streams: Streams, shape: tuple[int, int]) 
         )
     return Network(
         main,
-        Ledger(shape, len(ranges)),
+        Ledger(shape, len(ranges), latest),
         control=control,
         multi_hop=scenario.simulation.multi_hop,
         full_maps=spec.maps == "full",
@@ -252,6 +262,7 @@ class RunRules:
     stalled_gain: float = 0.001  # the smallest gain that counts as progress
     presume_lost_after: int = 200  # steps of silence after which a teammate is presumed lost
     vary_with_seed: bool = True  # the seed varies initial random steps, ties and starts
+    latest: bool = False  # beliefs hold each cell's latest observation (a changing world)
 
 
 @dataclass
@@ -323,9 +334,17 @@ def check_world_events(scenario: Scenario, events: list[Event], world: World) ->
                 raise ScenarioError(f"events[{i}].collapse: {exc}") from None
 
 
+def world_can_change(scenario: Scenario) -> bool:
+    """Whether anything in the scenario changes the truth during the run."""
+    changing = (Cells, Collapse, Close, Open)
+    events = any(isinstance(make_event(e), changing) for e in scenario.events)
+    return bool(scenario.obstacles or scenario.doors or scenario.random_debris or events)
+
+
 def run_rules(scenario: Scenario) -> RunRules:
     """The scenario's cycle and stop rules as plain values."""
     sim, stop = scenario.simulation, scenario.stop
+    latest = sim.belief == "latest" or (sim.belief == "auto" and world_can_change(scenario))
     return RunRules(
         steps=scenario.steps,
         scan_every_point=sim.scan == "point",
@@ -337,6 +356,7 @@ def run_rules(scenario: Scenario) -> RunRules:
         stalled_gain=stop.stalled_gain,
         presume_lost_after=sim.presume_lost_after,
         vary_with_seed=sim.vary_with_seed,
+        latest=latest,
     )
 
 
@@ -360,17 +380,22 @@ def build_setup(scenario: Scenario) -> Setup:
         scenario.obstacles, scenario.doors, scenario.random_debris, world, streams, bodies
     )
     reachable = Reachable(truth.occupied, starts)
+    rules = run_rules(scenario)
+    base = make_base(scenario.base_station, world.shape)
+    if rules.latest:
+        for agent in [base, *robots]:
+            agent.observed = np.full(world.shape, -1, dtype=np.int32)
     return Setup(
         truth=truth,
         world=world,
-        base=make_base(scenario.base_station, world.shape),
+        base=base,
         robots=robots,
-        network=build_network(scenario, streams, world.shape),
+        network=build_network(scenario, streams, world.shape, rules.latest),
         coverage=Coverage(reachable.mask),
         reachable=reachable,
         events=events,
         streams=streams,
-        rules=run_rules(scenario),
+        rules=rules,
         starts=starts,
         resolution=scenario.map.resolution or truth.resolution,
         team_order=team_order(scenario.robots, streams, vary),

@@ -22,6 +22,8 @@ import numpy as np
 
 from mresim_phys.agents import Robot
 from mresim_phys.knowledge.mapping import mark_bump
+from mresim_phys.planning.fields import clearance_kernel
+from mresim_phys.types import OCCUPIED
 from mresim_phys.world.space import World
 
 EPS = 1e-9
@@ -121,3 +123,24 @@ def stop_with_error(robot: Robot, contact: tuple[float, float]) -> None:
     robot.status = "error"
     robot.path = robot.path[:0]
     robot.reached_goal = False
+
+
+def path_blocked(belief: np.ndarray, path: np.ndarray, clearance: float, lookahead: float) -> bool:
+    """Whether the robot's map now holds an obstacle closer than ``clearance`` to one of
+    the path's points (after the first, where the robot stands) in its first ``lookahead``
+    cells: the path planner's own rule for a passable cell (``planning.fields``), so a
+    path planned on the same map is never blocked ('latest' beliefs: a person stepped
+    into the way, a door closed)."""
+    if len(path) < 2:
+        return False
+    steps = np.hypot(*np.diff(path, axis=0).T).cumsum()
+    cells = np.floor(path[1:][steps <= lookahead]).astype(np.int64)  # (col, row)
+    rows, cols = belief.shape
+    kernel = clearance_kernel(float(clearance))
+    half = kernel.shape[0] // 2
+    for dr, dc in np.argwhere(kernel) - half:
+        r, c = cells[:, 1] + dr, cells[:, 0] + dc
+        inside = (r >= 0) & (r < rows) & (c >= 0) & (c < cols)
+        if not inside.all() or (belief[r, c] == OCCUPIED).any():
+            return True
+    return False

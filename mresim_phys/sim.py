@@ -46,7 +46,7 @@ from mresim_phys.metrics import (
     measure_step,
     update_known_at_base,
 )
-from mresim_phys.motion import MoveRules, take_step, wants_plan
+from mresim_phys.motion import MoveRules, path_blocked, take_step, wants_plan
 from mresim_phys.parallel import Effects, RobotPool, thread_count
 from mresim_phys.snapshot import (
     AgentSnapshot,
@@ -60,6 +60,7 @@ from mresim_phys.strategies import Decision, RobotView
 from mresim_phys.world.sensing import scan
 
 PHASES = ("sensing", "mapping", "planning", "communication", "metrics")
+LOOKAHEAD_STEPS = 3  # 'latest' beliefs: a path blocked within this many steps is dropped
 
 
 class Simulation:
@@ -243,9 +244,17 @@ class Simulation:
             self._sensing_rngs[robot.index - 1],
         )
         scanned = perf_counter()
-        update = integrate_scan(robot.belief, robot.safe, result, laser.safe_fraction)
+        update = integrate_scan(
+            robot.belief, robot.safe, result, laser.safe_fraction, robot.observed, self.t
+        )
         effects.spend("sensing", scanned - started)
         effects.spend("mapping", perf_counter() - scanned)
+        clearance = robot.radius + robot.body.wall_margin
+        lookahead = LOOKAHEAD_STEPS * robot.speed
+        if robot.observed is not None and path_blocked(
+            robot.belief, robot.path, clearance, lookahead
+        ):
+            robot.stop_for_replan()
         if update is not None:
             effects.touched.append((robot.belief, update))
             h, w = update.free.shape

@@ -114,3 +114,46 @@ def stamp_changes(
             changed += 1
             r0, r1, c0, c1 = min(r0, r), max(r1, r + 1), min(c0, c), max(c1, c + 1)
     return changed, r0, r1, c0, c1
+
+
+@njit(cache=True, nogil=True)
+def merge_latest(
+    index: IntArray,
+    values: np.ndarray,
+    seen: np.ndarray,
+    belief: BeliefGrid,
+    safe: BoolGrid,
+    observed: np.ndarray,
+    codes: np.ndarray,
+    stamps: np.ndarray,
+    origins: np.ndarray,
+    tick: int,
+    sender: int,
+) -> tuple[int, int, int, int, int]:
+    """Merge received cells keeping each cell's newer observation: the sender's value
+    when it was observed later, the larger one (the obstacle) when at the same step, the
+    receiver's own when earlier; safe space is OR-ed either way. Return (cells changed,
+    r0, r1, c0, c1 of the changed ones); a newer observation of an equal value only
+    moves the cell's observation step."""
+    cols = belief.shape[1]
+    changed, r0, r1, c0, c1 = 0, belief.shape[0], 0, cols, 0
+    for k in range(len(index)):
+        r, c = index[k] // cols, index[k] % cols
+        old, theirs, own = codes[r, c], values[k], observed[r, c]
+        if seen[k] > own:
+            value = theirs & 3
+            observed[r, c] = seen[k]
+        elif seen[k] == own:
+            value = max(old & 3, theirs & 3)
+        else:
+            value = old & 3
+        new = value | ((old | theirs) & 4)
+        if new == old:
+            continue
+        belief[r, c] = new & 3
+        safe[r, c] = (new & 4) != 0
+        codes[r, c], stamps[r, c] = new, tick
+        origins[r, c] = sender if new == theirs else -1
+        changed += 1
+        r0, r1, c0, c1 = min(r0, r), max(r1, r + 1), min(c0, c), max(c1, c + 1)
+    return changed, r0, r1, c0, c1

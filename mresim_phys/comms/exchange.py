@@ -2,7 +2,9 @@
 
 Linked agents merge occupancy grids (``np.maximum``: known beats unknown, a cell
 seen as obstacle by either stays obstacle), safe space (OR) and teammate records
-(the newer report of each agent wins). What travels is counted:
+(the newer report of each agent wins). With 'latest' beliefs (a world that changes)
+a cell's value travels with the step it was observed at and the newer observation
+wins (equal steps: the obstacle). What travels is counted:
 
 * maps as deltas (:mod:`.ledger`): a transmission carries the cells changed since
   the pair last synchronised, ``CELL_BYTES`` each (a 4-byte cell index and one
@@ -25,6 +27,7 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 from scipy.sparse import csr_matrix
@@ -36,10 +39,17 @@ from mresim_phys.comms.ledger import Ledger, received_tick, sensed_tick
 from mresim_phys.knowledge.teammates import TeammateInfo
 
 CELL_BYTES = 5
+SEEN_BYTES = 4  # per cell with 'latest' beliefs: the step of the value's observation
 
-# The map part of one transmission: flat cell indices and their codes
-# (the occupancy value, plus 4 where the cell is safe space).
-Cells = tuple[np.ndarray, np.ndarray]
+
+class Cells(NamedTuple):
+    """The map part of one transmission: flat cell indices and their codes (the
+    occupancy value, plus 4 where the cell is safe space); with 'latest' beliefs also
+    the step at which each value was observed."""
+
+    flat: np.ndarray
+    codes: np.ndarray
+    seen: np.ndarray | None = None
 
 
 @dataclass
@@ -164,7 +174,8 @@ class Exchange:
     @property
     def cell_bytes(self) -> int:
         """Bytes per map cell sent: 1 for whole grids, index + state for deltas."""
-        return 1 if self.full_maps else CELL_BYTES
+        seen = SEEN_BYTES if self.ledger.latest else 0
+        return (1 if self.full_maps else CELL_BYTES) + seen
 
     def send(
         self,
@@ -196,11 +207,12 @@ class Exchange:
         i, j, ledger = sender.index, receiver.index, self.ledger
         if self.full_maps:
             codes = ledger.copies[i].reshape(-1)
-            return np.arange(codes.size, dtype=np.int64), codes.copy()
+            index = np.arange(codes.size, dtype=np.int64)
+            return Cells(index, codes.copy(), seen_of(sender, index))
         boxes = ledger.newer_boxes(i, int(ledger.synced[i, j]))
         if len(boxes) == 0:
             return None
-        return select_cells(
+        index, codes = select_cells(
             boxes,
             int(ledger.synced[i, j]),
             j,
@@ -210,11 +222,18 @@ class Exchange:
             ledger.copies[j],
             only_lacking,
         )
+        return Cells(index, codes, seen_of(sender, index))
 
     def deliver(self, receiver: Agent, cells: Cells | None, step: int, sender: int) -> None:
         """Merge a transmission's cells into ``receiver``'s grids."""
         if cells is not None and len(cells[0]):
-            self.ledger.merge(receiver.index, cells, (receiver.belief, receiver.safe), step, sender)
+            grids = (receiver.belief, receiver.safe)
+            self.ledger.merge(receiver.index, cells, grids, step, sender, receiver.observed)
+
+
+def seen_of(sender: Agent, index: np.ndarray) -> np.ndarray | None:
+    """When the sender's values of cells ``index`` were observed ('latest' beliefs only)."""
+    return None if sender.observed is None else sender.observed.reshape(-1)[index]
 
 
 def stamp_base_contacts(

@@ -7,7 +7,10 @@ the tick up to which the receiver holds everything the sender had
 (``synced[i, j]``), so a transmission carries only the cells whose tick is newer.
 Occupancy grids only ever grow (UNKNOWN < FREE < OCCUPIED, safe space only gains
 cells), which is why merging deltas ends in exactly the maps a full exchange
-gives (tests/test_comms.py checks it step by step).
+gives (tests/test_comms.py checks it step by step). With 'latest' beliefs a cell may
+change back (a scan overwrites what it sees); every change of a value is stamped like
+any other, and the value travels with the step of its observation, so a receiver keeps
+whichever observation is newer (:func:`~mresim_phys.comms.deltas.merge_latest`).
 
 Changes are found without full-grid passes: the simulation reports the window
 of every scan (:meth:`Ledger.note`), and each agent's windows are compared with
@@ -17,10 +20,16 @@ transmission which part of the grid can hold newer cells.
 
 from __future__ import annotations
 
-import numpy as np
+from typing import TYPE_CHECKING
 
-from mresim_phys.comms.deltas import merge_cells, stamp_changes
+import numpy as np
+from numpy.typing import NDArray
+
+from mresim_phys.comms.deltas import merge_cells, merge_latest, stamp_changes
 from mresim_phys.types import BeliefGrid, BoolGrid
+
+if TYPE_CHECKING:
+    from mresim_phys.comms.exchange import Cells
 
 Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)
 OWN = -1  # origin of a cell value the agent sensed itself
@@ -47,7 +56,8 @@ def received_tick(step: int) -> int:
 class Ledger:
     """Per-agent change ticks and per-pair sync ticks for n agents on one grid shape."""
 
-    def __init__(self, shape: tuple[int, int], n: int) -> None:
+    def __init__(self, shape: tuple[int, int], n: int, latest: bool = False) -> None:
+        self.latest = latest  # cells carry their observation step; the newer value wins
         self.stamps = [np.full(shape, -1, dtype=np.int32) for _ in range(n)]
         self.copies = [np.zeros(shape, dtype=np.uint8) for _ in range(n)]
         self.origins = [np.full(shape, OWN, dtype=np.int16) for _ in range(n)]
@@ -92,15 +102,22 @@ class Ledger:
     def merge(
         self,
         index: int,
-        cells: tuple[np.ndarray, np.ndarray],
+        cells: Cells,
         grids: tuple[BeliefGrid, BoolGrid],
         step: int,
         sender: int,
+        observed: NDArray[np.int32] | None = None,
     ) -> int:
-        """Merge received ``cells`` (flat indices, codes) into agent ``index``'s grids."""
+        """Merge received ``cells`` (flat indices, codes[, observation steps]) into agent
+        ``index``'s grids (and its ``observed`` steps, with 'latest' beliefs)."""
         tick = received_tick(step)
         grid = (self.copies[index], self.stamps[index], self.origins[index])
-        changed, *tight = merge_cells(*cells, *grids, *grid, tick, sender)
+        if cells.seen is not None and observed is not None:
+            changed, *tight = merge_latest(
+                cells.flat, cells.codes, cells.seen, *grids, observed, *grid, tick, sender
+            )
+        else:
+            changed, *tight = merge_cells(cells.flat, cells.codes, *grids, *grid, tick, sender)
         if changed:
             self.add_box(index, tick, (tight[0], tight[1], tight[2], tight[3]))
         return changed

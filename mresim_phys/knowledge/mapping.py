@@ -40,6 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
+from numpy.typing import NDArray
 
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN, BeliefGrid, BoolGrid, FloatArray, IntArray
 from mresim_phys.world.space import Scan
@@ -61,9 +62,19 @@ class Update:
 
 
 def integrate_scan(
-    belief: BeliefGrid, safe: BoolGrid, scan: Scan, safe_fraction: float
+    belief: BeliefGrid,
+    safe: BoolGrid,
+    scan: Scan,
+    safe_fraction: float,
+    observed: NDArray[np.int32] | None = None,
+    step: int = 0,
 ) -> Update | None:
-    """Fold one scan into ``belief`` and ``safe`` in place; return the cells marked FREE."""
+    """Fold one scan into ``belief`` and ``safe`` in place; return the cells marked FREE.
+
+    With ``observed`` (beliefs that hold each cell's latest observation) the scan also
+    overwrites what it sees: cells inside its free polygon become FREE even if they were
+    OCCUPIED (a moving obstacle has gone), the cells its rays hit are OCCUPIED, and both
+    get ``step`` as their latest observation (:func:`refresh_seen`)."""
     row0, col0, free = fold_scan(
         float(scan.origin[0]),
         float(scan.origin[1]),
@@ -76,7 +87,59 @@ def integrate_scan(
         safe,
         float(safe_fraction * scan.max_range),
     )
-    return None if row0 < 0 else Update(row0, col0, free.view(bool))
+    if row0 < 0:
+        return None
+    if observed is not None:
+        refresh_seen(
+            float(scan.origin[0]),
+            float(scan.origin[1]),
+            np.ascontiguousarray(scan.angles, dtype=np.float64),
+            np.ascontiguousarray(scan.ranges, dtype=np.float64),
+            np.ascontiguousarray(scan.wall_hit, dtype=np.bool_),
+            float(scan.max_range),
+            free,
+            row0,
+            col0,
+            belief,
+            observed,
+            step,
+        )
+    return Update(row0, col0, free.view(bool))
+
+
+@njit(cache=True, nogil=True)
+def refresh_seen(
+    ox: float,
+    oy: float,
+    angles: FloatArray,
+    ranges: FloatArray,
+    wall_hit: BoolGrid,
+    max_range: float,
+    free: BeliefGrid,
+    row0: int,
+    col0: int,
+    belief: BeliefGrid,
+    observed: NDArray[np.int32],
+    step: int,
+) -> None:
+    """After :func:`fold_scan`: the scan's free cells (``free``, a window at row0, col0)
+    become FREE whatever they held, then its hit cells OCCUPIED again (a hit wins within
+    one scan, as in the fold); all of them were observed at ``step``."""
+    h, w = free.shape
+    for r in range(h):
+        for c in range(w):
+            if free[r, c]:
+                belief[r + row0, c + col0] = FREE
+                observed[r + row0, c + col0] = step
+    rows, cols = belief.shape
+    for k in range(len(angles)):
+        if wall_hit[k] and ranges[k] < max_range:
+            ux, uy = math.cos(angles[k]), math.sin(angles[k])
+            ex, ey = ox + ranges[k] * ux, oy + ranges[k] * uy
+            c, r = math.floor(ex + 1e-3 * ux), math.floor(ey + 1e-3 * uy)
+            if 0 <= r < rows and 0 <= c < cols:
+                belief[r, c] = OCCUPIED
+                observed[r, c] = step
 
 
 @njit(cache=True, nogil=True)

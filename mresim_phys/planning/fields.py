@@ -61,13 +61,13 @@ _NO_PRED = -9999  # "no predecessor" (the marker scipy.sparse.csgraph uses)
 
 
 @lru_cache(maxsize=32)
-def _clearance_kernel(clearance: float) -> NDArray[np.uint8]:
+def clearance_kernel(clearance: float) -> NDArray[np.uint8]:
     """Offsets (as a dilation kernel) of the cells whose square lies closer than ``clearance``.
 
     The distance from a cell centre to the square of a cell at offset (dr, dc) is
     ``hypot(max(|dr| - 0.5, 0), max(|dc| - 0.5, 0))``.
 
-    >>> _clearance_kernel(0.6)
+    >>> clearance_kernel(0.6)
     array([[0, 1, 0],
            [1, 1, 1],
            [0, 1, 0]], dtype=uint8)
@@ -110,7 +110,7 @@ def traversable(belief: BeliefGrid, clearance: float) -> BoolGrid:
     box = bbox(free)
     if box is None or clearance <= 0.0:
         return free
-    kernel = _clearance_kernel(float(clearance))
+    kernel = clearance_kernel(float(clearance))
     r0, r1, c0, c1 = _grow(box, kernel.shape[0] // 2, belief.shape)
     occupied = (belief[r0:r1, c0:c1] == OCCUPIED).view(np.uint8)
     # Border value 1: cells outside the grid are walls. Inner crop edges are >= the kernel

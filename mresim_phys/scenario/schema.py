@@ -260,6 +260,16 @@ class SimulationSpec(Strict):
         default_factory=StartJitterSpec,
         description="Random shifts of the robots' starts (position and heading) per seed.",
     )
+    belief: Literal["auto", "latest", "grow"] = Field(
+        "auto",
+        description=(
+            "How robots' maps change: 'latest' (each cell holds its latest observation: a"
+            " scan overwrites what it sees, an exchange keeps the newer observation, ties go"
+            " to the obstacle), 'grow' (known cells only grow: unknown < free < obstacle, as"
+            " the original), or 'auto': latest when the world can change (obstacles, doors,"
+            " debris, collapse or cells events), grow otherwise."
+        ),
+    )
     threads: Annotated[int, Field(ge=1, le=MAX_THREADS)] | Literal["auto"] = Field(
         1,
         description=(
