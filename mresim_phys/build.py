@@ -25,6 +25,7 @@ from mresim_phys.comms.ledger import Ledger
 from mresim_phys.comms.network import Channel, Network
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.errors import ScenarioError
+from mresim_phys.knowledge.latest import LatestCoverage
 from mresim_phys.knowledge.mapping import Coverage
 from mresim_phys.knowledge.teammates import BASE_NAME
 from mresim_phys.planning import PLANNERS
@@ -391,7 +392,11 @@ def build_setup(scenario: Scenario) -> Setup:
         base=base,
         robots=robots,
         network=build_network(scenario, streams, world.shape, rules.latest),
-        coverage=Coverage(reachable.mask),
+        coverage=(
+            LatestCoverage(reachable.mask, world.occupied)
+            if rules.latest
+            else Coverage(reachable.mask)
+        ),
         reachable=reachable,
         events=events,
         streams=streams,

@@ -53,6 +53,7 @@ class StepRecord:
     control_bytes: int = 0
     latency_max: float = 0.0
     latency_mean: float = 0.0
+    stale: int | None = None  # cells some robot's map holds wrong now ('latest' beliefs only)
 
     def csv_row(self) -> list[str]:
         """Values in :func:`csv_header` order, floats as exact round-trip text."""
@@ -72,17 +73,18 @@ class StepRecord:
         row += [repr(r.distance) for r in self.robots]
         row += [r.state for r in self.robots]
         row += [str(r.base_contact) for r in self.robots]
-        return row
+        return row if self.stale is None else [*row, str(self.stale)]
 
 
-def csv_header(robot_names: list[str]) -> list[str]:
-    """Column names of ``metrics.csv``."""
+def csv_header(robot_names: list[str], stale: bool = False) -> list[str]:
+    """Column names of ``metrics.csv`` (``stale`` last, for a world that changes)."""
     return (
         ["step", "explored", "known_at_base", "distance", "alive", "links"]
         + ["comm_bytes", "control_links", "control_bytes", "latency_max", "latency_mean"]
         + [f"distance_{n}" for n in robot_names]
         + [f"state_{n}" for n in robot_names]
         + [f"base_contact_{n}" for n in robot_names]
+        + (["stale"] if stale else [])
     )
 
 
@@ -124,15 +126,19 @@ def measure_step(
         control_bytes=control_bytes,
         latency_max=latency[0],
         latency_mean=latency[1],
+        stale=getattr(coverage, "stale", None),
     )
 
 
-def update_known_at_base(previous: float, base_belief: BeliefGrid, coverage: Coverage) -> float:
+def update_known_at_base(
+    previous: float, base_belief: BeliefGrid, coverage: Coverage, monotone: bool = True
+) -> float:
     """``known_at_base`` once the base heard news: the share of ``coverage``'s reachable
-    cells FREE in ``base_belief``, never below ``previous``."""
+    cells FREE in ``base_belief``, never below ``previous`` (unless not ``monotone``: with
+    'latest' beliefs the base's map can lose a cell a newer observation closed)."""
     known = np.count_nonzero((base_belief == FREE) & coverage.reachable)
-    fraction = known / coverage.total if coverage.total else 1.0
-    return float(max(previous, min(fraction, 1.0)))
+    fraction = min(known / coverage.total if coverage.total else 1.0, 1.0)
+    return float(max(previous, fraction) if monotone else fraction)
 
 
 def base_latency(step: int, heard: dict[str, int], robots: list[str]) -> tuple[float, float]:

@@ -31,9 +31,10 @@ import numpy as np
 
 from mresim_phys.agents import Agent, Robot
 from mresim_phys.build import Scenario, Setup, build_setup, load_scenario
-from mresim_phys.comms.ledger import box_around
+from mresim_phys.comms.ledger import box_around, sensed_tick
 from mresim_phys.errors import ScenarioError, UnknownRobotError
 from mresim_phys.event_context import RunEventContext
+from mresim_phys.knowledge.latest import LatestCoverage
 from mresim_phys.knowledge.mapping import integrate_scan
 from mresim_phys.knowledge.teammates import presumed_lost
 from mresim_phys.metrics import (
@@ -313,11 +314,23 @@ class Simulation:
             )
         self.comm = self.network.communicate(self.agents, self.world, self.t)
         self.note_links()
+        if isinstance(self.coverage, LatestCoverage):
+            self.touch_merged(self.coverage)
         if self.links[0].any() or self.t == 0:
             self.known_at_base = update_known_at_base(
-                self.known_at_base, self.base.belief, self.coverage
+                self.known_at_base, self.base.belief, self.coverage, not self.rules.latest
             )
         self.phase_times["communication"] += perf_counter() - started
+
+    def touch_merged(self, coverage: LatestCoverage) -> None:
+        """'latest' beliefs: a merge (or a bump) may take a FREE cell out of a robot's
+        map, so the explored count looks at the boxes merges changed this step too."""
+        ledger = self.network.ledger
+        for robot in self.robots:
+            for box in ledger.newer_boxes(robot.index, sensed_tick(self.t)).tolist():
+                coverage.touch_box(robot.belief, (box[0], box[1], box[2], box[3]))
+            around = box_around(robot.position, robot.radius + 2, self.world.shape)
+            coverage.touch_box(robot.belief, around)
 
     def note_links(self) -> None:
         """Tell every agent whom it is linked with on the main channel now."""

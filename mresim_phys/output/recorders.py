@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any, Protocol
 import numpy as np
 import yaml
 
-from mresim_phys.build import region_probe
+from mresim_phys.build import region_probe, run_rules
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.errors import ScenarioError
 from mresim_phys.metrics import CommTotals, Milestones, StepRecord, csv_header
@@ -75,7 +75,8 @@ class RunWriter:
         self._partial = temp_sibling(self.path)
         self._file = self._partial.open("w", newline="", encoding="utf-8")
         self._csv = csv.writer(self._file, lineterminator="\n")
-        self._csv.writerow(csv_header([r.name for r in scenario.robots]))
+        latest = run_rules(scenario).latest  # a world that changes: a 'stale' column
+        self._csv.writerow(csv_header([r.name for r in scenario.robots], stale=latest))
 
     def on_step(self, record: StepRecord) -> None:
         """Append one row."""

@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-from mresim_phys.build import region_probe
+from mresim_phys.build import region_probe, run_rules
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.errors import MresimError, ScenarioError
 from mresim_phys.metrics import csv_header
@@ -120,10 +120,12 @@ def replay_frames(
 def replay_metrics(log: RunLog, run_dir: Path) -> tuple[list[str], bool]:
     """Write metrics-replayed.csv from the log and compare it with metrics.csv."""
     out = run_dir / "metrics-replayed.csv"
+    scenario = run_scenario(run_dir)
+    latest = scenario is not None and run_rules(scenario).latest
     with atomic_path(out) as tmp, tmp.open("w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle, lineterminator="\n")
-        writer.writerow(csv_header(log.names[1:]))
-        for record in recompute_metrics(log):
+        writer.writerow(csv_header(log.names[1:], stale=latest))
+        for record in recompute_metrics(log, latest):
             writer.writerow(record.csv_row())
     live = run_dir / "metrics.csv"
     if not live.is_file():

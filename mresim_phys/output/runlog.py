@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 
 from mresim_phys.errors import MresimError
+from mresim_phys.knowledge.latest import LatestCoverage
 from mresim_phys.knowledge.mapping import Coverage
 from mresim_phys.metrics import RobotRecord, StepRecord, measure_step, update_known_at_base
 from mresim_phys.output.files import write_json_atomic
@@ -44,7 +45,7 @@ from mresim_phys.output.logformat import (
 )
 from mresim_phys.output.logmeta import META, damaged, read_meta
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
-from mresim_phys.types import FREE, BoolGrid, IntArray
+from mresim_phys.types import FREE, BeliefGrid, BoolGrid, IntArray
 from mresim_phys.world.maps import connected_to, free_components_mask, seed_cells
 
 TRUTH_FILE, STEPS = "truth.npz", "steps.jsonl"
@@ -231,13 +232,20 @@ class Replay:
     against the free cells then reachable from the robots' starts, as live.
     """
 
-    def __init__(self, log: RunLog) -> None:
+    def __init__(self, log: RunLog, latest: bool = False) -> None:
         self.log, self.shape = log, (int(log.meta["shape"][0]), int(log.meta["shape"][1]))
         n, cells = len(log.names), self.shape[0] * self.shape[1]
         self.tracks = [Track(cells) for _ in range(n)]
         self.static = [decode_line(STATIC_AGENT, AgentSnapshot, a, n) for a in log.meta["agents"]]
         self.truth = flat_cells(log.truth)
-        self.coverage = Coverage(free_components_mask(log.truth, log.meta["starts"]))
+        reachable = free_components_mask(log.truth, log.meta["starts"])
+        self.latest = latest  # 'latest' beliefs: maps can lose FREE cells (knowledge.latest)
+        self.coverage: Coverage = (
+            LatestCoverage(reachable, self.truth.view(bool).reshape(self.shape))
+            if latest
+            else Coverage(reachable)
+        )
+        self._maps: dict[int, BeliefGrid] = {}  # each robot's map as one stable 2-D view
         self.known_at_base, self.first = 0.0, True
         self.version: int | None = None
 
@@ -264,7 +272,9 @@ class Replay:
         for i, row in enumerate(line["agents"]):
             agent, belief_changed = self.agent(i, row, chunk, j * n + i)
             agents.append(agent)
-            if i > 0:  # robots: cells newly FREE in their maps count as explored
+            if i > 0 and isinstance(self.coverage, LatestCoverage):
+                self.touch_changed(self.coverage, i, belief_changed)
+            elif i > 0:  # robots: cells newly FREE in their maps count as explored
                 free.append(self.newly_free(i, belief_changed))
         record = self.measure(fields["step"], free, fields["links"], agents, fields["comm"])
         snap = Snapshot(
@@ -294,6 +304,16 @@ class Replay:
         line = decode_line(AGENT_LINE, AgentSnapshot, row, len(self.tracks))
         return AgentSnapshot(**self.static[i], **line, **grids), changed["belief"]
 
+    def touch_changed(self, coverage: LatestCoverage, i: int, changed: IntArray | None) -> None:
+        """'latest' beliefs: recount the box of robot ``i``'s changed cells."""
+        if changed is None or len(changed) == 0:
+            return
+        if i not in self._maps:
+            self._maps[i] = self.tracks[i].grids["belief"].reshape(self.shape)
+        rows, cols = np.divmod(changed, self.shape[1])
+        box = (int(rows.min()), int(rows.max()) + 1, int(cols.min()), int(cols.max()) + 1)
+        coverage.touch_box(self._maps[i], box)
+
     def newly_free(self, i: int, changed: IntArray | None) -> IntArray:
         """The cells of ``changed`` that agent ``i`` now holds FREE."""
         if changed is None:
@@ -311,9 +331,12 @@ class Replay:
     ) -> StepRecord:
         """The step's metrics as live (``metrics.measure_step``), from cells newly FREE."""
         self.count_free(np.concatenate([np.zeros(0, np.int64), *free]))
+        self.coverage.settle()
         if self.first or links[0].any():  # the base's map changes only when it is linked
             base = self.tracks[0].grids["belief"].reshape(self.shape)
-            self.known_at_base = update_known_at_base(self.known_at_base, base, self.coverage)
+            self.known_at_base = update_known_at_base(
+                self.known_at_base, base, self.coverage, not self.latest
+            )
         self.first = False
         return measure_step(
             step,
@@ -344,7 +367,8 @@ def reachable_from(truth: BoolGrid, starts: list[list[float]]) -> BoolGrid:
     return connected_to(~truth, seed_cells(starts, truth.shape))
 
 
-def recompute_metrics(log: RunLog) -> Iterator[StepRecord]:
-    """The ``metrics.csv`` rows of the logged run, recomputed from its map deltas."""
-    for _, record in Replay(log).run():
+def recompute_metrics(log: RunLog, latest: bool = False) -> Iterator[StepRecord]:
+    """The ``metrics.csv`` rows of the logged run, recomputed from its map deltas
+    (``latest``: the run's beliefs held each cell's latest observation)."""
+    for _, record in Replay(log, latest).run():
         yield record
