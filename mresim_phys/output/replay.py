@@ -103,7 +103,8 @@ def replay_frames(
     )
     version = None
     try:
-        for snap, record in Replay(log).run():
+        latest = scenario is not None and run_rules(scenario).latest
+        for snap, record in Replay(log, latest).run():
             polygons = frames.renderer.regions is not None and not frames.renderer.regions.circles
             if polygons and version is not None and snap.world_version != version:
                 frames.renderer.regions = replay_regions(scenario, snap.truth)  # walls moved
