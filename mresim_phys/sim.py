@@ -36,6 +36,7 @@ from mresim_phys.errors import ScenarioError, UnknownRobotError
 from mresim_phys.event_context import RunEventContext
 from mresim_phys.knowledge.mapping import integrate_scan
 from mresim_phys.knowledge.teammates import presumed_lost
+from mresim_phys.knowledge.terrain import learn_terrain
 from mresim_phys.metrics import (
     CommTotals,
     Milestones,
@@ -90,7 +91,7 @@ class Simulation:
             self.agents, s.network, s.world, s.coverage, s.reachable, s.event_streams(),
             s.elements,
         )  # fmt: skip
-        self.move_rules = MoveRules(s.rules.scan_every_point, self.robot_filter)
+        self.move_rules = MoveRules(s.rules.scan_every_point, self.robot_filter, s.terrain)
         self.pool = RobotPool(thread_count(scenario.simulation.threads, len(self.robots)))
         self.apply_events()
         effects = Effects()
@@ -244,6 +245,8 @@ class Simulation:
         )
         scanned = perf_counter()
         update = integrate_scan(robot.belief, robot.safe, result, laser.safe_fraction)
+        if update is not None and robot.terrain is not None and self.setup.terrain is not None:
+            learn_terrain(robot.terrain, self.setup.terrain, update)
         effects.spend("sensing", scanned - started)
         effects.spend("mapping", perf_counter() - scanned)
         if update is not None:
@@ -288,6 +291,7 @@ class Simulation:
             team_order=self.setup.team_order,
             vary_with_seed=self.rules.vary_with_seed,
             free_area=self.setup.free_area,
+            terrain=read_only(robot.terrain) if robot.terrain is not None else None,
         )
 
     @property
