@@ -342,6 +342,7 @@ class Simulation:
                 self.comm.traffic.sent.copy(),
             ),
             world_version=self.world.version,
+            terrain=None if self.setup.terrain is None else read_only(self.setup.terrain),
         )
 
     def measure(self) -> StepRecord:
