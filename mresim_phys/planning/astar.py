@@ -5,9 +5,10 @@ The octile distance is the exact path cost on an obstacle-free grid under the mo
 and consistent: every cell is expanded at most once and the path is optimal, the same
 length as the distance field's. Equal f values are broken toward the deeper node.
 
-With a slowness grid from known terrain (``planning.costs``) a move costs its octile length
-times the mean slowness of its two cells (>= the octile length, so the heuristic stays
-admissible and consistent); without one the costs are the octile constants, as before.
+With a slowness grid from known terrain a search runs ``costs.astar_weighted_kernel``
+instead: a move costs its octile length times the mean slowness of its two cells (>= the
+octile length, so the heuristic stays admissible and consistent). Without one the uniform
+kernel below runs, unchanged.
 
 The kernel also serves the topological planner: given a label per cell and the set of
 allowed labels, it searches only the corridor of node regions along a graph route.
@@ -20,7 +21,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from mresim_phys.planning.base import PLANNERS, GridPlanner, no_path
-from mresim_phys.planning.costs import NO_SLOWNESS, move_cost
+from mresim_phys.planning.costs import astar_weighted_kernel
 from mresim_phys.planning.grid import (
     CLOSED,
     DIAGONAL,
@@ -56,18 +57,15 @@ def astar_kernel(
     g: FloatArray,
     pred: NDArray[np.int64],
     state: NDArray[np.uint8],
-    slow: FloatArray,
 ) -> tuple[float, int]:
     """A* from ``source`` to ``target`` over a flat padded mask (border blocked).
 
     With a non-empty ``labels`` (one per cell) a cell may be entered only if
-    ``allowed[labels[cell] + 1]``; with a non-empty ``slow`` (one per cell) moves are
-    priced by terrain (``costs.move_cost``). ``g``, ``pred`` and ``state`` come from
+    ``allowed[labels[cell] + 1]``. ``g``, ``pred`` and ``state`` come from
     ``search_arrays``; ``pred`` is filled in. Returns the path cost (inf if unreachable)
     and the number of expanded cells.
     """
     restricted = labels.size > 0
-    weighted = slow.size > 0
     tr, tc = target // wp, target % wp
     fs, gs, nodes = heap_new(1024)
     g[source], pred[source], state[source] = 0.0, NO_PRED, OPEN
@@ -92,9 +90,9 @@ def astar_kernel(
             if dr != 0 and dc != 0:
                 if not diagonal_ok(pad, wp, u, dr, dc):
                     continue
-                cost = here + (move_cost(DIAGONAL, slow, u, v) if weighted else DIAGONAL)
+                cost = here + DIAGONAL
             else:
-                cost = here + (move_cost(STRAIGHT, slow, u, v) if weighted else STRAIGHT)
+                cost = here + STRAIGHT
             if state[v] == UNSEEN or cost < g[v]:
                 g[v], pred[v], state[v] = cost, u, OPEN
                 f = cost + octile(ur + dr, uc + dc, tr, tc)
@@ -116,10 +114,15 @@ def astar_search(
     (``slowness``: the full-grid terrain cost multipliers, None = uniform)."""
     source, target = window.node(start), window.node(goal)
     g, pred, state = search_arrays(window.pad.size)
-    slow = NO_SLOWNESS if slowness is None else window.padded(slowness)
-    cost, expanded = astar_kernel(
-        window.pad, window.wp, source, target, labels, allowed, g, pred, state, slow
-    )
+    if slowness is None:
+        cost, expanded = astar_kernel(
+            window.pad, window.wp, source, target, labels, allowed, g, pred, state
+        )
+    else:  # terrain costs, over the whole window (``labels`` are not used)
+        slow = window.padded(slowness)
+        cost, expanded = astar_weighted_kernel(
+            window.pad, window.wp, source, target, slow, g, pred, state
+        )
     if not np.isfinite(cost):
         return no_path(), expanded
     return window.points(walk_back(pred, target)), expanded
