@@ -22,6 +22,7 @@ from mresim_phys.planning import Planner
 from mresim_phys.strategies.base import Decision, Strategy
 from mresim_phys.types import UNKNOWN, BeliefGrid, BoolGrid, FloatArray
 from mresim_phys.world.sensing import Laser
+from mresim_phys.world.terrain import TerrainGrid
 
 RobotState = Literal["active", "error", "done", "failed"]
 Part = Literal["drive", "sensor", "radio"]
@@ -98,6 +99,7 @@ class Robot(Agent):
     reached_goal: bool = False
     rng: np.random.Generator = field(default_factory=lambda: np.random.default_rng(0))
     decision: Decision | None = None
+    terrain: TerrainGrid | None = None  # known terrain factors (knowledge/terrain.py); None: none
 
     @property
     def alive(self) -> bool:

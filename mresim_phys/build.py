@@ -28,6 +28,7 @@ from mresim_phys.errors import ScenarioError
 from mresim_phys.knowledge.latest import LatestCoverage
 from mresim_phys.knowledge.mapping import Coverage
 from mresim_phys.knowledge.teammates import BASE_NAME
+from mresim_phys.knowledge.terrain import unknown_terrain
 from mresim_phys.planning import PLANNERS
 from mresim_phys.rng import Streams
 from mresim_phys.scenario.load import load_scenario
@@ -59,6 +60,7 @@ from mresim_phys.world.reach import Reachable
 from mresim_phys.world.sensing import Laser
 from mresim_phys.world.shapes import region_cells
 from mresim_phys.world.space import World
+from mresim_phys.world.terrain import TerrainGrid, TerrainSpec, terrain_grid
 
 __all__ = ["RunRules", "Scenario", "Setup", "build_setup", "load_scenario", "region_probe"]
 
@@ -285,6 +287,7 @@ class Setup:
     team_order: tuple[str, ...] = ()  # tie-break order of the robots in auctions
     free_area: int = 0  # free cells of the map (the original's total area), known to robots
     elements: list[MovingObstacle | Door | RandomDebris] = field(default_factory=list)
+    terrain: TerrainGrid | None = None  # true speed factor per cell; None: no terrain
 
     def sensing_streams(self) -> list[np.random.Generator]:
         """Each robot's laser-noise stream, in robot order."""
@@ -342,6 +345,20 @@ def world_can_change(scenario: Scenario) -> bool:
     return bool(scenario.obstacles or scenario.doors or scenario.random_debris or events)
 
 
+def build_terrain(
+    spec: TerrainSpec | None, robots: list[Robot], world: World
+) -> TerrainGrid | None:
+    """The true terrain grid (a ScenarioError naming the field if it cannot be built); each
+    robot starts knowing none of it."""
+    try:
+        truth = terrain_grid(spec, world.shape)
+    except ValueError as exc:
+        raise ScenarioError(str(exc)) from None
+    for robot in robots:
+        robot.terrain = unknown_terrain(truth)
+    return truth
+
+
 def run_rules(scenario: Scenario) -> RunRules:
     """The scenario's cycle and stop rules as plain values."""
     sim, stop = scenario.simulation, scenario.stop
@@ -386,6 +403,7 @@ def build_setup(scenario: Scenario) -> Setup:
     if rules.latest:
         for agent in [base, *robots]:
             agent.observed = np.full(world.shape, -1, dtype=np.int32)
+    terrain = build_terrain(scenario.terrain, robots, world)
     return Setup(
         truth=truth,
         world=world,
@@ -406,4 +424,5 @@ def build_setup(scenario: Scenario) -> Setup:
         team_order=team_order(scenario.robots, streams, vary),
         free_area=int(np.count_nonzero(~truth.occupied)),
         elements=elements,
+        terrain=terrain,
     )

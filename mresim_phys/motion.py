@@ -10,6 +10,10 @@ turns in place to face what its strategy asked it to look at, then scans); an
 invalid one sets the robot's error flag, marks what it bumped into in its own
 map, and ends its motion for this step. The last partial move of a step is
 scaled down to the remaining budget, as in the original.
+
+Terrain (``terrain:``): a step's distance budget is ``speed * factor`` of the cell under
+the robot at the start of the step (the truth, ``world/terrain.py``; 1 without terrain),
+whatever ground the step then crosses.
 """
 
 from __future__ import annotations
@@ -25,6 +29,7 @@ from mresim_phys.knowledge.mapping import mark_bump
 from mresim_phys.planning.fields import clearance_kernel
 from mresim_phys.types import OCCUPIED
 from mresim_phys.world.space import World
+from mresim_phys.world.terrain import TerrainGrid, factor_at
 
 EPS = 1e-9
 
@@ -35,6 +40,7 @@ class MoveRules:
 
     scan_every_point: bool
     shape_filter_of: Callable[[Robot], tuple[int, int, int]]
+    terrain: TerrainGrid | None = None  # true speed factors (world/terrain.py); None: none
 
 
 def wants_plan(robot: Robot, step: int, interval: int) -> bool:
@@ -55,7 +61,7 @@ def take_step(
     ``planned``: the robot already decided this step (its strategy is not asked
     again when the path runs out; the robot waits for the next step).
     """
-    budget = robot.speed
+    budget = robot.speed * factor_at(rules.terrain, robot.position)
     moved = False
     while budget > EPS:
         if len(robot.path) == 0:

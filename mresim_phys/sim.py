@@ -37,6 +37,7 @@ from mresim_phys.event_context import RunEventContext
 from mresim_phys.knowledge.latest import LatestCoverage
 from mresim_phys.knowledge.mapping import integrate_scan
 from mresim_phys.knowledge.teammates import presumed_lost
+from mresim_phys.knowledge.terrain import learn_terrain
 from mresim_phys.metrics import (
     CommTotals,
     Milestones,
@@ -92,7 +93,7 @@ class Simulation:
             self.agents, s.network, s.world, s.coverage, s.reachable, s.event_streams(),
             s.elements,
         )  # fmt: skip
-        self.move_rules = MoveRules(s.rules.scan_every_point, self.robot_filter)
+        self.move_rules = MoveRules(s.rules.scan_every_point, self.robot_filter, s.terrain)
         self.pool = RobotPool(thread_count(scenario.simulation.threads, len(self.robots)))
         self.apply_events()
         effects = Effects()
@@ -248,6 +249,8 @@ class Simulation:
         update = integrate_scan(
             robot.belief, robot.safe, result, laser.safe_fraction, robot.observed, self.t
         )
+        if update is not None and robot.terrain is not None and self.setup.terrain is not None:
+            learn_terrain(robot.terrain, self.setup.terrain, update)
         effects.spend("sensing", scanned - started)
         effects.spend("mapping", perf_counter() - scanned)
         clearance = robot.radius + robot.body.wall_margin
@@ -298,6 +301,7 @@ class Simulation:
             team_order=self.setup.team_order,
             vary_with_seed=self.rules.vary_with_seed,
             free_area=self.setup.free_area,
+            terrain=read_only(robot.terrain) if robot.terrain is not None else None,
         )
 
     @property
@@ -360,6 +364,7 @@ class Simulation:
                 self.comm.traffic.sent.copy(),
             ),
             world_version=self.world.version,
+            terrain=None if self.setup.terrain is None else read_only(self.setup.terrain),
         )
 
     def measure(self) -> StepRecord:

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray
 
@@ -116,6 +117,7 @@ class Snapshot:
     resolution: float | None = None
     comm: CommSummary = field(default_factory=CommSummary)
     world_version: int = 0  # World.version: bumped by every change of the truth
+    terrain: NDArray[np.float32] | None = None  # true speed factors (static); None: no terrain
 
     @property
     def base(self) -> AgentSnapshot:

@@ -21,7 +21,7 @@ from mresim_phys import COMM_MODELS, STRATEGIES  # noqa: E402
 from mresim_phys.planning import PLANNERS  # noqa: E402
 from mresim_phys.scenario import schema  # noqa: E402
 from mresim_phys.strict import MAX_FLOAT, MAX_INT, UNIT_BOUNDS, bounds_text  # noqa: E402
-from mresim_phys.world import debris, doors, obstacles, shapes  # noqa: E402
+from mresim_phys.world import debris, doors, obstacles, shapes, terrain  # noqa: E402
 from mresim_phys.world.events import EVENTS  # noqa: E402
 
 SECTIONS: list[tuple[str, type[BaseModel]]] = [
@@ -50,6 +50,8 @@ SECTIONS: list[tuple[str, type[BaseModel]]] = [
     ("", shapes.CircleRegion),
     ("", shapes.PolygonRegion),
     ("", shapes.MaskRegion),
+    ("terrain", terrain.TerrainSpec),
+    ("terrain.regions[i]", terrain.TerrainRegion),
 ]
 NOTES = {
     "obstacles[i]": (
@@ -72,6 +74,21 @@ NOTES = {
         " `region`. Rubble never lands on a robot: with `crush: avoid` its cells stay free;"
         " with `crush: fail` the robot is buried and fails."
     ),
+    "terrain": (
+        "A speed factor in (0, 1] per cell, from a greyscale `image` the size of the map"
+        " (`factor = max(min_factor, value / 255)`: white 1, black `min_factor`) or from"
+        " `regions` (other cells 1; where regions overlap the later wins). A robot's distance"
+        " budget for a step is `speed * factor` of the cell under it at the start of the"
+        " step. A robot learns the true factor of every cell its scans mark free (1 where"
+        " it has not sensed the ground; known terrain is not exchanged between robots), and"
+        " its distance fields and planners price a move as its octile length times the mean"
+        " of `1 / factor` of its two cells; `jps` and `topological` plan with that cost-aware"
+        " A* once the robot knows slow ground. The `terrain` video layer tints slow ground"
+        " brown."
+    ),
+    "terrain.regions[i]": (
+        "One of `box`, `circle`, `polygon` or `mask`, as the regions above, with its `factor`."
+    ),
 }
 
 
@@ -86,7 +103,7 @@ def type_name(annotation: Any) -> str:
         return " or ".join(repr(m) for m in members)
     text = getattr(annotation, "__name__", None) or str(annotation)
     text = text.replace("typing.", "").replace("mresim_phys.scenario.schema.", "")
-    for module in ("shapes", "obstacles", "doors", "debris"):
+    for module in ("shapes", "obstacles", "doors", "debris", "terrain"):
         text = text.replace(f"mresim_phys.world.{module}.", "")
     return text.replace(" | ", " or ")
 

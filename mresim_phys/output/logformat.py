@@ -122,7 +122,7 @@ SNAPSHOT_LINE = {
     "comm": LineField(CommSummary.to_json, to_comm),
     "world_version": LineField(int, to_int),
 }
-SNAPSHOT_ELSEWHERE = ("resolution", "truth", "agents")  # meta.json, truth codec, per agent
+SNAPSHOT_ELSEWHERE = ("resolution", "truth", "agents", "terrain")  # meta, truth, agents, truth.npz
 RECOMPUTED = ("explored", "known_at_base", "alive")  # by the replay, from the deltas
 
 

@@ -47,6 +47,7 @@ from mresim_phys.output.logmeta import META, damaged, read_meta
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
 from mresim_phys.types import FREE, BeliefGrid, BoolGrid, IntArray
 from mresim_phys.world.maps import connected_to, free_components_mask, seed_cells
+from mresim_phys.world.terrain import TerrainGrid
 
 TRUTH_FILE, STEPS = "truth.npz", "steps.jsonl"
 
@@ -96,7 +97,10 @@ class RunLogWriter:
             stale.unlink()
         self.meta = new_meta(first, name, seed, chunk_steps)
         truth = np.packbits(first.truth, axis=None)
-        np.savez_compressed(self.log_dir / TRUTH_FILE, occupied=truth)
+        statics: dict[str, Any] = {"occupied": truth}
+        if first.terrain is not None:
+            statics["terrain"] = first.terrain
+        np.savez_compressed(self.log_dir / TRUTH_FILE, **statics)
         self._tracks = [Track(cells) for _ in first.agents]
         self._truth = flat_cells(np.asarray(first.truth, dtype=bool))
         self._version = first.world_version
@@ -155,8 +159,11 @@ class RunLogWriter:
 class RunLog:
     """A run log opened for reading: static data at once, steps streamed by :meth:`snapshots`."""
 
-    def __init__(self, log_dir: Path, meta: dict[str, Any], truth: BoolGrid) -> None:
+    def __init__(
+        self, log_dir: Path, meta: dict[str, Any], truth: BoolGrid, terrain: TerrainGrid | None
+    ) -> None:
         self.log_dir, self.meta, self.truth = log_dir, meta, truth  # truth: at step 0
+        self.terrain = terrain  # true speed factors (static), None without terrain
         self.names: list[str] = [a["name"] for a in meta["agents"]]  # base first, as in snapshots
         self.robot_names = [a["name"] for a in meta["agents"] if a["kind"] == "robot"]
         self.steps: int = meta["steps"]  # committed steps (whole chunks only if never closed)
@@ -168,7 +175,7 @@ class RunLog:
         if not (log_dir / META).is_file():
             raise MresimError(f"{log_dir}: no run log here (no {META}; `mresim run` writes one)")
         meta = read_meta(log_dir)
-        log = cls(log_dir, meta, read_truth(log_dir, meta))
+        log = cls(log_dir, meta, read_truth(log_dir, meta), read_terrain(log_dir))
         log.check_files()
         return log
 
@@ -223,6 +230,16 @@ def read_truth(log_dir: Path, meta: dict[str, Any]) -> BoolGrid:
         return read_only(np.unpackbits(bits, count=rows * cols).view(bool).reshape(rows, cols))
     except (OSError, ValueError, KeyError, zipfile.BadZipFile) as exc:
         raise damaged(log_dir, f"{TRUTH_FILE}: {exc}") from None
+
+
+def read_terrain(log_dir: Path) -> TerrainGrid | None:
+    """The terrain factor grid of ``truth.npz`` (read-only), None if the run had none."""
+    try:
+        with np.load(log_dir / TRUTH_FILE, allow_pickle=False) as data:
+            terrain = data["terrain"] if "terrain" in data.files else None
+    except (OSError, ValueError, zipfile.BadZipFile) as exc:
+        raise damaged(log_dir, f"{TRUTH_FILE}: {exc}") from None
+    return None if terrain is None else read_only(terrain.astype(np.float32))
 
 
 class Replay:
@@ -285,6 +302,7 @@ class Replay:
             truth=self.truth_grid,
             agents=tuple(agents),
             resolution=self.log.meta.get("resolution"),
+            terrain=self.log.terrain,
         )
         return snap, record
 

@@ -5,6 +5,11 @@ The octile distance is the exact path cost on an obstacle-free grid under the mo
 and consistent: every cell is expanded at most once and the path is optimal, the same
 length as the distance field's. Equal f values are broken toward the deeper node.
 
+With a slowness grid from known terrain a search runs ``costs.astar_weighted_kernel``
+instead: a move costs its octile length times the mean slowness of its two cells (>= the
+octile length, so the heuristic stays admissible and consistent). Without one the uniform
+kernel below runs, unchanged.
+
 The kernel also serves the topological planner: given a label per cell and the set of
 allowed labels, it searches only the corridor of node regions along a graph route.
 """
@@ -16,6 +21,7 @@ from numba import njit
 from numpy.typing import NDArray
 
 from mresim_phys.planning.base import PLANNERS, GridPlanner, no_path
+from mresim_phys.planning.costs import astar_weighted_kernel
 from mresim_phys.planning.grid import (
     CLOSED,
     DIAGONAL,
@@ -32,7 +38,6 @@ from mresim_phys.planning.grid import (
     heap_push,
     octile,
     search_arrays,
-    search_window,
     walk_back,
 )
 from mresim_phys.types import BoolGrid, FloatArray
@@ -103,13 +108,21 @@ def astar_search(
     goal: tuple[int, int],
     labels: NDArray[np.int32] = NO_LABELS,
     allowed: NDArray[np.bool_] = NO_ALLOWED,
+    slowness: FloatArray | None = None,
 ) -> tuple[FloatArray, int]:
-    """Cell-centre path (empty if unreachable) and expansion count of one A* search."""
+    """Cell-centre path (empty if unreachable) and expansion count of one A* search
+    (``slowness``: the full-grid terrain cost multipliers, None = uniform)."""
     source, target = window.node(start), window.node(goal)
     g, pred, state = search_arrays(window.pad.size)
-    cost, expanded = astar_kernel(
-        window.pad, window.wp, source, target, labels, allowed, g, pred, state
-    )
+    if slowness is None:
+        cost, expanded = astar_kernel(
+            window.pad, window.wp, source, target, labels, allowed, g, pred, state
+        )
+    else:  # terrain costs, over the whole window (``labels`` are not used)
+        slow = window.padded(slowness)
+        cost, expanded = astar_weighted_kernel(
+            window.pad, window.wp, source, target, slow, g, pred, state
+        )
     if not np.isfinite(cost):
         return no_path(), expanded
     return window.points(walk_back(pred, target)), expanded
@@ -122,7 +135,23 @@ class AStar(GridPlanner):
     name = "astar"
 
     def search(
-        self, passable: BoolGrid, start: tuple[int, int], goal: tuple[int, int]
+        self,
+        passable: BoolGrid,
+        start: tuple[int, int],
+        goal: tuple[int, int],
+        slowness: FloatArray | None = None,
     ) -> FloatArray:
         """The optimal cell-centre path; (0, 2) if the goal is unreachable."""
-        return search_window(passable, start, goal, astar_search)
+        return weighted_astar(passable, start, goal, slowness)
+
+
+def weighted_astar(
+    passable: BoolGrid,
+    start: tuple[int, int],
+    goal: tuple[int, int],
+    slowness: FloatArray | None,
+) -> FloatArray:
+    """A* over the whole passable window, priced by ``slowness`` (None: uniform)."""
+    window = Window.of(passable)
+    assert window is not None  # the start is passable
+    return astar_search(window, start, goal, slowness=slowness)[0]

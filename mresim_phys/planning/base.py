@@ -10,6 +10,12 @@ obstacles; unknown cells are not traversable) with the move rule of
 centre to the goal cell's centre, optionally shortened by line-of-sight shortcuts
 (:mod:`mresim_phys.planning.smoothing`).
 
+With known slow terrain a caller passes ``slowness`` (``planning.costs``: per-cell cost
+multipliers, >= 1); planners then minimise travel time instead of length (``astar``), or
+fall back to a planner that does (``jps``, ``topological``), and smoothing shortcuts only
+across cells of slowness 1. Callers pass ``slowness`` only when it is not None, so a
+planner written before terrain existed still works on maps without it.
+
 Typical use: ``PLANNERS.get("jps")(JumpPointParams()).plan(passable, (x, y), (row, col))``.
 """
 
@@ -52,9 +58,15 @@ class Planner(Protocol):
         ...
 
     def plan(
-        self, passable: BoolGrid, start_xy: tuple[float, float], goal_rc: tuple[int, int]
+        self,
+        passable: BoolGrid,
+        start_xy: tuple[float, float],
+        goal_rc: tuple[int, int],
+        slowness: FloatArray | None = None,
     ) -> FloatArray:
-        """World points (n, 2) from the start cell's centre to the goal cell's; (0, 2) if none."""
+        """World points (n, 2) from the start cell's centre to the goal cell's; (0, 2) if none.
+
+        ``slowness``: terrain cost multipliers per cell (None: uniform octile costs)."""
         ...
 
     def info(self) -> Mapping[str, Any]:
@@ -92,17 +104,27 @@ class GridPlanner(Plugin):
         self.params = params
 
     def plan(
-        self, passable: BoolGrid, start_xy: tuple[float, float], goal_rc: tuple[int, int]
+        self,
+        passable: BoolGrid,
+        start_xy: tuple[float, float],
+        goal_rc: tuple[int, int],
+        slowness: FloatArray | None = None,
     ) -> FloatArray:
         """World points (n, 2) from the start cell's centre to the goal cell's; (0, 2) if none."""
         ends = endpoints(passable, start_xy, goal_rc)
         if ends is None:
             return no_path()
-        path = self.search(passable, *ends)
-        return smooth_path(path, passable) if self.params.smooth and len(path) else path
+        path = self.search(passable, *ends, slowness)
+        if not (self.params.smooth and len(path)):
+            return path
+        return smooth_path(path, passable if slowness is None else passable & (slowness <= 1.0))
 
     def search(
-        self, passable: BoolGrid, start: tuple[int, int], goal: tuple[int, int]
+        self,
+        passable: BoolGrid,
+        start: tuple[int, int],
+        goal: tuple[int, int],
+        slowness: FloatArray | None = None,
     ) -> FloatArray:
         """Cell-centre path between two passable cells; (0, 2) if unreachable."""
         raise NotImplementedError

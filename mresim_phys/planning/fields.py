@@ -42,6 +42,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from mresim_phys.planning.costs import dijkstra_weighted
 from mresim_phys.planning.grid import (
     DIAGONAL,
     SQRT2,
@@ -205,15 +206,25 @@ def _dijkstra(
 
 
 def _search(
-    passable: BoolGrid, start_rc: tuple[int, int], box: Box, limit: float = np.inf
+    passable: BoolGrid,
+    start_rc: tuple[int, int],
+    box: Box,
+    limit: float = np.inf,
+    slowness: FloatArray | None = None,
 ) -> tuple[FloatArray, NDArray[np.int32]]:
     """Dijkstra from ``start_rc`` over ``passable[box]``; padded (costs 2-D, preds flat).
 
     Node ``i`` is padded cell ``(i // (w + 2), i % (w + 2))``; the padding is blocked, so
-    the kernel needs no bounds checks.
+    the kernel needs no bounds checks. With a ``slowness`` grid (``planning.costs``) moves
+    are priced by terrain (a heap-based kernel); without, the bucket kernel runs.
     """
     window = Window.around(passable, box)
-    dist, pred = _dijkstra(window.pad, window.wp, window.node(start_rc), float(limit))
+    source = window.node(start_rc)
+    if slowness is None:
+        dist, pred = _dijkstra(window.pad, window.wp, source, float(limit))
+    else:
+        slow = window.padded(slowness)
+        dist, pred = dijkstra_weighted(window.pad, window.wp, source, float(limit), slow)
     return dist.reshape(-1, window.wp), pred
 
 
@@ -272,7 +283,8 @@ class DistanceField:
         """Cell-centre path (n, 2) of world (x, y) from the start cell to cell (row, col).
 
         The first point is the centre of the (snapped) start cell, the last the goal's. The
-        octile length of the path equals ``cost_at`` of the goal. Empty (0, 2) if unreachable.
+        octile length of the path equals ``cost_at`` of the goal (without terrain costs).
+        Empty (0, 2) if unreachable.
         """
         if not self.reachable(row, col):
             return np.empty((0, 2))
@@ -299,10 +311,14 @@ def _window(start: tuple[int, int], box: Box, limit: float) -> Box:
 
 
 def _field_in(
-    passable: BoolGrid, start: tuple[int, int], window: Box, limit: float
+    passable: BoolGrid,
+    start: tuple[int, int],
+    window: Box,
+    limit: float,
+    slowness: FloatArray | None = None,
 ) -> DistanceField:
     """The ``DistanceField`` of a search confined to ``window``."""
-    costs, pred = _search(passable, start, window, limit)
+    costs, pred = _search(passable, start, window, limit, slowness)
     shape = (int(passable.shape[0]), int(passable.shape[1]))
     return DistanceField(shape, start, (window[0] - 1, window[2] - 1), costs, pred)
 
@@ -313,6 +329,7 @@ def distance_field(
     *,
     max_snap: float = 3.0,
     limit: float = np.inf,
+    slowness: FloatArray | None = None,
 ) -> DistanceField:
     """One Dijkstra from ``start_xy`` over the passable cells (see the module move rules).
 
@@ -326,6 +343,8 @@ def distance_field(
         start_xy: Robot position in world coordinates (cells).
         max_snap: Largest distance to snap a non-passable start onto a passable cell.
         limit: Cells whose path cost exceeds this are left unreached (inf).
+        slowness: Per-cell cost multipliers from known terrain (``planning.costs``);
+            None = uniform octile costs.
 
     Returns:
         The ``DistanceField`` of the start.
@@ -334,7 +353,7 @@ def distance_field(
     box = bbox(passable)
     if start is None or box is None:
         return DistanceField((int(passable.shape[0]), int(passable.shape[1])), None)
-    return _field_in(passable, start, _window(start, box, limit), limit)
+    return _field_in(passable, start, _window(start, box, limit), limit, slowness)
 
 
 def plan_path(

@@ -138,6 +138,14 @@ class Window:
         """Flat window index of full-grid cell ``rc``."""
         return (rc[0] - self.origin[0]) * self.wp + (rc[1] - self.origin[1])
 
+    def padded(self, grid: FloatArray) -> FloatArray:
+        """A full-grid float array cut to this window, flat, its border 1.0 (never entered)."""
+        hp = self.pad.size // self.wp
+        r0, c0 = self.origin[0] + 1, self.origin[1] + 1
+        out = np.ones((hp, self.wp))
+        out[1:-1, 1:-1] = grid[r0 : r0 + hp - 2, c0 : c0 + self.wp - 2]
+        return out.ravel()
+
     def points(self, nodes: NDArray[np.int64]) -> FloatArray:
         """World (x, y) cell centres (n, 2) of flat window indices."""
         rows, cols = np.divmod(np.asarray(nodes, dtype=np.int64), self.wp)

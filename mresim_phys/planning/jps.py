@@ -18,6 +18,9 @@ blocked cell is allowed), i.e. exactly the rule of :mod:`mresim_phys.planning.gr
   diagonal ray stops wherever one of its two straight rays finds a jump point.
 
 The tests check path lengths against a reference Dijkstra on random grids.
+
+Terrain: jump points assume every move of a kind costs the same, so with known slow
+terrain (a ``slowness`` grid, ``planning.costs``) the planner runs cost-aware ``astar``.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from mresim_phys.planning.astar import weighted_astar
 from mresim_phys.planning.base import PLANNERS, GridPlanner, no_path
 from mresim_phys.planning.grid import (
     CLOSED,
@@ -212,7 +216,14 @@ class JumpPointSearch(GridPlanner):
     name = "jps"
 
     def search(
-        self, passable: BoolGrid, start: tuple[int, int], goal: tuple[int, int]
+        self,
+        passable: BoolGrid,
+        start: tuple[int, int],
+        goal: tuple[int, int],
+        slowness: FloatArray | None = None,
     ) -> FloatArray:
-        """An optimal cell-centre path; (0, 2) if the goal is unreachable."""
+        """An optimal cell-centre path; (0, 2) if the goal is unreachable. With known slow
+        terrain (``slowness``) the pruning is not valid: cost-aware A* plans instead."""
+        if slowness is not None:
+            return weighted_astar(passable, start, goal, slowness)
         return search_window(passable, start, goal, jps_search)

@@ -21,6 +21,11 @@ Every cell of the path is passable NOW (the mask given, not the one the map was 
 from), so a path never crosses an obstacle or an unknown cell; when the map is too stale to
 route (no route, or the corridor is cut), the planner falls back to plain grid A*. Paths are
 optimal within the corridor, hence at most slightly longer than ``astar``'s.
+
+Terrain: the region graph and the corridor search are uniform-cost, so with known slow
+terrain (a ``slowness`` grid, ``planning.costs``) a query is planned by cost-aware grid
+A* over the whole passable window instead (the map is still kept up to date for the
+strategies' junctions and the skeleton layer).
 """
 
 from __future__ import annotations
@@ -33,7 +38,7 @@ from numba import njit
 from numpy.typing import NDArray
 from pydantic import Field
 
-from mresim_phys.planning.astar import astar_search
+from mresim_phys.planning.astar import astar_search, weighted_astar
 from mresim_phys.planning.base import PLANNERS, GridPlanner, PlannerParams
 from mresim_phys.planning.grid import Window
 from mresim_phys.planning.topoanchor import anchor
@@ -134,10 +139,17 @@ class TopologicalPlanner(GridPlanner):
         return self.map, True
 
     def search(
-        self, passable: BoolGrid, start: tuple[int, int], goal: tuple[int, int]
+        self,
+        passable: BoolGrid,
+        start: tuple[int, int],
+        goal: tuple[int, int],
+        slowness: FloatArray | None = None,
     ) -> FloatArray:
-        """A cell-centre path through the node regions; (0, 2) if the goal is unreachable."""
+        """A cell-centre path through the node regions; (0, 2) if the goal is unreachable.
+        With known slow terrain: cost-aware A* (see the module docstring)."""
         topo, fresh = self._refresh(passable)
+        if slowness is not None:
+            return weighted_astar(passable, start, goal, slowness)
         return topological_path(topo, passable, start, goal, self.params.corridor, fresh)
 
     def info(self) -> Mapping[str, Any]:

@@ -24,7 +24,7 @@ import numpy as np
 
 from mresim_phys.render.draw import ONE, Overlay
 from mresim_phys.render.layers import LayerSpec
-from mresim_phys.render.raster import LabelGrids, colour_labels, packed_colours
+from mresim_phys.render.raster import LabelGrids, colour_labels, packed_colours, shade_terrain
 from mresim_phys.render.style import DEFAULT_STYLE, Style
 
 if TYPE_CHECKING:
@@ -85,6 +85,8 @@ class Renderer:
             raise ValueError(f"snapshot map {snapshot.truth.shape} != {(self.rows, self.cols)}")
         label = self._grids.labels(snapshot, self.layers, len(self.style.palette))
         image = self._colour(label)
+        if snapshot.terrain is not None and "terrain" in self.layers.global_layers:
+            shade_terrain(image, snapshot.terrain, snapshot.truth, self.map_size, self.style)
         self._overlay.draw(image, snapshot, self._regions(snapshot))
         return image
 

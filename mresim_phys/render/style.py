@@ -39,6 +39,8 @@ class Style:
     background: BGR = (255, 255, 255)  # a map class whose layer is off
     frontier: BGR = (255, 0, 255)
     skeleton: BGR = (0, 90, 200)
+    terrain: BGR = (20, 60, 110)  # dark brown: slow ground is tinted toward it
+    terrain_alpha: float = 0.7  # tint of the slowest ground (factor -> 0); factor 1: none
     link: BGR = (128, 128, 0)
     hierarchy: BGR = (130, 0, 75)
     failed: BGR = (128, 128, 128)

@@ -33,6 +33,7 @@ from mresim_phys.scenario.schema import (
 from mresim_phys.strategies import STRATEGIES
 from mresim_phys.world.events import EVENTS, CollapseParams
 from mresim_phys.world.shapes import MaskRegion, Region
+from mresim_phys.world.terrain import absolute_terrain
 
 RobotT = TypeVar("RobotT", bound=RobotParams)
 
@@ -177,7 +178,7 @@ def absolute_mask(region: Region | None, folder: Path) -> Region | None:
 
 
 def resolve_mask_paths(scenario: Scenario, folder: Path) -> Scenario:
-    """The scenario with the mask images of collapse events and random debris made
+    """The scenario with the mask images of collapse events, random debris and terrain made
     absolute (relative paths are to the YAML file), so the run can be built anywhere."""
     events = [
         e.model_copy(update={"collapse": absolute_mask(e.collapse, folder)})
@@ -188,7 +189,10 @@ def resolve_mask_paths(scenario: Scenario, folder: Path) -> Scenario:
     debris = scenario.random_debris
     if debris is not None:
         debris = debris.model_copy(update={"region": absolute_mask(debris.region, folder)})
-    return scenario.model_copy(update={"events": events, "random_debris": debris})
+    terrain = absolute_terrain(scenario.terrain, folder)
+    return scenario.model_copy(
+        update={"events": events, "random_debris": debris, "terrain": terrain}
+    )
 
 
 def describe_errors(

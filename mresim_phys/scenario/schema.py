@@ -26,6 +26,7 @@ from mresim_phys.world.debris import RandomDebrisParams
 from mresim_phys.world.doors import DoorParams
 from mresim_phys.world.events import EVENTS, EventParams
 from mresim_phys.world.obstacles import ObstacleParams
+from mresim_phys.world.terrain import TerrainSpec
 
 Point = tuple[float, float]
 MAX_RANGE = 100_000.0  # cells: sensor and radio ranges (a 1000x map diagonal is far less)
@@ -371,6 +372,9 @@ class Scenario(Strict):
     )
     random_debris: RandomDebrisParams | None = Field(
         None, description="Rubble falling at random steps and places (null: none)."
+    )
+    terrain: TerrainSpec | None = Field(
+        None, description="Variable terrain: a speed factor per cell (null: open floor)."
     )
 
     @model_validator(mode="before")

@@ -12,7 +12,9 @@ role, and the payload to send its teammates with its record from now on.
 :func:`plan_context` gives a strategy the configuration space and one distance
 field from the robot, computed once per decision, plans the path to a chosen
 goal with the robot's own planner (``RobotView.planner``) and gives the
-topological map of its known space (skeleton, junctions, node regions).
+topological map of its known space (skeleton, junctions, node regions). With
+terrain in the scenario, its fields and plans price moves by the terrain the robot
+KNOWS (``RobotView.terrain``, never the truth): ``PlanContext.slowness``.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ import numpy as np
 
 from mresim_phys.knowledge.teammates import Payload, TeammateInfo
 from mresim_phys.planning import Planner, TopologicalMap, shared_map
+from mresim_phys.planning.costs import slowness_of
 from mresim_phys.planning.fields import DistanceField, distance_field, traversable
 from mresim_phys.planning.topological import TopologicalPlanner
 from mresim_phys.plugin import PluginParams
@@ -66,6 +69,7 @@ class RobotView:
     team_order: tuple[str, ...] = ()  # the team's tie-break order (from the seed), the same for all
     vary_with_seed: bool = True  # the scenario lets the seed vary the run (initial random steps)
     free_area: int = 0  # free cells of the whole map, known before the mission (0: not known)
+    terrain: FloatArray | None = None  # known terrain speed factors (1: open or unsensed); None
 
     def tie_rank(self, name: str) -> int:
         """Where ``name`` stands in the team's tie-break order (unknown names last)."""
@@ -122,9 +126,15 @@ class PlanContext:
         return traversable(self.view.belief, self.view.clearance)
 
     @cached_property
+    def slowness(self) -> FloatArray | None:
+        """Cost multipliers of the terrain the robot knows (``planning.costs``); None while
+        it knows no slow ground (or the run has no terrain): uniform costs."""
+        return slowness_of(self.view.terrain)
+
+    @cached_property
     def field(self) -> DistanceField:
         """Path costs from the robot to every passable cell it can reach."""
-        return distance_field(self.passable, self.view.position)
+        return distance_field(self.passable, self.view.position, slowness=self.slowness)
 
     def fields_growing(self, first_limit: float) -> Iterator[DistanceField]:
         """Distance fields bounded by a cost horizon that doubles, ending unbounded.
@@ -136,7 +146,9 @@ class PlanContext:
         limit = max(first_limit, 1.0)
         extent = sum(self.view.belief.shape)
         while limit < extent:
-            yield distance_field(self.passable, self.view.position, limit=limit)
+            yield distance_field(
+                self.passable, self.view.position, limit=limit, slowness=self.slowness
+            )
             limit *= 2
         yield self.field
 
@@ -149,7 +161,9 @@ class PlanContext:
         planner = self.view.planner
         if planner is None:
             return self.field.path_to(row, col)
-        return planner.plan(self.passable, self.view.position, (row, col))
+        if self.slowness is None:
+            return planner.plan(self.passable, self.view.position, (row, col))
+        return planner.plan(self.passable, self.view.position, (row, col), self.slowness)
 
     def topology(self, spacing: int = 10) -> TopologicalMap:
         """The topological map (skeleton, nodes, regions) of the robot's passable cells.

@@ -297,7 +297,7 @@ def exact_costs(
     context: PlanContext, position: tuple[float, float], goals_rc: IntArray, limit: float
 ) -> FloatArray | None:
     """Path costs on this robot's map from a teammate's position (None if off the map)."""
-    field = distance_field(context.passable, position, limit=limit)
+    field = distance_field(context.passable, position, limit=limit, slowness=context.slowness)
     if field.start_rc is None:
         return None
     return field.cost_at(goals_rc[:, 0], goals_rc[:, 1])
