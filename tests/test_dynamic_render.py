@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import json
 from pathlib import Path
+from typing import Any
 
 import cv2
 import numpy as np
@@ -42,8 +43,9 @@ def two_rooms() -> np.ndarray:
     return occ
 
 
-def dynamic_scenario(folder: Path) -> Path:
-    """Write the map and the scenario into ``folder``; the scenario's path."""
+def dynamic_scenario(folder: Path, **changes: Any) -> Path:
+    """Write the map and the scenario into ``folder`` (keyword arguments replace or add
+    top-level keys); the scenario's path."""
     cv2.imwrite(str(folder / "rooms.png"), np.where(two_rooms(), 0, 255).astype(np.uint8))
     cart = {"waypoints": [[25, 8], [25, 52]], "speed": 1, "mode": "back_and_forth"}
     data = {
@@ -67,7 +69,7 @@ def dynamic_scenario(folder: Path) -> Path:
         ],
     }
     path = folder / "dynamic.yaml"
-    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    path.write_text(yaml.safe_dump(data | changes, sort_keys=False))
     return path
 
 
@@ -225,7 +227,25 @@ def test_the_log_stores_footprints_once_and_moves_only_when_they_change(
 
 
 def test_cli_replay_frames_and_metrics_equal_the_live_run(scenario: Path, tmp_path: Path) -> None:
-    out, steps = tmp_path / "run", (5, 10, 20, 25, 30, 44, 60)
+    assert_replay_equals_live(scenario, tmp_path / "run", (5, 10, 20, 25, 30, 44, 60))
+
+
+def test_replayed_regions_pass_through_obstacles_radio_passes_through(tmp_path: Path) -> None:
+    """Path-loss region polygons replay as live around an obstacle with
+    ``blocks_radio: false`` (radio passes it, the truth holds it), with random debris."""
+    walk = {"random_walk": [60, 20], "speed": 1.5}
+    rover = {"name": "rover", "shape": {"circle": 1.5}, "motion": walk, "blocks_radio": False}
+    path = dynamic_scenario(
+        tmp_path,
+        communication={"model": "path_loss"},
+        obstacles=[rover],
+        random_debris={"rate": 0.3, "size": [2, 4]},
+    )
+    assert_replay_equals_live(path, tmp_path / "run", (10, 20, 33, 47, 60))
+
+
+def assert_replay_equals_live(scenario: Path, out: Path, steps: tuple[int, ...]) -> None:
+    """Run, replay with --metrics: the same metrics and PNG frames at ``steps``."""
     flags = ["--snapshot", ",".join(map(str, steps)), "--layers", "all"]
     assert main(["run", str(scenario), "--out", str(out), "--quiet", "--no-plots", *flags]) == 0
     assert main(["replay", str(out), *flags, "--metrics"]) == 0
