@@ -60,6 +60,7 @@ from mresim_phys.snapshot import (
 )
 from mresim_phys.strategies import Decision, RobotView
 from mresim_phys.world.sensing import scan
+from mresim_phys.world.views import movable_views
 
 PHASES = ("sensing", "mapping", "planning", "communication", "metrics")
 LOOKAHEAD_STEPS = 3  # 'latest' beliefs: a path blocked within this many steps is dropped
@@ -345,6 +346,7 @@ class Simulation:
     def snapshot(self) -> Snapshot:
         """The run at the end of the current step (views of the live grids, not copies)."""
         agents = [agent_snapshot(self.base)] + [agent_snapshot(r) for r in self.robots]
+        rubble, gave_way = self.world.debris() or (None, None)
         return Snapshot(
             step=self.t,
             explored=self.record.explored,
@@ -365,6 +367,9 @@ class Simulation:
             ),
             world_version=self.world.version,
             terrain=None if self.setup.terrain is None else read_only(self.setup.terrain),
+            movables=movable_views(self.world, self.setup.elements),
+            rubble=rubble,
+            gave_way=gave_way,
         )
 
     def measure(self) -> StepRecord:

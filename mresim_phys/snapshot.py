@@ -99,11 +99,28 @@ class CommSummary:
 
 
 @dataclass(frozen=True)
+class MovableSnapshot:
+    """A moving obstacle or a door at the end of a step (``world/views.py`` builds them).
+
+    ``cells`` never changes for a given name during a run (the run log stores it once): an
+    obstacle's footprint, or a door's leaf without the map's walls its ends lie in.
+    """
+
+    name: str
+    kind: str  # "obstacle" or "door"
+    cells: BoolGrid  # read-only; cells[0, 0] is the map cell ``at``
+    at: tuple[int, int]  # (row, col) of the top-left cell
+    on: bool  # on the map: an obstacle present, a door closed
+    segment: tuple[tuple[float, float], tuple[float, float]] | None = None  # a door's ends
+
+
+@dataclass(frozen=True)
 class Snapshot:
     """A whole run at the end of step ``step``; ``agents[0]`` is the base station.
 
     ``truth`` is a view of the world's occupancy grid, which may change during a run
-    (``world_version`` tells which truth it is).
+    (``world_version`` tells which truth it is); ``movables``, ``rubble`` and
+    ``gave_way`` tell the renderer which of its occupied cells are what.
     """
 
     step: int
@@ -118,6 +135,9 @@ class Snapshot:
     comm: CommSummary = field(default_factory=CommSummary)
     world_version: int = 0  # World.version: bumped by every change of the truth
     terrain: NDArray[np.float32] | None = None  # true speed factors (static); None: no terrain
+    movables: tuple[MovableSnapshot, ...] = ()  # every obstacle and door, scenario order
+    rubble: BoolGrid | None = None  # static walls that were free on the map (None: none yet)
+    gave_way: BoolGrid | None = None  # free cells that were the map's walls
 
     @property
     def base(self) -> AgentSnapshot:

@@ -10,8 +10,10 @@ Each field of :class:`~mresim_phys.snapshot.Snapshot` and of its
   ``position``, ``heading``, ``state``, ``role``, ``goal``, ``distance``, ``parent``,
   ``base_contact`` (:data:`AGENT_LINE`);
 * delta chunks, as changes since the previous logged step: grids (:class:`GridField`:
-  ``belief``, ``safe``, ``skeleton``, and the ``truth`` when the world changed) and point
-  arrays (:class:`PointsField`: ``path``, ``rendezvous``);
+  ``belief``, ``safe``, ``skeleton``, the ``truth`` when the world changed, ``rubble``
+  and ``gave_way``) and point arrays (:class:`PointsField`: ``path``, ``rendezvous``);
+* ``movables``: what never changes in ``meta.json``, moves in the steps' lines
+  (``output.logworld``);
 * not at all, recomputed on replay: ``explored``, ``known_at_base``, ``alive``.
 
 Importing this module fails if a dataclass field has no codec here (or a codec has no
@@ -31,8 +33,8 @@ import numpy as np
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
 from mresim_phys.types import FloatArray, IntArray
 
-FORMAT, VERSION = "mresim-runlog", 2
-READABLE = (1, 2)  # versions the reader reads (how 1 differs: docs/run-log-format.md)
+FORMAT, VERSION = "mresim-runlog", 3
+READABLE = (1, 2, 3)  # versions the reader reads (how 1 differs: docs/run-log-format.md)
 NEW, NONE = -1, -2  # PointsField codes: the points are stored; the field is None
 Parts = dict[str, list[np.ndarray]]
 Chunk = dict[str, np.ndarray]
@@ -122,7 +124,9 @@ SNAPSHOT_LINE = {
     "comm": LineField(CommSummary.to_json, to_comm),
     "world_version": LineField(int, to_int),
 }
-SNAPSHOT_ELSEWHERE = ("resolution", "truth", "agents", "terrain")  # meta, truth, agents, truth.npz
+# meta.json, the truth codec, per agent; then output.logworld and WORLD_GRIDS
+SNAPSHOT_ELSEWHERE: tuple[str, ...] = ("resolution", "truth", "agents")
+SNAPSHOT_ELSEWHERE += ("movables", "rubble", "gave_way", "terrain")  # terrain: truth.npz
 RECOMPUTED = ("explored", "known_at_base", "alive")  # by the replay, from the deltas
 
 
@@ -294,7 +298,13 @@ AGENT_GRIDS = (
 )
 AGENT_POINTS = (PointsField("path"), PointsField("rendezvous", optional=True))
 TRUTH = GridField("truth", values=False)  # one entry per logged step, not per agent
-ARRAYS = {k: v for f in (TRUTH, *AGENT_GRIDS, *AGENT_POINTS) for k, v in f.arrays().items()}
+WORLD_GRIDS = (  # one entry per logged step; absent from logs of version 2 or older
+    GridField("rubble", values=False, optional=True),
+    GridField("gave_way", values=False, optional=True),
+)
+ARRAYS = {
+    k: v for f in (TRUTH, *WORLD_GRIDS, *AGENT_GRIDS, *AGENT_POINTS) for k, v in f.arrays().items()
+}
 
 
 class Track:

@@ -2,7 +2,8 @@
 
 ``meta.json`` (docs/run-log-format.md) is a run log's commit point: format, version,
 name, seed, grid shape, chunk size, the agents' static table, the robots' starts and the
-committed step count. :func:`read_meta` reads it and checks every value, so a damaged or
+committed step count, and (version 3) the moving obstacles and doors
+(``output.logworld``). :func:`read_meta` reads it and checks every value, so a damaged or
 foreign file is a MresimError naming it rather than an error deep in a replay.
 """
 
@@ -14,6 +15,7 @@ from typing import Any
 
 from mresim_phys.errors import MresimError
 from mresim_phys.output.logformat import FORMAT, READABLE, STATIC_AGENT, decode_line
+from mresim_phys.output.logworld import read_movable_meta
 from mresim_phys.snapshot import AgentSnapshot
 
 META = "meta.json"
@@ -81,4 +83,16 @@ def meta_problem(meta: dict[str, Any]) -> str | None:
     robots = sum(1 for a in agents if a["kind"] == "robot")
     if not (isinstance(starts, list) and len(starts) == robots and all(map(is_point, starts))):
         return f"starts {starts!r} are not {robots} [x, y] points"
+    return movables_problem(meta.get("movables", []))
+
+
+def movables_problem(movables: Any) -> str | None:
+    """What is wrong with meta.json's ``movables`` list (absent before version 3)."""
+    if not isinstance(movables, list):
+        return f"movables {movables!r} is not a list"
+    for entry in movables:
+        try:
+            read_movable_meta(entry)
+        except (IndexError, KeyError, TypeError, ValueError):
+            return f"movable {entry!r} lacks a name, kind, shape or cells"
     return None

@@ -12,6 +12,7 @@ With ``--metrics`` it recomputes ``metrics.csv`` from the log into
 from __future__ import annotations
 
 import csv
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -28,6 +29,7 @@ from mresim_phys.output.runlog import Replay, RunLog, recompute_metrics
 from mresim_phys.scenario.load import validate_scenario
 from mresim_phys.scenario.readers import read_yaml_mapping
 from mresim_phys.scenario.schema import RenderSpec, Scenario
+from mresim_phys.snapshot import MovableSnapshot
 from mresim_phys.types import BoolGrid
 from mresim_phys.world.space import World
 
@@ -82,16 +84,37 @@ def run_scenario(run_dir: Path) -> Scenario | None:
         return None  # a run of another version: draw range circles
 
 
-def replay_regions(scenario: Scenario | None, truth: BoolGrid) -> RegionProbe | None:
-    """The run's communication regions through the walls of ``truth`` (copied)."""
-    return None if scenario is None else region_probe(scenario, World(np.array(truth), []))
+def replay_regions(
+    scenario: Scenario | None, truth: BoolGrid, movables: Sequence[MovableSnapshot] = ()
+) -> RegionProbe | None:
+    """The run's communication regions through the walls of ``truth`` (copied), past the
+    obstacles among ``movables`` that the scenario says radio passes through."""
+    return (
+        None if scenario is None else region_probe(scenario, radio_world(scenario, truth, movables))
+    )
+
+
+def radio_world(scenario: Scenario, truth: BoolGrid, movables: Sequence[MovableSnapshot]) -> World:
+    """A World of truth ``truth`` whose radio passes through the scenario's obstacles with
+    ``blocks_radio: false`` that are on the map, as the live world's does."""
+    quiet = {o.name for o in scenario.obstacles if not o.blocks_radio}
+    placed = [m for m in movables if m.kind == "obstacle" and m.on and m.name in quiet]
+    static = np.array(truth, dtype=bool)
+    for m in placed:
+        (row, col), (h, w) = m.at, m.cells.shape
+        static[row : row + h, col : col + w] &= ~m.cells
+    world = World(static, [])
+    for m in placed:
+        world.add_movable(m.name, m.cells, m.at, blocks_radio=False)
+    return world
 
 
 def replay_frames(
     log: RunLog, spec: RenderSpec, png_dir: Path, scenario: Scenario | None = None
 ) -> list[str]:
     """Render the logged run into a video and/or PNGs through a FrameRecorder, as live;
-    return what was written. Region polygons follow the truth when the world changes."""
+    return what was written. Region polygons follow the truth (and the obstacles radio
+    passes through) when the world changes."""
     try:
         layers = checked_layers(spec.layers, log.names)
     except ValueError as exc:
@@ -106,8 +129,8 @@ def replay_frames(
         latest = scenario is not None and run_rules(scenario).latest
         for snap, record in Replay(log, latest).run():
             polygons = frames.renderer.regions is not None and not frames.renderer.regions.circles
-            if polygons and version is not None and snap.world_version != version:
-                frames.renderer.regions = replay_regions(scenario, snap.truth)  # walls moved
+            if polygons and snap.world_version != version:  # step 0, or the walls moved
+                frames.renderer.regions = replay_regions(scenario, snap.truth, snap.movables)
             version = snap.world_version
             frames.on_step(record, given(snap))
     finally:

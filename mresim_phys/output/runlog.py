@@ -35,6 +35,7 @@ from mresim_phys.output.logformat import (
     STATIC_AGENT,
     TRUTH,
     VERSION,
+    WORLD_GRIDS,
     Chunk,
     Track,
     chunk_arrays,
@@ -44,6 +45,7 @@ from mresim_phys.output.logformat import (
     point,
 )
 from mresim_phys.output.logmeta import META, damaged, read_meta
+from mresim_phys.output.logworld import MovablesTrack, movable_meta
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
 from mresim_phys.types import FREE, BeliefGrid, BoolGrid, IntArray
 from mresim_phys.world.maps import connected_to, free_components_mask, seed_cells
@@ -69,6 +71,7 @@ def new_meta(first: Snapshot, name: str, seed: int, chunk_steps: int) -> dict[st
         "chunk_steps": chunk_steps,
         "agents": [encode_line(STATIC_AGENT, a) for a in first.agents],
         "starts": [point(a.position) for a in first.robots],
+        "movables": [movable_meta(m) for m in first.movables],
         "steps": 0,
         "closed": False,
     }
@@ -103,6 +106,8 @@ class RunLogWriter:
         np.savez_compressed(self.log_dir / TRUTH_FILE, **statics)
         self._tracks = [Track(cells) for _ in first.agents]
         self._truth = flat_cells(np.asarray(first.truth, dtype=bool))
+        self._world = {g.name: np.zeros(cells, np.uint8) for g in WORLD_GRIDS}
+        self._movables = MovablesTrack(first.movables)
         self._version = first.world_version
         self._lines: list[str] = []
         self._parts = new_parts()
@@ -119,10 +124,15 @@ class RunLogWriter:
         changed = snap.world_version != self._version
         TRUTH.write(self._truth, snap.truth if changed else None, self._parts)
         self._version = snap.world_version
+        for grid in WORLD_GRIDS:
+            grid.write(self._world[grid.name], getattr(snap, grid.name), self._parts)
         for track, agent in zip(self._tracks, snap.agents, strict=True):
             track.write(agent, self._parts)
         line = encode_line(SNAPSHOT_LINE, snap)
         line["agents"] = [encode_line(AGENT_LINE, a) for a in snap.agents]
+        moved = self._movables.write(snap.movables)
+        if moved:
+            line["moved"] = moved
         self._lines.append(json.dumps(line, separators=(",", ":")))
         self._last_step = snap.step
         if len(self._lines) == self.chunk_steps:
@@ -255,6 +265,8 @@ class Replay:
         self.tracks = [Track(cells) for _ in range(n)]
         self.static = [decode_line(STATIC_AGENT, AgentSnapshot, a, n) for a in log.meta["agents"]]
         self.truth = flat_cells(log.truth)
+        self.world = {g.name: np.zeros(cells, np.uint8) for g in WORLD_GRIDS}
+        self.movables = MovablesTrack.from_meta(log.meta.get("movables", []))
         reachable = free_components_mask(log.truth, log.meta["starts"])
         self.latest = latest  # 'latest' beliefs: maps can lose FREE cells (knowledge.latest)
         self.coverage: Coverage = (
@@ -296,6 +308,8 @@ class Replay:
         record = self.measure(fields["step"], free, fields["links"], agents, fields["comm"])
         snap = Snapshot(
             **fields,
+            **self.world_grids(chunk, j),  # rubble, gave_way
+            movables=self.movables.read(line.get("moved", [])),
             explored=record.explored,
             known_at_base=record.known_at_base,
             alive=record.alive,
@@ -312,6 +326,16 @@ class Replay:
             TRUTH.read(self.truth, chunk, j)
             self.coverage.retarget(reachable_from(self.truth_grid, self.log.meta["starts"]))
         self.version = version
+
+    def world_grids(self, chunk: Chunk, j: int) -> dict[str, Any]:
+        """The step's rubble and gave-way grids (None before the first change of the
+        static walls, and in logs of version 2 or older)."""
+        out: dict[str, BoolGrid | None] = {}
+        for grid in WORLD_GRIDS:
+            state = self.world[grid.name]
+            idx = grid.read(state, chunk, j)
+            out[grid.name] = None if idx is None else grid.view(state, self.shape)
+        return out
 
     def agent(
         self, i: int, row: dict[str, Any], chunk: Chunk, k: int

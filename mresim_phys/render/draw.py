@@ -1,11 +1,12 @@
 """Views (phase 8), vector stage: what a frame shows in output pixels, over the coloured map.
 
-Comm ranges, links, hierarchy, paths, goals, rendezvous points, robots, names, header and
-legend, bottom to top, with cv2 primitives in 4-bit fixed point (anti-aliased). Points are
-converted to pixels in one numpy call per frame (every agent, every path point, every
-goal), robot triangles in another, and all links are one ``cv2.polylines`` call; the
-drawing order (and so every blended pixel) is the same as one robot at a time. The legend
-band is drawn once per set of robot names and pasted.
+Open doors (dashed lines) and moving obstacles' names, comm ranges, links, hierarchy,
+paths, goals, rendezvous points, robots, names, header and legend, bottom to top, with cv2
+primitives in 4-bit fixed point (anti-aliased). Points are converted to pixels in one numpy
+call per frame (every agent, every path point, every goal), robot triangles in another,
+and all links are one ``cv2.polylines`` call; the drawing order (and so every blended
+pixel) is the same as one robot at a time. The legend band is drawn once per set of robot
+names (and world legend entries) and pasted.
 
 Typical use: ``Overlay(layers, style, scale, to_px).draw(image, snapshot)``.
 """
@@ -30,6 +31,7 @@ LEGEND["known_at_base"] = "known_at_base"  # global layer -> Style colour, in le
 TRIANGLE_TURNS = np.array((0.0, 2.4, -2.4))  # radians from the heading: tip, two corners
 TRIANGLE_REACH = np.array((1.6, 1.0, 1.0))  # in robot glyph sizes
 FAR_PX = 2**24  # fixed-point pixels (a million whole pixels): farther points are clipped here
+DASH_PX = 6  # length of a dash of an open door's line, pixels
 CROSS_ARMS = np.array(((1, 1), (1, -1)), dtype=np.int32) * ONE  # half-diagonals of an 'x'
 
 
@@ -45,7 +47,7 @@ class Overlay:
 
     def __init__(self, layers: LayerSpec, style: Style, scale: float, to_px: np.ndarray) -> None:
         self.layers, self.style, self.scale, self.to_px = layers, style, scale, to_px
-        self._legend: tuple[tuple[str, ...], np.ndarray] | None = None
+        self._legend: tuple[tuple[tuple[str, ...], tuple[str, ...]], np.ndarray] | None = None
 
     def px(self, xy: Sequence[float] | np.ndarray) -> np.ndarray:
         """World (x, y) points -> fixed-point output pixel coordinates (int32, 4 bits)."""
@@ -67,6 +69,7 @@ class Overlay:
         layers = [self.layers.for_agent(a.name) for a in snap.agents]
         colours = [style.base, *(style.robot_colour(i) for i in range(len(snap.robots)))]
         centres, paths, goals = self._points(snap, layers)
+        self._draw_world(image, snap)
         self._draw_network(image, snap, centres, colours, layers, regions)
         for i, robot in enumerate(snap.robots, start=1):
             self._draw_plans(image, robot, paths[i], goals[i], colours[i], layers[i])
@@ -84,7 +87,7 @@ class Overlay:
         if "header" in on:
             draw_header(image, snap, style)
         if "legend" in on:
-            self._paste_legend(image, tuple(r.name for r in snap.robots))
+            self._paste_legend(image, tuple(r.name for r in snap.robots), world_legend(snap, on))
 
     def _points(
         self, snap: Snapshot, layers: list[frozenset[str]]
@@ -165,9 +168,27 @@ class Overlay:
             for p in self.px(np.reshape(points, (-1, 2))) >> SHIFT:
                 cv2.drawMarker(image, p, colour, cv2.MARKER_DIAMOND, 8, 2)
 
-    def _paste_legend(self, image: np.ndarray, names: tuple[str, ...]) -> None:
-        if self._legend is None or self._legend[0] != names:
-            self._legend = (names, legend_band(image.shape[1], names, self.layers, self.style))
+    def _draw_world(self, image: np.ndarray, snap: Snapshot) -> None:
+        """Open doors as dashed lines along their segment (closed ones are cells of the
+        raster stage) and moving obstacles' names, each when its layer is on."""
+        on, style = self.layers.global_layers, self.style
+        for movable in snap.movables:
+            if movable.kind == "door" and not movable.on and movable.segment is not None:
+                if "doors" in on:
+                    lines = dashes(self.px(np.asarray(movable.segment)), DASH_PX * ONE)
+                    cv2.polylines(image, lines, False, style.door, 2, AA, SHIFT)
+            elif movable.kind == "obstacle" and movable.on and "obstacles" in on:
+                h, w = movable.cells.shape
+                centre = self.px(np.array([movable.at[1] + w / 2, movable.at[0] + h / 2]))
+                draw_label(image, movable.name, centre, w / 2 * self.scale, style.obstacle, style)
+
+    def _paste_legend(
+        self, image: np.ndarray, names: tuple[str, ...], extras: tuple[str, ...]
+    ) -> None:
+        key = (names, extras)
+        if self._legend is None or self._legend[0] != key:
+            band = legend_band(image.shape[1], names, self.layers, self.style, extras)
+            self._legend = (key, band)
         band = self._legend[1][-image.shape[0] :]
         image[image.shape[0] - band.shape[0] :] = band
 
@@ -234,14 +255,39 @@ def draw_header(image: np.ndarray, snap: Snapshot, style: Style) -> None:
     cv2.putText(image, text, (4, th + 3), FONT, style.font_scale, style.header_text, 1, AA)
 
 
-def legend_band(width: int, names: Sequence[str], layers: LayerSpec, style: Style) -> np.ndarray:
-    """A band image with colour swatches for the map classes shown and every robot."""
+def world_legend(snap: Snapshot, on: frozenset[str]) -> tuple[str, ...]:
+    """The changing world's legend entries (Style colour names) a frame shows: obstacle and
+    door if the run has them, rubble once some has fallen (a static run: none)."""
+    kinds = {m.kind for m in snap.movables}
+    rubble = snap.rubble is not None and bool(snap.rubble.any())
+    present = [("obstacle", "obstacles", "obstacle" in kinds), ("door", "doors", "door" in kinds)]
+    present.append(("rubble", "debris", rubble))
+    return tuple(name for name, layer, shown in present if shown and layer in on)
+
+
+def dashes(ends: np.ndarray, dash: float) -> list[np.ndarray]:
+    """A dashed line between the two fixed-point points ``ends``: an odd number of pieces
+    about ``dash`` long (fixed point), every other one drawn, starting and ending drawn."""
+    start, end = ends.astype(float)
+    pieces = max(round(float(np.hypot(*(end - start))) / dash), 1)
+    pieces += 1 - pieces % 2
+    points = np.round(start + np.linspace(0.0, 1.0, pieces + 1)[:, None] * (end - start))
+    points = points.astype(np.int32)
+    return [points[i : i + 2] for i in range(0, pieces, 2)]
+
+
+def legend_band(
+    width: int, names: Sequence[str], layers: LayerSpec, style: Style, extras: Sequence[str] = ()
+) -> np.ndarray:
+    """A band image with colour swatches for the map classes shown, the changing world's
+    ``extras`` (Style colour names) and every robot."""
     on = layers.global_layers
     items = [
         (name.replace("_", " "), getattr(style, name)) for key, name in LEGEND.items() if key in on
     ]
     if "frontiers" in set(layers.robot_layers).union(*layers.per_robot.values()):
         items.append(("frontier", style.frontier))
+    items += [(name, getattr(style, name)) for name in extras]
     items += [(name, style.robot_colour(i)) for i, name in enumerate(names)]
     (_, th), base = cv2.getTextSize("Ag", FONT, style.font_scale, 1)
     line, spots, x, y = th + base + 4, [], 4, 0

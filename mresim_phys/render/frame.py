@@ -3,7 +3,8 @@
 Raster stage (:mod:`~mresim_phys.render.raster`), at grid resolution: a uint8 label per
 cell, class (0 unexplored, 1 team-known, 2 known at base, 3 wall, 4 skeleton, 5 frontier;
 the larger wins) + 6 * free/safe space tint (later robots over earlier), coloured by one
-lookup table (:meth:`Style.lut <mresim_phys.render.style.Style.lut>`) and resized once.
+lookup table (:meth:`Style.lut <mresim_phys.render.style.Style.lut>`) and resized once;
+a changing world's rubble, closed doors and moving obstacles are solid labels over them.
 Vector stage (:mod:`~mresim_phys.render.draw`), in output pixels with cv2 primitives: comm
 ranges, links, hierarchy, paths, goals, rendezvous points, robots, names, header and legend.
 Modules import downwards only: ``layers`` <- ``style`` <- ``raster``, ``draw`` <- ``frame``.

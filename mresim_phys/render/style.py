@@ -4,8 +4,9 @@ A frame's raster stage (:mod:`~mresim_phys.render.raster`) gives every cell a la
 ``class + CLASSES * tint``: classes 0 unexplored, 1 team-known, 2 known at base, 3 wall,
 4 skeleton, 5 frontier (the larger wins); tints 0 none, ``1 + i`` robot ``i``'s free
 space, ``1 + n + i`` its safe space. :meth:`Style.lut` is the lookup table from labels to
-BGR colours; the vector stage (:mod:`~mresim_phys.render.draw`) takes its colours and
-sizes from the same :class:`Style`.
+BGR colours, and the last three labels are the changing world's solid cells (rubble,
+closed doors, moving obstacles; drawn over every class); the vector stage
+(:mod:`~mresim_phys.render.draw`) takes its colours and sizes from the same :class:`Style`.
 
 Typical use: ``Style().lut(parse_layers("all"))``.
 """
@@ -20,6 +21,8 @@ from mresim_phys.render.layers import LayerSpec
 
 BGR = tuple[int, int, int]
 TEAM_KNOWN, AT_BASE, WALL, SKELETON, FRONTIER, CLASSES = 1, 2, 3, 4, 5, 6
+RUBBLE, DOOR, OBSTACLE = 253, 254, 255  # solid labels, above every class + tint (< 246)
+_SOLID_COLOURS = {RUBBLE: "rubble", DOOR: "door", OBSTACLE: "obstacle"}
 _CLASS_COLOURS = ("team_known", "known_at_base", "wall", "skeleton", "frontier")  # classes 1-5
 
 PALETTE: tuple[BGR, ...] = (
@@ -49,6 +52,9 @@ class Style:
     header_bg: BGR = (40, 40, 40)
     header_text: BGR = (255, 255, 255)
     legend_bg: BGR = (235, 235, 235)
+    obstacle: BGR = (30, 30, 200)  # moving obstacles: deep red
+    door: BGR = (0, 190, 255)  # doors: amber (closed: filled cells; open: dashed line)
+    rubble: BGR = (50, 90, 130)  # rubble that fell during the run: brown
     palette: tuple[BGR, ...] = PALETTE
     free_alpha: float = 0.3
     safe_alpha: float = 0.55
@@ -60,7 +66,7 @@ class Style:
         return self.palette[index % len(self.palette)]
 
     def lut(self, layers: LayerSpec) -> np.ndarray:
-        """(256, 1, 3) uint8 table: label (class + 6 * tint) -> BGR."""
+        """(256, 1, 3) uint8 table: label (class + 6 * tint, or a solid label) -> BGR."""
         blank = self.unexplored if "unexplored" in layers.global_layers else self.background
         base = np.array([blank] + [getattr(self, name) for name in _CLASS_COLOURS])
         n, table = len(self.palette), np.zeros((256, 1, 3), dtype=np.uint8)
@@ -70,6 +76,8 @@ class Style:
         mixed = np.round((1 - alpha) * base + alpha * np.array(self.palette * 2)[:, None])
         mixed[:, AT_BASE + 1 :] = base[AT_BASE + 1 :]  # (tint, class, BGR); walls stay black
         table[: CLASSES * (2 * n + 1), 0] = np.concatenate((base, mixed.reshape(-1, 3)))
+        for label, name in _SOLID_COLOURS.items():
+            table[label, 0] = getattr(self, name)
         return table
 
 

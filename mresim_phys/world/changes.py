@@ -179,6 +179,8 @@ class Layers:
     def __init__(self, occupied: BoolGrid) -> None:
         self.occupied = occupied  # the world's truth grid, written in place
         self.static = occupied.copy()
+        self.original = occupied.copy()  # the map before any change (views draw rubble by it)
+        self.static_changes = 0  # bumped by every write of the static layer
         self.cover = np.zeros(occupied.shape, dtype=np.uint16)
         self.quiet = np.zeros(occupied.shape, dtype=np.uint16)  # cover radio passes through
         self.kinds: KindGrid = padded_kinds(occupied)
@@ -188,6 +190,7 @@ class Layers:
         """Walls (True) or free space (False) in the static layer of ``box``."""
         row0, row1, col0, col1 = box
         self.static[row0:row1, col0:col1] = cells
+        self.static_changes += 1
 
     def add_cover(self, movable: Movable, sign: int) -> None:
         """Add (sign +1) or take away (-1) a movable's footprint from the cover count."""

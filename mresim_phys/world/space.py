@@ -149,6 +149,7 @@ class World:
         self.version = 0  # bumped by every change of the truth after step 0
         self._layers: Layers | None = None  # built by the first change
         self._movables: dict[str, Movable] = {}
+        self._debris: tuple[int, BoolGrid, BoolGrid] | None = None  # cache of debris()
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -248,6 +249,29 @@ class World:
         block radio (the truth grid itself while there are none)."""
         layers = self._layers
         return self.occupied if layers is None or layers.radio is None else layers.radio
+
+    @property
+    def original(self) -> BoolGrid:
+        """The map's walls before any change of the world (read-only)."""
+        layers = self._layers
+        grid = self.occupied if layers is None else layers.original
+        view: BoolGrid = grid.view()
+        view.flags.writeable = False
+        return view
+
+    def debris(self) -> tuple[BoolGrid, BoolGrid] | None:
+        """(rubble, gave_way): static cells free on the original map, and free cells that
+        were its walls (new read-only grids, kept until the static layer changes again);
+        None while the static layer is the original map's."""
+        layers = self._layers
+        if layers is None or layers.static_changes == 0:
+            return None
+        if self._debris is None or self._debris[0] != layers.static_changes:
+            rubble = layers.static & ~layers.original
+            gave_way = layers.original & ~layers.static
+            rubble.flags.writeable = gave_way.flags.writeable = False
+            self._debris = (layers.static_changes, rubble, gave_way)
+        return self._debris[1], self._debris[2]
 
     def radio_filter(self) -> QueryFilter:
         """The Chipmunk filter of what blocks radio: walls and radio-blocking movables."""
