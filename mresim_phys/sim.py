@@ -366,6 +366,7 @@ class Simulation:
                 self.comm.traffic.sent.copy(),
             ),
             world_version=self.world.version,
+            latest=self.rules.latest,
             terrain=None if self.setup.terrain is None else read_only(self.setup.terrain),
             movables=movable_views(self.world, self.setup.elements),
             rubble=rubble,

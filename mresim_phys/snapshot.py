@@ -134,6 +134,7 @@ class Snapshot:
     resolution: float | None = None
     comm: CommSummary = field(default_factory=CommSummary)
     world_version: int = 0  # World.version: bumped by every change of the truth
+    latest: bool = False  # robots' maps hold each cell's latest observation (belief: latest)
     terrain: NDArray[np.float32] | None = None  # true speed factors (static); None: no terrain
     movables: tuple[MovableSnapshot, ...] = ()  # every obstacle and door, scenario order
     rubble: BoolGrid | None = None  # static walls that were free on the map (None: none yet)

@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from mresim_phys.build import region_probe, run_rules
+from mresim_phys.build import region_probe
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.errors import MresimError, ScenarioError
 from mresim_phys.metrics import csv_header
@@ -126,8 +126,7 @@ def replay_frames(
     )
     version = None
     try:
-        latest = scenario is not None and run_rules(scenario).latest
-        for snap, record in Replay(log, latest).run():
+        for snap, record in Replay(log).run():
             polygons = frames.renderer.regions is not None and not frames.renderer.regions.circles
             if polygons and snap.world_version != version:  # step 0, or the walls moved
                 frames.renderer.regions = replay_regions(scenario, snap.truth, snap.movables)
@@ -144,12 +143,11 @@ def replay_frames(
 def replay_metrics(log: RunLog, run_dir: Path) -> tuple[list[str], bool]:
     """Write metrics-replayed.csv from the log and compare it with metrics.csv."""
     out = run_dir / "metrics-replayed.csv"
-    scenario = run_scenario(run_dir)
-    latest = scenario is not None and run_rules(scenario).latest
+    latest = log.meta.get("beliefs") == "latest"
     with atomic_path(out) as tmp, tmp.open("w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle, lineterminator="\n")
         writer.writerow(csv_header(log.names[1:], stale=latest))
-        for record in recompute_metrics(log, latest):
+        for record in recompute_metrics(log):
             writer.writerow(record.csv_row())
     live = run_dir / "metrics.csv"
     if not live.is_file():

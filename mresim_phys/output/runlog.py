@@ -72,6 +72,7 @@ def new_meta(first: Snapshot, name: str, seed: int, chunk_steps: int) -> dict[st
         "agents": [encode_line(STATIC_AGENT, a) for a in first.agents],
         "starts": [point(a.position) for a in first.robots],
         "movables": [movable_meta(m) for m in first.movables],
+        "beliefs": "latest" if first.latest else "grow",
         "steps": 0,
         "closed": False,
     }
@@ -259,7 +260,7 @@ class Replay:
     against the free cells then reachable from the robots' starts, as live.
     """
 
-    def __init__(self, log: RunLog, latest: bool = False) -> None:
+    def __init__(self, log: RunLog, latest: bool | None = None) -> None:
         self.log, self.shape = log, (int(log.meta["shape"][0]), int(log.meta["shape"][1]))
         n, cells = len(log.names), self.shape[0] * self.shape[1]
         self.tracks = [Track(cells) for _ in range(n)]
@@ -268,6 +269,8 @@ class Replay:
         self.world = {g.name: np.zeros(cells, np.uint8) for g in WORLD_GRIDS}
         self.movables = MovablesTrack.from_meta(log.meta.get("movables", []))
         reachable = free_components_mask(log.truth, log.meta["starts"])
+        if latest is None:  # logs before 'latest' beliefs existed were all 'grow'
+            latest = log.meta.get("beliefs") == "latest"
         self.latest = latest  # 'latest' beliefs: maps can lose FREE cells (knowledge.latest)
         self.coverage: Coverage = (
             LatestCoverage(reachable, self.truth.view(bool).reshape(self.shape))
@@ -317,6 +320,7 @@ class Replay:
             agents=tuple(agents),
             resolution=self.log.meta.get("resolution"),
             terrain=self.log.terrain,
+            latest=self.latest,
         )
         return snap, record
 
@@ -409,8 +413,9 @@ def reachable_from(truth: BoolGrid, starts: list[list[float]]) -> BoolGrid:
     return connected_to(~truth, seed_cells(starts, truth.shape))
 
 
-def recompute_metrics(log: RunLog, latest: bool = False) -> Iterator[StepRecord]:
+def recompute_metrics(log: RunLog, latest: bool | None = None) -> Iterator[StepRecord]:
     """The ``metrics.csv`` rows of the logged run, recomputed from its map deltas
-    (``latest``: the run's beliefs held each cell's latest observation)."""
+    (``latest``: the run's beliefs held each cell's latest observation; None: as the log
+    says)."""
     for _, record in Replay(log, latest).run():
         yield record
