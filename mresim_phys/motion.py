@@ -143,10 +143,10 @@ def path_blocked(belief: np.ndarray, path: np.ndarray, clearance: float, lookahe
     cells = np.floor(path[1:][steps <= lookahead]).astype(np.int64)  # (col, row)
     rows, cols = belief.shape
     kernel = clearance_kernel(float(clearance))
-    half = kernel.shape[0] // 2
-    for dr, dc in np.argwhere(kernel) - half:
-        r, c = cells[:, 1] + dr, cells[:, 0] + dc
-        inside = (r >= 0) & (r < rows) & (c >= 0) & (c < cols)
-        if not inside.all() or (belief[r, c] == OCCUPIED).any():
-            return True
-    return False
+    offsets = np.argwhere(kernel) - kernel.shape[0] // 2  # (k, 2) (dr, dc)
+    r = cells[:, 1, None] + offsets[None, :, 0]
+    c = cells[:, 0, None] + offsets[None, :, 1]
+    inside = (r >= 0) & (r < rows) & (c >= 0) & (c < cols)
+    if not inside.all():
+        return True
+    return bool((belief[r, c] == OCCUPIED).any())
