@@ -12,10 +12,22 @@ temporaries over the union of every robot's scan windows.
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
 from numba import njit
 
 from mresim_phys.types import BeliefGrid, BoolGrid, IntArray
+
+
+class Cells(NamedTuple):
+    """The map part of one transmission: flat cell indices and their codes (the
+    occupancy value, plus 4 where the cell is safe space); with 'latest' beliefs also
+    the step at which each value was observed."""
+
+    flat: np.ndarray
+    codes: np.ndarray
+    seen: np.ndarray | None = None
 
 
 @njit(cache=True, nogil=True)

@@ -27,29 +27,18 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import NamedTuple
 
 import numpy as np
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import breadth_first_order, connected_components
 
 from mresim_phys.agents import Agent
-from mresim_phys.comms.deltas import select_cells
+from mresim_phys.comms.deltas import Cells, select_cells
 from mresim_phys.comms.ledger import Ledger, received_tick, sensed_tick
 from mresim_phys.knowledge.teammates import TeammateInfo
 
 CELL_BYTES = 5
 SEEN_BYTES = 4  # per cell with 'latest' beliefs: the step of the value's observation
-
-
-class Cells(NamedTuple):
-    """The map part of one transmission: flat cell indices and their codes (the
-    occupancy value, plus 4 where the cell is safe space); with 'latest' beliefs also
-    the step at which each value was observed."""
-
-    flat: np.ndarray
-    codes: np.ndarray
-    seen: np.ndarray | None = None
 
 
 @dataclass

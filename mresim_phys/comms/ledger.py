@@ -20,16 +20,11 @@ transmission which part of the grid can hold newer cells.
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
-
 import numpy as np
 from numpy.typing import NDArray
 
-from mresim_phys.comms.deltas import merge_cells, merge_latest, stamp_changes
+from mresim_phys.comms.deltas import Cells, merge_cells, merge_latest, stamp_changes
 from mresim_phys.types import BeliefGrid, BoolGrid
-
-if TYPE_CHECKING:
-    from mresim_phys.comms.exchange import Cells
 
 Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)
 OWN = -1  # origin of a cell value the agent sensed itself
