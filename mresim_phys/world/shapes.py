@@ -147,15 +147,21 @@ def region_cells(region: Region, shape: tuple[int, int], base: Path | None = Non
     return out
 
 
-def read_mask(path: Path, shape: tuple[int, int]) -> BoolGrid:
-    """The dark pixels (< 128) of the image at ``path``, which must be the map's size."""
+def read_grey(path: Path, shape: tuple[int, int], what: str) -> np.ndarray:
+    """The greyscale image at ``path`` (``what`` names it in errors), which must be the
+    map's size."""
     image = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
     if image is None:
-        raise ValueError(f"cannot read the mask image {path}")
+        raise ValueError(f"cannot read the {what} {path}")
     if image.shape != shape:
         raise ValueError(
-            f"the mask image {path} is {image.shape[1]}x{image.shape[0]} pixels; the map is"
-            f" {shape[1]}x{shape[0]}"
+            f"the {what} {path} is {image.shape[1]}x{image.shape[0]} pixels; the map is"
+            f" {shape[1]}x{shape[0]}: give one the size of the map"
         )
-    mask: BoolGrid = image < 128
+    return image
+
+
+def read_mask(path: Path, shape: tuple[int, int]) -> BoolGrid:
+    """The dark pixels (< 128) of the image at ``path``, which must be the map's size."""
+    mask: BoolGrid = read_grey(path, shape, "mask image") < 128
     return mask

@@ -20,7 +20,6 @@ from __future__ import annotations
 
 from pathlib import Path
 
-import cv2
 import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field, model_validator
@@ -32,6 +31,7 @@ from mresim_phys.world.shapes import (
     MaskRegion,
     PolygonRegion,
     Region,
+    read_grey,
     region_cells,
 )
 
@@ -129,14 +129,10 @@ def terrain_grid(spec: TerrainSpec | None, shape: tuple[int, int]) -> TerrainGri
 
 def image_factors(path: Path, shape: tuple[int, int], min_factor: float) -> TerrainGrid:
     """``max(min_factor, value / 255)`` per pixel of the greyscale image at ``path``."""
-    image = cv2.imread(str(path), cv2.IMREAD_GRAYSCALE)
-    if image is None:
-        raise ValueError(f"terrain.image: cannot read the image {path}")
-    if image.shape != shape:
-        raise ValueError(
-            f"terrain.image: the image {path} is {image.shape[1]}x{image.shape[0]} pixels;"
-            f" the map is {shape[1]}x{shape[0]}: give a terrain image the size of the map"
-        )
+    try:
+        image = read_grey(path, shape, "terrain image")
+    except ValueError as exc:
+        raise ValueError(f"terrain.image: {exc}") from None
     factors = np.maximum(image.astype(np.float32) / np.float32(255.0), np.float32(min_factor))
     return np.ascontiguousarray(factors, dtype=np.float32)
 
