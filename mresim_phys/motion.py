@@ -1,8 +1,10 @@
 """Motion (phase 5): one robot's step along its path (paper, Algorithms 1 and 2).
 
 The decide phase (``sim.py``) replans a robot whose replan is due
-(:func:`wants_plan`). Then, while the robot has moved less than its speed this
-step, it takes the next path point, replanning through its strategy when the
+(:func:`wants_plan`; a strategy may also ask for one after its robot was in
+contact, :class:`~mresim_phys.strategies.base.ReplansOnContact`). Then, while the
+robot has moved less than its speed this step, it takes the next path point,
+replanning through its strategy when the
 path has run out mid-step (the original's ``takeStep``). Each move is checked
 with a swept circle of the robot's radius against the true walls. A valid move
 is made and (by default) followed by a scan (at the end of its path a robot
@@ -27,6 +29,7 @@ import numpy as np
 from mresim_phys.agents import Robot
 from mresim_phys.knowledge.mapping import mark_bump
 from mresim_phys.planning.fields import clearance_kernel
+from mresim_phys.strategies.base import ReplansOnContact
 from mresim_phys.types import OCCUPIED
 from mresim_phys.world.space import World
 from mresim_phys.world.terrain import TerrainGrid, factor_at
@@ -44,8 +47,15 @@ class MoveRules:
 
 
 def wants_plan(robot: Robot, step: int, interval: int) -> bool:
-    """Replan after an error, after reaching the goal, or when the interval has passed."""
-    return robot.status == "error" or robot.reached_goal or step - robot.last_plan_step >= interval
+    """Replan after an error, after reaching the goal, when the interval has passed, or
+    when the robot was linked at the last exchange and its strategy asks for it."""
+    due = robot.status == "error" or robot.reached_goal or step - robot.last_plan_step >= interval
+    strategy: object = robot.strategy  # the protocol is optional, not part of Strategy
+    return due or (
+        len(robot.links) > 0
+        and isinstance(strategy, ReplansOnContact)
+        and strategy.replan_on_contact(robot.belief)
+    )
 
 
 def take_step(

@@ -117,6 +117,23 @@ def test_repeated_contact_sends_only_what_changed(multi_hop: bool) -> None:
     assert third.cells == 3 and third.sent[1, 0] >= 3 * 5 and agents[0].belief[15, 21] == OCCUPIED
 
 
+@pytest.mark.parametrize("multi_hop", [True, False])
+def test_a_value_mixed_from_both_sides_travels_back_to_the_sender(multi_hop: bool) -> None:
+    """The receiver's obstacle merged with the sender's safe flag is news to the sender."""
+    agents = make_agents(2, shape=(20, 30))
+    agents[0].belief[5, 5] = OCCUPIED  # the receiver saw an obstacle ...
+    agents[1].belief[5, 5] = FREE  # ... where the sender saw safe free space
+    agents[1].safe[5, 5] = True
+    exchange = Exchanger(agents)
+    links = np.zeros((2, 2), dtype=bool)
+    exchange(links, step=1, multi_hop=multi_hop)  # both stamp what they sensed
+    only_1_to_0 = Exchange(exchange.ledger)
+    only_1_to_0.send(agents, 1, 0, 1, Traffic.empty(2), only_lacking=False)
+    assert agents[0].belief[5, 5] == OCCUPIED and agents[0].safe[5, 5]
+    exchange(chain_links(2), step=2, multi_hop=multi_hop)
+    assert agents[1].belief[5, 5] == OCCUPIED and agents[1].safe[5, 5]
+
+
 def test_full_exchange_sends_whole_grids_every_time() -> None:
     agents = make_agents(2, shape=(20, 30))
     exchange = Exchanger(agents, full=True)

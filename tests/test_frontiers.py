@@ -35,14 +35,31 @@ def random_belief(seed: int, shape: tuple[int, int] | None = None) -> np.ndarray
 
 
 def brute_frontier(belief: np.ndarray) -> np.ndarray:
-    """FREE cells with an UNKNOWN 8-neighbour, cells outside the grid not unknown."""
+    """FREE cells with an UNKNOWN 8-neighbour, cells outside the grid not unknown, except a
+    diagonal neighbour behind two OCCUPIED cells (the wall corner hides it)."""
     padded = np.pad(belief == UNKNOWN, 1, constant_values=False)
+    walls = np.pad(belief == OCCUPIED, 1, constant_values=False)
     rows, cols = belief.shape
     near = np.zeros(belief.shape, dtype=bool)
     for dr in (-1, 0, 1):
         for dc in (-1, 0, 1):
-            near |= padded[1 + dr : 1 + dr + rows, 1 + dc : 1 + dc + cols]
+            seen = padded[1 + dr : 1 + dr + rows, 1 + dc : 1 + dc + cols].copy()
+            if dr and dc:
+                beside = walls[1 + dr : 1 + dr + rows, 1 : 1 + cols]
+                seen &= ~(beside & walls[1 : 1 + rows, 1 + dc : 1 + dc + cols])
+            near |= seen
     return near & (belief == FREE)
+
+
+def test_a_diagonal_wall_hides_the_unknown_behind_its_corners() -> None:
+    """Cells along a staircase wall are not frontier; a gap in the wall is."""
+    belief = np.full((8, 8), FREE, dtype=np.uint8)
+    for i in range(8):
+        belief[i, i] = OCCUPIED
+        belief[i, i + 1 :] = UNKNOWN
+    assert not frontier_mask(belief).any()
+    belief[3, 3] = UNKNOWN  # a cell of the wall never seen: the unknown shows through
+    assert frontier_mask(belief)[3, 2] and frontier_mask(belief)[4, 3]
 
 
 def as_set(cells: np.ndarray) -> set[tuple[int, int]]:

@@ -211,3 +211,24 @@ def test_a_random_step_never_leaves_known_free_space() -> None:
     boxed[:, 44] = boxed[:, 47] = OCCUPIED  # a slot 2 cells wide: nowhere to step
     cornered = RobotView(**{**view.__dict__, "belief": boxed})
     assert random_step(cornered, plan_context(cornered)) is None
+
+
+@pytest.mark.parametrize("enabled", [True, False])
+def test_a_robot_in_contact_replans_once_its_frontier_is_gone(enabled: bool) -> None:
+    """replan_on_contact: the chased frontier left the map (a teammate explored it)."""
+    from mresim_phys.agents import Robot
+    from mresim_phys.motion import wants_plan
+
+    view = corridor_view({}, (45.5, 10.5))
+    strategy = FrontierExploration(FrontierParams(replan_on_contact=enabled))
+    strategy.decide(view)
+    belief = view.belief.copy()
+    assert not strategy.replan_on_contact(belief)  # its frontier is still there
+    belief[5:15, :20] = FREE  # the left end explored by a teammate
+    belief[5:15, 80:] = FREE  # and the right one
+    assert strategy.replan_on_contact(belief) is enabled
+    robot = Robot("A", 1, view.position, 10.0, belief, np.zeros_like(belief, bool), "explorer")
+    robot.strategy, robot.last_plan_step = strategy, view.step
+    assert not wants_plan(robot, view.step + 1, 15)  # no contact, no replan
+    robot.links = ("B",)
+    assert wants_plan(robot, view.step + 1, 15) is enabled

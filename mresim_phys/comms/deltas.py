@@ -4,7 +4,10 @@ Each cell of an agent has a *code* (occupancy value, plus 4 where it is safe
 space), the *tick* it last changed and the agent its value came from. A
 transmission selects, inside a few boxes, the sender's cells newer than the
 pair's last sync and not received from the receiver; the receiver merges them
-(``max`` of occupancy, OR of safe space) and stamps what changed. ``numba``
+(``max`` of occupancy, OR of safe space) and stamps what changed, naming the sender
+as the value's origin only when the merged value is exactly the sender's (a value
+mixed from both sides, say the receiver's obstacle with the sender's safe flag, must
+still travel back to the sender). ``numba``
 kernels visit each box cell once with no temporary grids: the numpy version of
 the same steps cost 8-10 ms per 8-robot step on the office map, mostly in
 temporaries over the union of every robot's scan windows.
@@ -99,7 +102,10 @@ def merge_cells(
             continue
         belief[r, c] = new & 3
         safe[r, c] = (new & 4) != 0
-        codes[r, c], stamps[r, c], origins[r, c] = new, tick, sender
+        # a value mixed from both sides (e.g. the receiver's obstacle with the sender's
+        # safe flag) is news to the sender too: it counts as the receiver's own
+        codes[r, c], stamps[r, c] = new, tick
+        origins[r, c] = sender if new == values[k] else -1
         changed += 1
         r0, r1, c0, c1 = min(r0, r), max(r1, r + 1), min(c0, c), max(c1, c + 1)
     return changed, r0, r1, c0, c1

@@ -1,8 +1,15 @@
 """Frontiers (phase 3b, knowledge): frontier clusters and targets from a belief grid.
 
 A frontier cell is a FREE cell 8-adjacent to an UNKNOWN cell (cells outside the grid are not
-unknown). Clusters are the 8-connected components of frontier cells. ``find_frontiers``
-extracts them with ``cv2.dilate`` (the frontier mask) and a union-find over the frontier
+unknown) that it can see: an UNKNOWN diagonal neighbour behind the corner where two OCCUPIED
+cells meet (both cells orthogonally between them are walls) does not count. Walls are solid
+cell squares, so no line of sight from the FREE cell reaches that unknown cell through the
+corner, whatever the robot does there: without this rule every cell along a diagonal
+(staircase) wall is a frontier that no scan can resolve (the original thickens walls 3 px
+away from the robot, which closes these corners; its contour tracer takes a diagonal step
+only between free cells). Clusters are the 8-connected components of frontier cells.
+``find_frontiers`` extracts them with ``cv2.dilate`` (the candidate cells, then
+:func:`sees_unknown` on those alone) and a union-find over the frontier
 cells alone (:func:`label_cells`): labelling the whole 800x600 grid with
 ``cv2.connectedComponentsWithStats`` cost ~2.5 ms a replan, most of a replan's frontier
 work. ``frontier_targets`` then picks, for every
@@ -21,7 +28,15 @@ from numba import njit
 
 from mresim_phys.planning.fields import DistanceField
 from mresim_phys.planning.grid import bbox
-from mresim_phys.types import FREE, UNKNOWN, BeliefGrid, BoolGrid, FloatArray, IntArray
+from mresim_phys.types import (
+    FREE,
+    OCCUPIED,
+    UNKNOWN,
+    BeliefGrid,
+    BoolGrid,
+    FloatArray,
+    IntArray,
+)
 
 _KERNEL_3X3 = np.ones((3, 3), dtype=np.uint8)
 _EARLIER = ((0, -1), (-1, 0), (-1, -1), (-1, 1))  # 8-neighbours before a cell in raster order
@@ -56,18 +71,62 @@ def _empty_frontiers() -> Frontiers:
     )
 
 
+@njit(cache=True, nogil=True)
+def sees_unknown(belief: BeliefGrid, r: int, c: int) -> bool:
+    """Whether cell (r, c) has an UNKNOWN 8-neighbour not hidden behind a wall corner.
+
+    A diagonal neighbour is hidden when both cells orthogonally between them are OCCUPIED.
+    """
+    rows, cols = belief.shape
+    for dr in range(-1, 2):
+        for dc in range(-1, 2):
+            rr, cc = r + dr, c + dc
+            if not (0 <= rr < rows and 0 <= cc < cols) or belief[rr, cc] != UNKNOWN:
+                continue
+            if dr != 0 and dc != 0 and belief[rr, c] == OCCUPIED and belief[r, cc] == OCCUPIED:
+                continue
+            return True
+    return False
+
+
+@njit(cache=True, nogil=True)
+def _keep_seeing(belief: BeliefGrid, mask: BoolGrid) -> None:
+    """Clear the cells of ``mask`` whose only UNKNOWN neighbours are hidden (in place)."""
+    rows, cols = mask.shape
+    for r in range(rows):
+        for c in range(cols):
+            if mask[r, c] and not sees_unknown(belief, r, c):
+                mask[r, c] = False
+
+
+@njit(cache=True, nogil=True)
+def any_frontier(belief: BeliefGrid, cells_rc: IntArray) -> bool:
+    """Whether any of the cells (rows of (row, col)) is still a frontier cell of ``belief``."""
+    for k in range(len(cells_rc)):
+        r, c = cells_rc[k, 0], cells_rc[k, 1]
+        if belief[r, c] == FREE and sees_unknown(belief, r, c):
+            return True
+    return False
+
+
 def frontier_mask(belief: BeliefGrid) -> BoolGrid:
-    """FREE cells with an UNKNOWN cell among their 8 neighbours.
+    """FREE cells with an UNKNOWN cell among their 8 neighbours that they can see.
 
     >>> b = np.array([[1, 1, 1, 1], [1, 1, 1, 0], [2, 1, 1, 1]], dtype=np.uint8)
     >>> frontier_mask(b).astype(int)
     array([[0, 0, 1, 1],
            [0, 0, 1, 0],
            [0, 0, 1, 1]])
+    >>> wall = np.array([[1, 2, 0], [1, 1, 2], [1, 1, 1]], dtype=np.uint8)  # a staircase
+    >>> frontier_mask(wall).astype(int)
+    array([[0, 0, 0],
+           [0, 0, 0],
+           [0, 0, 0]])
     """
     unknown = (belief == UNKNOWN).view(np.uint8)
     # cv2's default dilation border never wins, so outside the grid is "not unknown".
     mask: BoolGrid = (cv2.dilate(unknown, _KERNEL_3X3) != 0) & (belief == FREE)
+    _keep_seeing(belief, mask)
     return mask
 
 

@@ -9,7 +9,8 @@ labels with one lookup table (``render.style.Style.lut``).
 Per robot, the first pass (:func:`known_box`) finds the bounding box of its known cells;
 the second (:func:`mark_robot`) runs over that box (+1) only, while the belief is still in
 cache, and fuses the team-known class, the free and safe tints and the frontier test (a
-FREE cell with an UNKNOWN cell among its 8 neighbours, as ``frontiers.frontier_mask``). The
+FREE cell with an UNKNOWN cell among its 8 neighbours not hidden behind a wall corner, as
+``frontiers.frontier_mask``). The
 frontier test fills one row buffer per row ("an UNKNOWN cell above, at or below, in this
 column"), so every inner loop is branch-free over contiguous row slices and vectorises. A
 last pass (:func:`finish_labels`) adds the known-at-base and wall classes and the tints;
@@ -32,6 +33,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from mresim_phys.knowledge.frontiers import sees_unknown
 from mresim_phys.render.layers import LayerSpec
 from mresim_phys.render.style import (
     AT_BASE,
@@ -92,7 +94,8 @@ def mark_robot(
 
     Frontier cells are FREE cells with an UNKNOWN cell among their 8 neighbours in the grid:
     per row, ``near[1 + k]`` flags an UNKNOWN cell in column c0 + k of the rows above, at
-    and below, and a cell is a frontier if ``near`` flags it or a column next to it.
+    and below, and a cell is a frontier if ``near`` flags it or a column next to it, and
+    :func:`~mresim_phys.knowledge.frontiers.sees_unknown` (no wall corner hides them all).
     """
     r0, r1, c0, c1 = box
     rows, cols = belief.shape
@@ -118,6 +121,8 @@ def mark_robot(
             raised = max(tint_row[k], np.uint8(free * free_tint))
             tint_row[k] = max(raised, np.uint8(np.uint8(safe_row[k]) * safe_tint))
             edge = np.uint8(np.uint8(near[k] | near[k + 1] | near[k + 2]) & free)
+            if edge and not sees_unknown(belief, r, c0 + k):  # hidden behind a wall corner
+                edge = np.uint8(0)
             marked = max(np.uint8(edge * frontier), np.uint8(free * known))
             label_row[k] = max(label_row[k], marked)
 

@@ -110,6 +110,20 @@ class Strategy(Protocol):
 STRATEGIES: Registry[Strategy] = Registry("strategy", "mresim_phys.strategies")
 
 
+@runtime_checkable
+class ReplansOnContact(Protocol):
+    """A strategy that may ask for a replan on the step after its robot was in contact.
+
+    The original replans every cycle while a robot receives messages; a strategy with
+    this method says when such a replan is worth its cost (``belief``: the robot's map
+    after the exchange).
+    """
+
+    def replan_on_contact(self, belief: BeliefGrid) -> bool:
+        """Whether the robot, linked at the last exchange, should replan now."""
+        ...
+
+
 class PlanContext:
     """Configuration space and distance field of one robot, computed lazily once.
 

@@ -31,7 +31,12 @@ import numpy as np
 from numpy.typing import NDArray
 from pydantic import Field
 
-from mresim_phys.knowledge.frontiers import Frontiers, find_frontiers, frontier_targets
+from mresim_phys.knowledge.frontiers import (
+    Frontiers,
+    any_frontier,
+    find_frontiers,
+    frontier_targets,
+)
 from mresim_phys.knowledge.teammates import TeammateInfo
 from mresim_phys.planning.fields import distance_field
 from mresim_phys.plugin import Plugin
@@ -45,7 +50,7 @@ from mresim_phys.strategies.base import (
     return_to_base,
 )
 from mresim_phys.strategies.random_walk import random_step
-from mresim_phys.types import FREE, BoolGrid, FloatArray, IntArray
+from mresim_phys.types import FREE, BeliefGrid, BoolGrid, FloatArray, IntArray
 
 UTILITY_SCALE = 1e8  # original: U = area * 10^8 / d^4
 MIN_SEARCH = 10.0  # cells: smallest extra horizon when refining a teammate's bid
@@ -88,6 +93,13 @@ class FrontierParams(StrategyParams):
     )
     done_after: int = Field(
         100, ge=0, description="Steps before the done_fraction rule may fire (the original: 100)."
+    )
+    replan_on_contact: bool = Field(
+        False,
+        description=(
+            "Replan on the step after a contact when the frontier the robot chases has"
+            " left its map (the original replans every step while in contact)."
+        ),
     )
     give_up_radius: float = Field(
         10.0,
@@ -188,6 +200,22 @@ class FrontierExploration(Plugin):
             goal=(col + 0.5, row + 0.5),
             look_at=nearest_cell_centre(chasing, row, col),
             info=info,
+        )
+
+    def replan_on_contact(self, belief: BeliefGrid) -> bool:
+        """Replan after a contact when no cell of the chased frontier is frontier any more.
+
+        The original replans every cycle while a robot receives messages, so a robot
+        whose frontier a teammate has explored turns to another one at once. Of those
+        replans only the ones whose target is gone are made here (replanning every step
+        in contact cost 8 times the run time, library 8 robots). Off by default: it
+        helps library 8 robots under path_loss and hurts library 16 (see
+        docs/differences-from-original.md, "Fidelity")."""
+        chasing = self._chasing
+        return bool(
+            self.params.replan_on_contact
+            and chasing is not None
+            and not any_frontier(belief, chasing)
         )
 
     def _goal_met(self, view: RobotView) -> bool:
