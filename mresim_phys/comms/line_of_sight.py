@@ -56,5 +56,5 @@ class LineOfSightComm(Plugin):
     def reach(self, radios: Radios, index: int, angles: FloatArray, world: World) -> FloatArray:
         """The agent's disk, each ray stopped at the first wall."""
         origin = tuple(radios.positions[index].tolist())
-        walls = world.query_filter(None, robots_block=False)
+        walls = world.radio_filter()  # as the links: radio-quiet obstacles let it through
         return world.cast_rays(origin, angles, float(radios.ranges[index]), walls).ranges

@@ -62,6 +62,7 @@ from mresim_phys.world.wallset import (
     MOVABLE_CATEGORIES,
     MOVABLE_CATEGORY,
     OBSTACLE_CATEGORIES,
+    QUIET_CATEGORY,
     RADIO_CATEGORIES,
     ROBOT_CATEGORY,
     SHUFFLE_SEED,
@@ -410,12 +411,15 @@ class World:
 
         One compiled call (``world/raycast.py``): a traversal of the truth grid, whose
         cell boundaries are exactly the Space's wall segments, plus the robot circles
-        the filter lets block (every robot but the filter's group).
+        the filter lets block (every robot but the filter's group). A filter without
+        the radio-quiet obstacles' category (:meth:`radio_filter`) traverses the grid
+        radio meets (:attr:`radio_occupied`).
         """
         n = len(angles)
         ranges, normals, wall_hit = np.empty(n), np.empty((n, 2)), np.empty(n, dtype=np.bool_)
+        quiet_blocks = shape_filter[2] & QUIET_CATEGORY
         cast_fan(
-            self.occupied,
+            self.occupied if quiet_blocks else self.radio_occupied,
             float(origin[0]),
             float(origin[1]),
             np.ascontiguousarray(angles, dtype=np.float64),
