@@ -64,7 +64,7 @@ def test_radio_passes_an_obstacle_that_does_not_block_it() -> None:
     assert walls_between(world.radio_occupied, *ends)[0][0] == 0
     assert world.occupied[19, 51]  # ... while rays and motion meet it
     east = np.array([0.0])
-    assert sight.reach(radios, 0, east, world)[0] == pytest.approx(100.0)  # region too
+    assert sight.reach(radios, 0, east, world)[0] == pytest.approx(120 - 40.5)  # map edge
     world.add_movable("crate", (4, 4), (18, 55))  # one that blocks radio
     assert sight.reach(radios, 0, east, world)[0] == pytest.approx(55 - 40.5)
 
