@@ -179,3 +179,14 @@ def test_a_door_waits_for_its_doorway_to_clear() -> None:
 def test_debris_squares_are_clipped_to_the_map() -> None:
     mask = square_at((10, 10), 0, 9, 4)
     assert mask.sum() == 3 * 2 and mask[0:3, 8:10].all()
+
+
+def test_a_misspelt_shape_key_names_the_kinds() -> None:
+    from pydantic import ValidationError
+
+    with pytest.raises(ValidationError) as info:
+        ObstacleParams.model_validate(
+            {"name": "x", "shape": {"circel": 3}, "motion": {"still": [1, 1]}}
+        )
+    errors = info.value.errors()
+    assert len(errors) == 1 and "'circle' or 'box' or 'polygon'" in errors[0]["msg"]

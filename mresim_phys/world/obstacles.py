@@ -24,14 +24,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import ClassVar, Literal, Protocol
+from typing import Annotated, ClassVar, Literal, Protocol
 
 import numpy as np
-from pydantic import Field, model_validator
+from pydantic import Field, Tag, model_validator
 
 from mresim_phys.strict import Strict
 from mresim_phys.types import BoolGrid
-from mresim_phys.world.shapes import BodyShape, body_cells
+from mresim_phys.world.shapes import BodyShape, body_cells, keyed
 
 Point = tuple[float, float]
 
@@ -62,7 +62,12 @@ class StillMotion(Strict):
     still: Point = Field(description="Where it stands [x, y] in cells.")
 
 
-Motion = WaypointsMotion | RandomWalkMotion | StillMotion
+Motion = Annotated[
+    Annotated[WaypointsMotion, Tag("waypoints")]
+    | Annotated[RandomWalkMotion, Tag("random_walk")]
+    | Annotated[StillMotion, Tag("still")],
+    keyed("waypoints", "random_walk", "still"),
+]
 
 
 class ObstacleParams(Strict):

@@ -18,11 +18,11 @@ from __future__ import annotations
 
 import math
 from pathlib import Path
-from typing import Annotated
+from typing import Annotated, Any
 
 import cv2
 import numpy as np
-from pydantic import Field, field_validator
+from pydantic import Discriminator, Field, Tag, field_validator
 from skimage.measure import points_in_poly
 
 from mresim_phys.strict import Strict
@@ -52,7 +52,27 @@ class PolygonShape(Strict):
     )
 
 
-BodyShape = CircleShape | BoxShape | PolygonShape
+def keyed(*keys: str) -> Discriminator:
+    """A discriminator that picks a union member by which of ``keys`` the mapping has
+    (the YAML key that names the kind), so a mistake is reported for that kind only."""
+
+    def kind(value: Any) -> str | None:
+        if isinstance(value, dict):
+            return next((k for k in keys if k in value), None)
+        return next((k for k in keys if hasattr(value, k)), None)
+
+    wanted = " or ".join(f"'{k}'" for k in keys)
+    return Discriminator(
+        kind, custom_error_type="kind", custom_error_message=f"give one of the keys {wanted}"
+    )
+
+
+BodyShape = Annotated[
+    Annotated[CircleShape, Tag("circle")]
+    | Annotated[BoxShape, Tag("box")]
+    | Annotated[PolygonShape, Tag("polygon")],
+    keyed("circle", "box", "polygon"),
+]
 
 
 class BoxRegion(Strict):
@@ -89,7 +109,13 @@ class MaskRegion(Strict):
     mask: Path = Field(description="PNG the size of the map; pixels darker than 128 are in.")
 
 
-Region = BoxRegion | CircleRegion | PolygonRegion | MaskRegion
+Region = Annotated[
+    Annotated[BoxRegion, Tag("box")]
+    | Annotated[CircleRegion, Tag("circle")]
+    | Annotated[PolygonRegion, Tag("polygon")]
+    | Annotated[MaskRegion, Tag("mask")],
+    keyed("box", "circle", "polygon", "mask"),
+]
 
 
 def inside_polygon(vertices: np.ndarray, xs: np.ndarray, ys: np.ndarray) -> BoolGrid:
