@@ -21,9 +21,9 @@ and returns a :class:`~mresim_phys.world.changes.Change`. Movable obstacles'
 segments have their own category and every obstacle filter includes it: rays,
 line of sight and motion see them exactly where the grid has them.
 
-Queries go through Chipmunk's C function via pymunk's cffi handle with one
-reused result struct: the pymunk wrapper allocates per ray and costs ~4 us a ray,
-the direct call ~1.3 us (docs/performance.md, Kernels). Walls live in the
+Segment and swept-circle queries go through :class:`~mresim_phys.world.queries.SpaceQuery`
+(Chipmunk's C function via pymunk's cffi handle, one reused result struct, one query at a
+time; docs/performance.md, Kernels). Walls live in the
 default bounding-box tree, inserted in a fixed shuffled order (sorted insertion
 builds a degenerate tree). The spatial hash, measured as fast, is NOT
 used: its segment query misses hits near the end of a ray (a ray from (60, 30)
@@ -34,7 +34,6 @@ tests/test_sensing.py keeps that case).
 from __future__ import annotations
 
 import math
-import threading
 from collections.abc import Mapping
 from dataclasses import dataclass
 from functools import cached_property
@@ -43,7 +42,6 @@ from types import MappingProxyType
 import numpy as np
 import pymunk
 from numpy.typing import ArrayLike
-from pymunk._chipmunk_cffi import ffi, lib
 
 from mresim_phys.types import BoolGrid, FloatArray
 from mresim_phys.world.changes import (
@@ -57,9 +55,9 @@ from mresim_phys.world.changes import (
     join_boxes,
 )
 from mresim_phys.world.maps import wall_segments
+from mresim_phys.world.queries import ALL_BITS, Hit, QueryFilter, SpaceQuery
 from mresim_phys.world.raycast import cast_fan
 from mresim_phys.world.wallset import (
-    MOVABLE_CATEGORIES,
     MOVABLE_CATEGORY,
     OBSTACLE_CATEGORIES,
     QUIET_CATEGORY,
@@ -84,26 +82,9 @@ __all__ = [
     "World",
 ]
 
-ALL_BITS = 0xFFFFFFFF
 NO_CIRCLES = np.zeros((0, 3))
 
 Point = tuple[float, float]
-QueryFilter = tuple[int, int, int]  # Chipmunk shape filter: (group, categories, mask)
-
-
-@dataclass(frozen=True)
-class Hit:
-    """First thing a query touched: where, the surface normal, and whether it is a wall.
-
-    ``is_wall``: an obstacle of the truth grid (a wall or a movable obstacle), not a
-    robot; ``is_movable``: a movable obstacle's face.
-    """
-
-    point: tuple[float, float]
-    normal: tuple[float, float]
-    alpha: float
-    is_wall: bool
-    is_movable: bool = False
 
 
 @dataclass(frozen=True)
@@ -143,10 +124,7 @@ class World:
         self.bodies = [self._add_robot(i, r) for i, r in enumerate(robot_radii)]
         self._radii = np.asarray(robot_radii, dtype=np.float64)
         self._robot_xy = self._body_positions()
-        self._info = ffi.new("cpSegmentQueryInfo *")
-        # Chipmunk locks a Space for a query by a counter, which concurrent queries would
-        # corrupt, and _info is one shared result struct: one query at a time
-        self._query_lock = threading.Lock()
+        self._query = SpaceQuery(self.space)
         self.version = 0  # bumped by every change of the truth after step 0
         self._layers: Layers | None = None  # built by the first change
         self._movables: dict[str, Movable] = {}
@@ -346,59 +324,9 @@ class World:
         radius: float,
         shape_filter: QueryFilter,
     ) -> Hit | None:
-        """The first shape a segment (swept by ``radius``) from ``start`` to ``end`` touches.
-
-        Safe to call from several threads (they query one at a time)."""
-        with self._query_lock:
-            if radius > 0:
-                return self._first_swept_hit(start, end, radius, shape_filter)
-            return self._first_segment_hit(start, end, radius, shape_filter)
-
-    def _first_segment_hit(
-        self, start: Point, end: Point, radius: float, shape_filter: QueryFilter
-    ) -> Hit | None:
-        """Chipmunk's own segment query (no swept radius), into the one reused result struct."""
-        info, space = self._info, self.space._space  # never keep the cdata beyond the Space
-        if lib.cpSpaceSegmentQueryFirst(space, start, end, radius, shape_filter, info) == ffi.NULL:
-            return None
-        categories = lib.cpShapeGetFilter(info.shape).categories
-        return Hit(
-            (info.point.x, info.point.y),
-            (info.normal.x, info.normal.y),
-            info.alpha,
-            bool(categories & OBSTACLE_CATEGORIES),
-            bool(categories & MOVABLE_CATEGORIES),
-        )
-
-    def _first_swept_hit(
-        self, start: Point, end: Point, radius: float, shape_filter: QueryFilter
-    ) -> Hit | None:
-        """Swept-circle query: candidates from the swept box, then an exact query per shape.
-
-        Chipmunk's own segment query ignores the radius in its broad phase (it
-        walks the tree with the bare segment), so it misses a wall the circle
-        grazes but the centre line does not cross.
-        """
-        box = pymunk.BB(
-            min(start[0], end[0]) - radius,
-            min(start[1], end[1]) - radius,
-            max(start[0], end[0]) + radius,
-            max(start[1], end[1]) + radius,
-        )
-        best = None
-        for shape in self.space.bb_query(box, pymunk.ShapeFilter(*shape_filter)):
-            info = shape.segment_query(start, end, radius)
-            if info is not None and (best is None or info.alpha < best.alpha):
-                best = info
-        if best is None:
-            return None
-        return Hit(
-            (best.point.x, best.point.y),
-            (best.normal.x, best.normal.y),
-            best.alpha,
-            bool(best.shape.filter.categories & OBSTACLE_CATEGORIES),
-            bool(best.shape.filter.categories & MOVABLE_CATEGORIES),
-        )
+        """The first shape a segment (swept by ``radius``) from ``start`` to ``end`` touches
+        (:class:`~mresim_phys.world.queries.SpaceQuery`; safe from several threads)."""
+        return self._query.first_hit(start, end, radius, shape_filter)
 
     def cast_rays(
         self,
