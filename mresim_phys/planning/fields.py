@@ -330,6 +330,7 @@ def distance_field(
     max_snap: float = 3.0,
     limit: float = np.inf,
     slowness: FloatArray | None = None,
+    box: Box | None = None,
 ) -> DistanceField:
     """One Dijkstra from ``start_xy`` over the passable cells (see the module move rules).
 
@@ -343,6 +344,8 @@ def distance_field(
         start_xy: Robot position in world coordinates (cells).
         max_snap: Largest distance to snap a non-passable start onto a passable cell.
         limit: Cells whose path cost exceeds this are left unreached (inf).
+        box: ``bbox(passable)`` if the caller has it already (one robot's replan asks
+            for several fields on one mask); None: computed here.
         slowness: Per-cell cost multipliers from known terrain (``planning.costs``);
             None = uniform octile costs.
 
@@ -350,7 +353,7 @@ def distance_field(
         The ``DistanceField`` of the start.
     """
     start = snap_to_passable(passable, start_xy, max_snap)
-    box = bbox(passable)
+    box = bbox(passable) if box is None else box
     if start is None or box is None:
         return DistanceField((int(passable.shape[0]), int(passable.shape[1])), None)
     return _field_in(passable, start, _window(start, box, limit), limit, slowness)

@@ -30,6 +30,7 @@ from mresim_phys.knowledge.teammates import Payload, TeammateInfo
 from mresim_phys.planning import Planner, TopologicalMap, shared_map
 from mresim_phys.planning.costs import slowness_of
 from mresim_phys.planning.fields import DistanceField, distance_field, traversable
+from mresim_phys.planning.grid import Box, bbox
 from mresim_phys.planning.topological import TopologicalPlanner
 from mresim_phys.plugin import PluginParams
 from mresim_phys.registry import Registry
@@ -140,6 +141,11 @@ class PlanContext:
         return traversable(self.view.belief, self.view.clearance)
 
     @cached_property
+    def passable_box(self) -> Box | None:
+        """The bounding box of :attr:`passable` (None if no cell is), found once."""
+        return bbox(self.passable)
+
+    @cached_property
     def slowness(self) -> FloatArray | None:
         """Cost multipliers of the terrain the robot knows (``planning.costs``); None while
         it knows no slow ground (or the run has no terrain): uniform costs."""
@@ -148,7 +154,14 @@ class PlanContext:
     @cached_property
     def field(self) -> DistanceField:
         """Path costs from the robot to every passable cell it can reach."""
-        return distance_field(self.passable, self.view.position, slowness=self.slowness)
+        return self.field_from(self.view.position)
+
+    def field_from(self, position: tuple[float, float], limit: float = np.inf) -> DistanceField:
+        """Path costs on this robot's map from ``position`` (the robot's own, or a
+        teammate's), up to ``limit``."""
+        return distance_field(
+            self.passable, position, limit=limit, slowness=self.slowness, box=self.passable_box
+        )
 
     def fields_growing(self, first_limit: float) -> Iterator[DistanceField]:
         """Distance fields bounded by a cost horizon that doubles, ending unbounded.
@@ -160,9 +173,7 @@ class PlanContext:
         limit = max(first_limit, 1.0)
         extent = sum(self.view.belief.shape)
         while limit < extent:
-            yield distance_field(
-                self.passable, self.view.position, limit=limit, slowness=self.slowness
-            )
+            yield self.field_from(self.view.position, limit)
             limit *= 2
         yield self.field
 

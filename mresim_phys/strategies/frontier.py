@@ -38,7 +38,6 @@ from mresim_phys.knowledge.frontiers import (
     frontier_targets,
 )
 from mresim_phys.knowledge.teammates import TeammateInfo
-from mresim_phys.planning.fields import distance_field
 from mresim_phys.plugin import Plugin
 from mresim_phys.strategies.base import (
     STRATEGIES,
@@ -325,7 +324,7 @@ def exact_costs(
     context: PlanContext, position: tuple[float, float], goals_rc: IntArray, limit: float
 ) -> FloatArray | None:
     """Path costs on this robot's map from a teammate's position (None if off the map)."""
-    field = distance_field(context.passable, position, limit=limit, slowness=context.slowness)
+    field = context.field_from(position, limit)
     if field.start_rc is None:
         return None
     return field.cost_at(goals_rc[:, 0], goals_rc[:, 1])
