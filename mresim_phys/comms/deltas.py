@@ -79,6 +79,26 @@ def select_cells(
     return index[:n], values[:n]
 
 
+@njit(cache=True, nogil=True, inline="always")
+def store(
+    belief: BeliefGrid,
+    safe: BoolGrid,
+    codes: np.ndarray,
+    stamps: np.ndarray,
+    origins: np.ndarray,
+    r: int,
+    c: int,
+    code: int,
+    origin: int,
+    tick: int,
+) -> None:
+    """Write a merged cell code (occupancy, plus 4 for safe space) into the receiver's grids,
+    stamped ``tick`` and coming from ``origin`` (-1: its own)."""
+    belief[r, c] = code & 3
+    safe[r, c] = (code & 4) != 0
+    codes[r, c], stamps[r, c], origins[r, c] = code, tick, origin
+
+
 @njit(cache=True, nogil=True)
 def merge_cells(
     index: IntArray,
@@ -100,12 +120,10 @@ def merge_cells(
         new = max(old & 3, values[k] & 3) | ((old | values[k]) & 4)
         if new == old:
             continue
-        belief[r, c] = new & 3
-        safe[r, c] = (new & 4) != 0
         # a value mixed from both sides (e.g. the receiver's obstacle with the sender's
         # safe flag) is news to the sender too: it counts as the receiver's own
-        codes[r, c], stamps[r, c] = new, tick
-        origins[r, c] = sender if new == values[k] else -1
+        origin = sender if new == values[k] else -1
+        store(belief, safe, codes, stamps, origins, r, c, new, origin, tick)
         changed += 1
         r0, r1, c0, c1 = min(r0, r), max(r1, r + 1), min(c0, c), max(c1, c + 1)
     return changed, r0, r1, c0, c1
@@ -168,10 +186,8 @@ def merge_latest(
         new = value | ((old | theirs) & 4)
         if new == old:
             continue
-        belief[r, c] = new & 3
-        safe[r, c] = (new & 4) != 0
-        codes[r, c], stamps[r, c] = new, tick
-        origins[r, c] = sender if new == theirs else -1
+        origin = sender if new == theirs else -1
+        store(belief, safe, codes, stamps, origins, r, c, new, origin, tick)
         changed += 1
         r0, r1, c0, c1 = min(r0, r), max(r1, r + 1), min(c0, c), max(c1, c + 1)
     return changed, r0, r1, c0, c1
