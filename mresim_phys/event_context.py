@@ -17,7 +17,7 @@ import numpy as np
 from mresim_phys.agents import Agent, Robot
 from mresim_phys.comms.network import Blackout, Network
 from mresim_phys.knowledge.mapping import Coverage
-from mresim_phys.types import BoolGrid
+from mresim_phys.types import BoolGrid, FloatArray
 from mresim_phys.world.changes import Change, circles_cover
 from mresim_phys.world.debris import Crush
 from mresim_phys.world.doors import Door
@@ -55,11 +55,12 @@ class RunEventContext:
         self.lines: list[str] = []
         self._step = 0
         self._current = 0
+        self._bodies: FloatArray | None = None  # (x, y, radius) of every robot this step
 
     def run(self, events: Sequence[Event], step: int) -> list[str]:
         """Apply every event (in scenario order), then move every world element (moving
         obstacles, doors, debris; in scenario order) at ``step``; return the lines logged."""
-        self._step, self.lines = step, []
+        self._step, self.lines, self._bodies = step, [], None
         for index, event in enumerate(events):
             self._current = index
             event.apply(self)
@@ -137,9 +138,11 @@ class RunEventContext:
         over_walls: bool = False,
     ) -> bool:
         """Put or move obstacle ``name`` (False, and nothing changes, if it does not fit)."""
-        robots = [a for a in self.agents.values() if isinstance(a, Robot)]
-        bodies = np.array([(*r.position, r.radius) for r in robots], dtype=np.float64)
-        if not self.world.fits(footprint, at, bodies.reshape(-1, 3), name, over_walls):
+        if self._bodies is None:  # robots stand still through the events phase
+            robots = [a for a in self.agents.values() if isinstance(a, Robot)]
+            bodies = np.array([(*r.position, r.radius) for r in robots], dtype=np.float64)
+            self._bodies = bodies.reshape(-1, 3)
+        if not self.world.fits(footprint, at, self._bodies, name, over_walls):
             return False
         if name in self.world.movables:
             self._follow(self.world.move_movable(name, at, footprint))

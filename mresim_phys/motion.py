@@ -23,14 +23,16 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
+from numba import njit
 
 from mresim_phys.agents import Robot
 from mresim_phys.knowledge.mapping import mark_bump
 from mresim_phys.planning.fields import clearance_kernel
 from mresim_phys.strategies.base import ReplansOnContact
-from mresim_phys.types import OCCUPIED
+from mresim_phys.types import OCCUPIED, FloatArray, IntArray
 from mresim_phys.world.space import World
 from mresim_phys.world.terrain import TerrainGrid, factor_at
 
@@ -146,17 +148,35 @@ def path_blocked(belief: np.ndarray, path: np.ndarray, clearance: float, lookahe
     the path's points (after the first, where the robot stands) in its first ``lookahead``
     cells: the path planner's own rule for a passable cell (``planning.fields``), so a
     path planned on the same map is never blocked ('latest' beliefs: a person stepped
-    into the way, a door closed)."""
+    into the way, a door closed). A point whose clearance leaves the map blocks too."""
     if len(path) < 2:
         return False
-    steps = np.hypot(*np.diff(path, axis=0).T).cumsum()
-    cells = np.floor(path[1:][steps <= lookahead]).astype(np.int64)  # (col, row)
+    return _path_blocked(belief, path, clearance_offsets(float(clearance)), float(lookahead))
+
+
+@lru_cache(maxsize=32)
+def clearance_offsets(clearance: float) -> IntArray:
+    """``(k, 2)`` (dr, dc) of the cells :func:`~mresim_phys.planning.fields.clearance_kernel`
+    holds, relative to its centre."""
+    kernel = clearance_kernel(clearance)
+    offsets: IntArray = np.argwhere(kernel) - kernel.shape[0] // 2
+    return offsets
+
+
+@njit(cache=True, nogil=True)
+def _path_blocked(
+    belief: np.ndarray, path: FloatArray, offsets: IntArray, lookahead: float
+) -> bool:
+    """The kernel of :func:`path_blocked`: walk the path's points within ``lookahead``."""
     rows, cols = belief.shape
-    kernel = clearance_kernel(float(clearance))
-    offsets = np.argwhere(kernel) - kernel.shape[0] // 2  # (k, 2) (dr, dc)
-    r = cells[:, 1, None] + offsets[None, :, 0]
-    c = cells[:, 0, None] + offsets[None, :, 1]
-    inside = (r >= 0) & (r < rows) & (c >= 0) & (c < cols)
-    if not inside.all():
-        return True
-    return bool((belief[r, c] == OCCUPIED).any())
+    travelled = 0.0
+    for i in range(1, len(path)):
+        travelled += np.hypot(path[i, 0] - path[i - 1, 0], path[i, 1] - path[i - 1, 1])
+        if travelled > lookahead:
+            return False
+        col, row = math.floor(path[i, 0]), math.floor(path[i, 1])
+        for k in range(len(offsets)):
+            r, c = row + offsets[k, 0], col + offsets[k, 1]
+            if r < 0 or r >= rows or c < 0 or c >= cols or belief[r, c] == OCCUPIED:
+                return True
+    return False

@@ -63,7 +63,7 @@ def test_a_cart_moving_in_a_room_is_followed_without_relabelling_the_map() -> No
     world.add_movable("cart", (3, 3), (10, 10))
     for col in range(11, 20):
         change = world.move_movable("cart", (10, col))
-        window = reachable.follow(world.occupied, [change])
+        window, _ = reachable.follow(world.occupied, [change])
         assert window[1] - window[0] < 10 and window[3] - window[2] < 10
         np.testing.assert_array_equal(reachable.mask, labelled(world.occupied, np.array([[5, 5]])))
     assert reachable.relabels == 0

@@ -39,12 +39,13 @@ def walls(world: World) -> tuple[int, int, int]:
 
 
 def held_segments(world: World) -> list[tuple[tuple[float, ...], int]]:
-    """Segments in the Space, in insertion order, with their categories."""
-    return [
-        ((s.a.x, s.a.y, s.b.x, s.b.y), s.filter.categories)
-        for s in world.space.shapes
-        if isinstance(s, pymunk.Segment)
-    ]
+    """Segments in the Space (in world coordinates), in insertion order, with their categories."""
+    held = []
+    for s in world.space.shapes:
+        if isinstance(s, pymunk.Segment):
+            a, b = s.body.local_to_world(s.a), s.body.local_to_world(s.b)
+            held.append(((a.x, a.y, b.x, b.y), s.filter.categories))
+    return held
 
 
 def test_an_unchanged_world_is_built_exactly_as_before(rooms: np.ndarray) -> None:
@@ -124,7 +125,9 @@ def test_a_movable_obstacle_blocks_rays_and_motion_only_where_its_cells_are() ->
     hit = world.first_hit((5.5, 11.5), (35.5, 11.5), 0.0, robot)
     assert hit is not None and hit.is_wall and hit.is_movable and hit.point[0] == pytest.approx(20)
     assert world.blocked((15.0, 11.5), (25.0, 11.5), 1.0, robot) is not None
+    walls = world.segments
     world.move_movable("cart", (20, 20))
+    np.testing.assert_array_equal(world.segments, walls)  # its own body moved, no wall rebuilt
     assert world.blocked((15.0, 11.5), (25.0, 11.5), 1.0, robot) is None
     assert not world.occupied[10:13].any() and world.occupied[20:23, 20:22].all()
     world.remove_movable("cart")

@@ -2,8 +2,9 @@
 
 The stateful property test drives a World through random sequences of cell changes and
 movable obstacles against a plain numpy model, and after every step checks that the truth
-grid is the model's, that the Space holds exactly the unit edges ``wall_segments`` builds
-from it (maximally merged, each with the category of its occupied side), that rays cast
+grid is the model's, that the Space holds the static layer's ``wall_segments`` (maximally
+merged) plus each movable obstacle's outline on its own body, where the model has it, so
+that together they cover every boundary edge of the truth and only such edges, that rays cast
 (the scan kernel and a Chipmunk query of the Space) stop where a grid traversal of
 ``world.occupied`` stops, that each Change
 reports exactly the flipped cells and the overlapped robots, and that the reachable set
@@ -45,13 +46,16 @@ def unit_edges(segments: list[Edge] | NDArray[np.float64]) -> list[Edge]:
     return out
 
 
-def space_segments(world: World) -> list[tuple[Edge, int]]:
-    """The wall segments in the world's pymunk Space with their collision categories."""
-    return [
-        ((s.a.x, s.a.y, s.b.x, s.b.y), s.filter.categories)
-        for s in world.space.shapes
-        if isinstance(s, pymunk.Segment)
-    ]
+def space_segments(world: World) -> list[tuple[Edge, int, bool]]:
+    """The segments in the world's pymunk Space in world coordinates, with their collision
+    categories and whether they belong to the static body (the map's walls)."""
+    out = []
+    for s in world.space.shapes:
+        if isinstance(s, pymunk.Segment):
+            a, b = s.body.local_to_world(s.a), s.body.local_to_world(s.b)
+            on_static = s.body is world.space.static_body
+            out.append(((a.x, a.y, b.x, b.y), s.filter.categories, on_static))
+    return out
 
 
 def occupied_side(edge: Edge) -> tuple[int, int]:
@@ -221,19 +225,31 @@ class ChangingWorld(RuleBasedStateMachine):
         np.testing.assert_array_equal(self.world.occupied, self.truth())
 
     @invariant()
-    def space_holds_exactly_the_grids_segments(self) -> None:
+    def space_holds_the_static_walls_and_each_movables_outline(self) -> None:
         held = space_segments(self.world)
-        edges = [(e, cat) for segment, cat in held for e in unit_edges([segment])]
-        assert len(edges) == len({e for e, _ in edges})  # no unit edge twice
-        assert {e for e, _ in edges} == set(unit_edges(wall_segments(self.world.occupied)))
-        for edge, category in edges:
-            kind = self.kind(*occupied_side(edge))
-            assert category == {1: WALL_CATEGORY, 2: MOVABLE_CATEGORY}[kind], (edge, category)
-        ends = {(s[:2], np.sign(np.subtract(s[2:], s[:2])).tolist().__str__(), c) for s, c in held}
-        for s, c in held:
-            direction = np.sign(np.subtract(s[2:], s[:2])).tolist().__str__()
-            assert (s[2:], direction, c) not in ends, f"{s} is not merged with its continuation"
-        assert len(self.world.segments) == len(held)
+        static = [(segment, cat) for segment, cat, on_static in held if on_static]
+        walls = sorted(map(tuple, wall_segments(self.static).tolist()))
+        assert sorted(s for s, _ in static) == walls
+        assert {cat for _, cat in static} <= {WALL_CATEGORY}
+        assert len(self.world.segments) == len(static)
+        outlines = [(e, c) for s, c, on_static in held if not on_static for e in unit_edges([s])]
+        expected = []
+        for footprint, row, col in self.movables.values():
+            h, w = footprint.shape  # the outline: boundary edges of the padded footprint
+            for x0, y0, x1, y1 in unit_edges(wall_segments(np.pad(footprint, 1))):
+                inside = min(x0, x1) > 0 and max(x0, x1) < w + 2
+                if inside and min(y0, y1) > 0 and max(y0, y1) < h + 2:
+                    expected.append((x0 + col - 1, y0 + row - 1, x1 + col - 1, y1 + row - 1))
+        assert sorted(e for e, _ in outlines) == sorted(expected)
+        assert {cat for _, cat in outlines} <= {MOVABLE_CATEGORY}
+        # together: every boundary edge of the truth, and only edges with an occupied side
+        edges = {e for s, _, _ in held for e in unit_edges([s])}
+        assert set(unit_edges(wall_segments(self.world.occupied))) <= edges
+        rows, cols = self.static.shape
+        for edge in edges:
+            row, col = occupied_side(edge)
+            inside = 0 <= row < rows and 0 <= col < cols
+            assert not inside or self.world.occupied[row, col], edge
 
 
 ChangingWorld.TestCase.settings = settings(max_examples=60, stateful_step_count=25, deadline=None)

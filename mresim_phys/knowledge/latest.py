@@ -13,12 +13,14 @@ Coverage`: robots report the windows their scans touched and the boxes their mer
 changed (:meth:`LatestCoverage.touch_box`), the world reports where the truth or the
 reachable set changed (:meth:`LatestCoverage.retarget`); only those windows are
 recounted. A per-robot copy of which cells it held FREE / OCCUPIED turns a window of
-its map into changes of the per-cell holder counts.
+its map into changes of the per-cell holder counts. One compiled pass per window
+(:func:`fold_window`) folds a map's window and recounts it.
 """
 
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from mresim_phys.knowledge.mapping import Coverage, Update
 from mresim_phys.types import FREE, OCCUPIED, BeliefGrid, BoolGrid
@@ -34,7 +36,7 @@ class LatestCoverage(Coverage):
         self.truth = truth  # the world's truth grid, changed in place by the world
         self.free_holders = np.zeros(truth.shape, dtype=np.uint16)
         self.wall_holders = np.zeros(truth.shape, dtype=np.uint16)
-        self._held: dict[int, tuple[BoolGrid, BoolGrid]] = {}
+        self._held: dict[int, BeliefGrid] = {}  # each map as last folded in
         self._boxes: dict[int, tuple[BeliefGrid, Box]] = {}
         self.stale_mask = np.zeros(truth.shape, dtype=bool)
         self.stale = 0
@@ -61,32 +63,21 @@ class LatestCoverage(Coverage):
     def _fold(self, belief: BeliefGrid, window: tuple[slice, slice]) -> None:
         """Move one map's window into the holder counts and recount the window."""
         if id(belief) not in self._held:
-            shape = belief.shape
-            self._held[id(belief)] = (np.zeros(shape, bool), np.zeros(shape, bool))
-        held_free, held_wall = self._held[id(belief)]
-        free, wall = belief[window] == FREE, belief[window] == OCCUPIED
-        self.free_holders[window] += free
-        self.free_holders[window] -= held_free[window]
-        self.wall_holders[window] += wall
-        self.wall_holders[window] -= held_wall[window]
-        held_free[window], held_wall[window] = free, wall
-        self._recount(window)
+            self._held[id(belief)] = np.zeros(belief.shape, np.uint8)  # all UNKNOWN
+        rows, cols = window
+        counted, stale = fold_window(
+            belief, self._held[id(belief)], self.free_holders, self.wall_holders, self.known,
+            self.reachable, self.truth, self.stale_mask,
+            rows.start, rows.stop, cols.start, cols.stop,
+        )  # fmt: skip
+        self.count += counted
+        self.stale += stale
 
-    def _recount(self, window: tuple[slice, slice]) -> None:
-        """Recount explored and stale cells inside ``window``."""
-        known = self.free_holders[window] > 0
-        reach = self.reachable[window]
-        old = self.known[window]
-        self.count += int(np.count_nonzero(known & reach)) - int(np.count_nonzero(old & reach))
-        self.known[window] = known
-        truth = self.truth[window]
-        stale = (known & truth) | ((self.wall_holders[window] > 0) & ~truth)
-        self.stale += int(np.count_nonzero(stale)) - int(np.count_nonzero(self.stale_mask[window]))
-        self.stale_mask[window] = stale
-
-    def retarget(self, reachable: BoolGrid, window: Box | None = None) -> None:
+    def retarget(
+        self, reachable: BoolGrid, window: Box | None = None, before: BoolGrid | None = None
+    ) -> None:
         """The truth changed (inside ``window``, or anywhere): count against it."""
-        super().retarget(reachable, window)
+        super().retarget(reachable, window, before)
         rows, cols = self.truth.shape
         r0, r1, c0, c1 = window if window is not None else (0, rows, 0, cols)
         region = (slice(r0, r1), slice(c0, c1))
@@ -95,3 +86,43 @@ class LatestCoverage(Coverage):
         )
         self.stale += int(np.count_nonzero(stale)) - int(np.count_nonzero(self.stale_mask[region]))
         self.stale_mask[region] = stale
+
+
+@njit(cache=True, nogil=True)
+def fold_window(
+    belief: BeliefGrid,
+    held: BeliefGrid,
+    free_holders: np.ndarray,
+    wall_holders: np.ndarray,
+    known: BoolGrid,
+    reachable: BoolGrid,
+    truth: BoolGrid,
+    stale_mask: BoolGrid,
+    row0: int,
+    row1: int,
+    col0: int,
+    col1: int,
+) -> tuple[int, int]:
+    """Fold one map's window into the holder counts (what it holds now against what it
+    held when last folded, ``held``, updated in place), recounting ``known`` and
+    ``stale_mask`` on the cells whose value changed (elsewhere they are up to date:
+    :meth:`LatestCoverage.retarget` follows the truth); returns the change of the
+    explored count and of the stale count."""
+    counted = 0
+    stale_change = 0
+    for r in range(row0, row1):
+        for c in range(col0, col1):
+            value, old = belief[r, c], held[r, c]
+            if value == old:
+                continue
+            held[r, c] = value
+            free_holders[r, c] += (value == FREE) - (old == FREE)
+            wall_holders[r, c] += (value == OCCUPIED) - (old == OCCUPIED)
+            now = free_holders[r, c] > 0
+            if reachable[r, c]:
+                counted += int(now) - int(known[r, c])
+            known[r, c] = now
+            stale = (now and truth[r, c]) or (wall_holders[r, c] > 0 and not truth[r, c])
+            stale_change += int(stale) - int(stale_mask[r, c])
+            stale_mask[r, c] = stale
+    return counted, stale_change

@@ -378,22 +378,26 @@ class Coverage:
         self._pending: list[tuple[BeliefGrid, int, int, int, int]] = []
 
     def retarget(
-        self, reachable: BoolGrid, window: tuple[int, int, int, int] | None = None
+        self,
+        reachable: BoolGrid,
+        window: tuple[int, int, int, int] | None = None,
+        before: BoolGrid | None = None,
     ) -> None:
         """The world changed: count against the new reachable set from now on.
 
         Cells already held FREE and still reachable keep counting; cells that left
         the reachable set stop counting; newly reachable cells count once seen FREE.
         ``window`` (row0, row1, col0, col1), if given, is where ``reachable`` may differ
-        from the set counted so far (which must not have been changed in place): only
-        that window is recounted.
+        from the set counted so far: only that window is recounted. ``before`` is what
+        the set held in the window, if ``reachable`` is that set changed in place.
         """
         if window is None:
             self.total = int(np.count_nonzero(reachable))
             self.count = int(np.count_nonzero(self.known & reachable))
         else:
             r0, r1, c0, c1 = window
-            old, new = self.reachable[r0:r1, c0:c1], reachable[r0:r1, c0:c1]
+            old = self.reachable[r0:r1, c0:c1] if before is None else before
+            new = reachable[r0:r1, c0:c1]
             known = self.known[r0:r1, c0:c1]
             self.total += int(np.count_nonzero(new)) - int(np.count_nonzero(old))
             self.count += int(np.count_nonzero(known & new)) - int(np.count_nonzero(known & old))

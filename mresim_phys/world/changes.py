@@ -4,11 +4,11 @@ The truth grid is ``static | movable footprints``: the static layer holds walls 
 rubble (changed by ``World.set_cells``), and every movable obstacle adds its
 footprint, a set of whole cells at a whole-cell offset, to a cover count (so
 footprints may overlap each other and the walls). :class:`Layers` keeps both and a
-padded *kinds* grid (0 free, 1 static wall, 2 cell covered only by movables, 3 only by
-movables radio passes through; see
-``maps.edge_segments``), and :meth:`Layers.refresh` folds a window of them into the
-truth grid in place, reporting which cells' truth flipped (a :class:`Patch`) and
-which cells' kind changed (the window whose wall segments must be rebuilt).
+padded *kinds* grid of the static layer (0 free, 1 wall; ``maps.edge_segments``), and
+:meth:`Layers.refresh` folds a window of them into the truth grid in place, reporting
+which cells' truth flipped (a :class:`Patch`) and which static cells changed (the
+window whose wall segments must be rebuilt). Movable obstacles have no wall segments
+of the map: each is a body of its own in the Space (``world/bodies.py``).
 
 A :class:`Change` is what every mutation of the world returns: the world's new
 version, the patches of flipped cells, and the robots whose bodies now overlap a
@@ -24,8 +24,11 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from mresim_phys.types import BoolGrid, FloatArray, IntArray
+from mresim_phys.world.layerkernels import fold_truth, footprint_clear
 from mresim_phys.world.maps import KindGrid, padded_kinds
 from mresim_phys.world.wallset import Box
+
+NO_CELLS = np.zeros((0, 0), dtype=bool)  # no footprint, no radio grid (kernel arguments)
 
 
 def check_box(box: Box, shape: tuple[int, int]) -> Box:
@@ -154,7 +157,10 @@ class Movable:
         blocks_radio: bool = True,
     ) -> Movable:
         """A checked movable: ``footprint`` is a bool mask or (height, width) of a solid box."""
-        cells = np.array(footprint, copy=True)
+        if isinstance(footprint, np.ndarray) and not footprint.flags.writeable:
+            cells = footprint  # an earlier Movable's (read-only) footprint: shared
+        else:
+            cells = np.array(footprint, copy=True)
         if isinstance(footprint, tuple):
             cells = np.ones(footprint, dtype=bool)
         if cells.dtype != np.bool_ or cells.ndim != 2 or not cells.any():
@@ -207,50 +213,44 @@ class Layers:
                 window -= movable.footprint
 
     def clear(
-        self, footprint: BoolGrid, at: tuple[int, int], own: Movable | None, over_walls: bool
+        self,
+        footprint: BoolGrid,
+        at: tuple[int, int],
+        own: Movable | None,
+        over_walls: bool,
+        circles: FloatArray,
     ) -> bool:
         """Whether ``footprint`` at top-left cell ``at`` lies on the map and covers no cell
-        of another movable (``own``'s cells do not count) nor, unless ``over_walls``, a
-        static wall."""
-        row, col = at
-        h, w = footprint.shape
-        rows, cols = self.occupied.shape
-        if row < 0 or col < 0 or row + h > rows or col + w > cols:
-            return False
-        window = (slice(row, row + h), slice(col, col + w))
-        cover = self.cover[window].astype(np.int32)
-        if own is not None:
-            cover -= footprint_in(own, (row, row + h, col, col + w))
-        blocked = cover > 0
-        if not over_walls:
-            blocked |= self.static[window]
-        return not (blocked & footprint).any()
+        of another movable (``own``'s cells do not count), nor, unless ``over_walls``, a
+        static wall, nor a circle of ``circles`` (rows x, y, radius: robots' bodies)."""
+        own_cells, own_at = (NO_CELLS, (0, 0)) if own is None else (own.footprint, own.box[::2])
+        return bool(
+            footprint_clear(
+                self.cover, self.static, footprint, int(at[0]), int(at[1]),
+                own_cells, int(own_at[0]), int(own_at[1]), over_walls, circles,
+            )
+        )  # fmt: skip
 
     def refresh(self, box: Box) -> tuple[Box | None, Patch | None]:
         """Fold the layers of ``box`` into the kinds and truth grids.
 
-        Returns the box of cells whose kind changed (their segments must be rebuilt)
-        and the patch of cells whose truth flipped (None for either if there are none).
+        Returns the box of cells whose kind changed (their wall segments must be
+        rebuilt: only the static layer has segments of the map; movables are bodies,
+        ``world/bodies.py``) and the patch of cells whose truth flipped (None for
+        either if there are none).
         """
         row0, row1, col0, col1 = box
-        static = self.static[row0:row1, col0:col1]
-        cover, quiet = self.cover[row0:row1, col0:col1], self.quiet[row0:row1, col0:col1]
-        loud = cover > quiet  # covered by a movable that blocks radio
-        kinds = np.where(static, 1, np.where(loud, 2, np.where(cover > 0, 3, 0))).astype(np.int8)
-        if self.radio is not None:
-            self.radio[row0:row1, col0:col1] = static | loud
-        old = self.kinds[row0 + 1 : row1 + 1, col0 + 1 : col1 + 1]
-        flipped = (kinds > 0) != (old > 0)
-        rebuild = bounding_box(kinds != old, row0, col0)
-        old[...] = kinds
-        self.occupied[row0:row1, col0:col1] = kinds > 0
-        flip_box = bounding_box(flipped, row0, col0)
-        if flip_box is None:
+        flipped = np.empty((row1 - row0, col1 - col0), dtype=bool)
+        radio = NO_CELLS if self.radio is None else self.radio
+        k0, k1, k2, k3, r0, r1, c0, c1 = fold_truth(
+            self.static, self.cover, self.quiet, radio, self.kinds, self.occupied, flipped,
+            row0, row1, col0, col1,
+        )  # fmt: skip
+        rebuild = None if k0 < 0 else (k0, k1, k2, k3)
+        if r0 < 0:
             return rebuild, None
-        r0, r1, c0, c1 = flip_box
-        local = (slice(r0 - row0, r1 - row0), slice(c0 - col0, c1 - col0))
-        patch = Patch(r0, c0, flipped[local], self.occupied[r0:r1, c0:c1].copy())
-        return rebuild, patch
+        local = flipped[r0 - row0 : r1 - row0, c0 - col0 : c1 - col0]
+        return rebuild, Patch(r0, c0, local, self.occupied[r0:r1, c0:c1].copy())
 
 
 def footprint_in(movable: Movable, box: Box) -> IntArray:

@@ -114,6 +114,7 @@ class Door:
     def __init__(self, params: DoorParams) -> None:
         self.params = params
         self.footprint, self.at = door_cells(params)
+        self.footprint.flags.writeable = False  # shared with the world's Movable
         self.scheduled = params.closed  # the state close / open events asked for
         self.closed = False
 

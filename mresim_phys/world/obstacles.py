@@ -170,6 +170,7 @@ class MovingObstacle:
         self.params = params
         self.rng = rng
         self.footprint, self.centre_cell = body_cells(params.shape)
+        self.footprint.flags.writeable = False  # shared with the world's Movable
         self.position: Point = params.points()[0]
         self.on_map = False
         self.target, self.direction = (1 if len(params.points()) > 1 else -1), 1

@@ -26,13 +26,12 @@ from collections.abc import Sequence
 from typing import Protocol
 
 import numpy as np
+from numba import njit
 from numpy.typing import ArrayLike
-from scipy import ndimage
 
 from mresim_phys.types import BoolGrid, IntArray
 from mresim_phys.world.changes import Change, Patch, union_box
 from mresim_phys.world.maps import (
-    FOUR_CONNECTED,
     connected_to,
     free_components_mask,
     seed_cells,
@@ -47,8 +46,11 @@ NOTHING: Box = (0, 0, 0, 0)
 class Retargets(Protocol):
     """Anything that counts against a reachable set (``knowledge.mapping.Coverage``)."""
 
-    def retarget(self, reachable: BoolGrid, window: Box | None = None) -> None:
-        """Count against ``reachable`` from now on (it differs only inside ``window``)."""
+    def retarget(
+        self, reachable: BoolGrid, window: Box | None = None, before: BoolGrid | None = None
+    ) -> None:
+        """Count against ``reachable`` from now on (it differs only inside ``window``,
+        where it held ``before`` if it was changed in place)."""
         ...
 
 
@@ -60,15 +62,17 @@ class Reachable:
         self.seeds = seed_cells(seeds_xy, occupied.shape)
         self.relabels = 0  # how often a change needed the whole map labelled again
 
-    def follow(self, occupied: BoolGrid, changes: Sequence[Change]) -> Box:
+    def follow(self, occupied: BoolGrid, changes: Sequence[Change]) -> tuple[Box, BoolGrid | None]:
         """Bring :attr:`mask` up to date with ``changes`` (every change since the last call,
-        ``occupied`` the truth after them); return the box outside which it did not change.
+        ``occupied`` the truth after them); return the box outside which it did not change
+        and what the mask held there before (None when the whole map was labelled again).
 
-        :attr:`mask` becomes a new array; the previous one is left as it was.
+        A local change writes :attr:`mask` in place; labelling the whole map again makes
+        it a new array, leaving the previous one as it was.
         """
         patches = [patch for change in changes for patch in change.patches]
         if not patches:
-            return NOTHING
+            return NOTHING, None
         window = grown(union_box(patches), MARGIN, occupied.shape)
         local = None
         if area(window) <= LOCAL_SHARE * occupied.size:
@@ -77,11 +81,11 @@ class Reachable:
             self.relabels += 1
             free = ~occupied
             self.mask = connected_to(free, self.seeds)
-            return (0, occupied.shape[0], 0, occupied.shape[1])
-        mask = self.mask.copy()
-        mask[window[0] : window[1], window[2] : window[3]] = local
-        self.mask = mask
-        return window
+            return (0, occupied.shape[0], 0, occupied.shape[1]), None
+        region = self.mask[window[0] : window[1], window[2] : window[3]]
+        before = region.copy()
+        region[...] = local
+        return window, before
 
     def _local(self, occupied: BoolGrid, patches: list[Patch], window: Box) -> BoolGrid | None:
         """The reachable cells of ``window`` after the change, or None if the change may
@@ -89,30 +93,85 @@ class Reachable:
         row0, row1, col0, col1 = window
         free = ~occupied[row0:row1, col0:col1]
         was_free = free ^ flips_in(patches, window)
-        seeds = self.seeds - np.array([row0, col0])
-        inside = ((seeds >= 0) & (seeds < free.shape)).all(axis=1)
-        seeds = seeds[inside]
-        if not (free[seeds[:, 0], seeds[:, 1]].all() and was_free[seeds[:, 0], seeds[:, 1]].all()):
+        ring = ring_of(window, occupied.shape)
+        local = np.zeros(free.shape, dtype=bool)
+        seeds = (self.seeds - np.array([row0, col0])).astype(np.int64)
+        reached = self.mask[row0:row1, col0:col1]
+        if not relabel_window(free, was_free, ring, seeds, reached, local):
             return None
-        ring = ring_of(window, occupied.shape) & free  # unchanged cells: free before and after
-        terminals = np.concatenate((np.argwhere(ring), seeds))
-        before, _ = ndimage.label(was_free, structure=FOUR_CONNECTED)
-        after, _ = ndimage.label(free, structure=FOUR_CONNECTED)
-        rows, cols = terminals[:, 0], terminals[:, 1]
-        if not same_groups(before[rows, cols], after[rows, cols]):
-            return None
-        reached = self.mask[row0:row1, col0:col1][rows, cols]  # seeds free before: reached
-        ids = np.unique(after[rows[reached], cols[reached]])
-        return np.isin(after, ids[ids > 0])
+        return local
+
+
+@njit(cache=True, nogil=True)
+def _label(free: BoolGrid, labels: IntArray) -> int:
+    """4-connected components of ``free`` into ``labels`` (0: not free); returns their count."""
+    rows, cols = free.shape
+    stack = np.empty(rows * cols, dtype=np.int64)
+    count = 0
+    for start in range(rows * cols):
+        r0, c0 = divmod(start, cols)
+        if not free[r0, c0] or labels[r0, c0]:
+            continue
+        count += 1
+        labels[r0, c0], stack[0], top = count, start, 1
+        while top:
+            top -= 1
+            r, c = divmod(stack[top], cols)
+            for dr, dc in ((-1, 0), (1, 0), (0, -1), (0, 1)):
+                rr, cc = r + dr, c + dc
+                if 0 <= rr < rows and 0 <= cc < cols and free[rr, cc] and not labels[rr, cc]:
+                    labels[rr, cc] = count
+                    stack[top] = rr * cols + cc
+                    top += 1
+    return count
+
+
+@njit(cache=True, nogil=True)
+def relabel_window(
+    free: BoolGrid, was_free: BoolGrid, ring: BoolGrid, seeds: IntArray, reached: BoolGrid,
+    out: BoolGrid,
+) -> bool:  # fmt: skip
+    """Reachability inside a window after a change, from its ring and seeds (see the module
+    docstring): ``free`` / ``was_free`` the window after / before, ``ring`` the cells with a
+    neighbour outside it, ``seeds`` (window coordinates; outside ones are skipped),
+    ``reached`` the reachable set before. Writes ``out`` and returns True, or returns False
+    when a seed flipped or the change regrouped the terminals (free ring cells and seeds)."""
+    rows, cols = free.shape
+    terminal = ring & free
+    for k in range(len(seeds)):
+        r, c = seeds[k, 0], seeds[k, 1]
+        if 0 <= r < rows and 0 <= c < cols:
+            if not (free[r, c] and was_free[r, c]):
+                return False
+            terminal[r, c] = True
+    before, after = np.zeros((rows, cols), np.int64), np.zeros((rows, cols), np.int64)
+    n_before, n_after = _label(was_free, before), _label(free, after)
+    to_after = np.full(n_before + 1, -1, np.int64)
+    to_before = np.full(n_after + 1, -1, np.int64)
+    keep = np.zeros(n_after + 1, dtype=np.bool_)
+    for r in range(rows):
+        for c in range(cols):
+            if not terminal[r, c]:
+                continue
+            b, a = before[r, c], after[r, c]
+            if to_after[b] == -1 and to_before[a] == -1:
+                to_after[b], to_before[a] = a, b
+            elif to_after[b] != a or to_before[a] != b:
+                return False
+            keep[a] |= reached[r, c]  # a seed was free before: it was reached
+    for r in range(rows):
+        for c in range(cols):
+            out[r, c] = keep[after[r, c]] and after[r, c] > 0
+    return True
 
 
 def follow_changes(
     coverage: Retargets, reachable: Reachable, occupied: BoolGrid, changes: Sequence[Change]
 ) -> None:
     """After ``changes`` of the world: update the reachable set, retarget ``coverage`` to it."""
-    window = reachable.follow(occupied, changes)
+    window, before = reachable.follow(occupied, changes)
     if window != NOTHING:
-        coverage.retarget(reachable.mask, window)
+        coverage.retarget(reachable.mask, window, before)
 
 
 def grown(box: Box, margin: int, shape: tuple[int, int]) -> Box:
@@ -151,11 +210,3 @@ def ring_of(window: Box, shape: tuple[int, int]) -> BoolGrid:
     ring[:, 0] |= col0 > 0
     ring[:, -1] |= col1 < shape[1]
     return ring
-
-
-def same_groups(before: IntArray, after: IntArray) -> bool:
-    """Whether two labellings split the same items into the same groups."""
-    if before.size == 0:
-        return True
-    pairs = before.astype(np.int64) * (int(after.max()) + 1) + after
-    return len(np.unique(pairs)) == len(np.unique(before)) == len(np.unique(after))

@@ -14,12 +14,14 @@ A world can change (``world/changes.py``): :meth:`World.set_cells` turns cells
 into walls or free space, and movable obstacles (:meth:`World.add_movable`,
 :meth:`World.move_movable`, :meth:`World.remove_movable`) are footprints of whole
 cells. Every change writes the truth grid in place (``occupied`` stays the array
-renderers and snapshots hold), rebuilds only the wall segments around the cells
-whose kind changed (``world/wallset.py``), so the Space always holds exactly the
-segments ``maps.wall_segments`` builds from the grid, bumps :attr:`World.version`
-and returns a :class:`~mresim_phys.world.changes.Change`. Movable obstacles'
-segments have their own category and every obstacle filter includes it: rays,
-line of sight and motion see them exactly where the grid has them.
+renderers and snapshots hold), bumps :attr:`World.version` and returns a
+:class:`~mresim_phys.world.changes.Change`. A change of walls rebuilds only the wall
+segments around the cells that changed (``world/wallset.py``), so the static body
+always holds exactly the segments ``maps.wall_segments`` builds from the static
+layer. Each movable obstacle is a kinematic body of its own carrying its footprint's
+outline (``world/bodies.py``): moving it moves the body, no wall segment is touched.
+Its segments have their own category, which every obstacle filter includes: line of
+sight and motion meet it exactly where the grid has it.
 
 Segment and swept-circle queries go through :class:`~mresim_phys.world.queries.SpaceQuery`
 (Chipmunk's C function via pymunk's cffi handle, one reused result struct, one query at a
@@ -44,13 +46,13 @@ import pymunk
 from numpy.typing import ArrayLike
 
 from mresim_phys.types import BoolGrid, FloatArray
+from mresim_phys.world.bodies import MovableBodies
 from mresim_phys.world.changes import (
     Change,
     Layers,
     Movable,
     cells_of,
     check_box,
-    circles_cover,
     circles_on_cells,
     join_boxes,
 )
@@ -128,6 +130,7 @@ class World:
         self.version = 0  # bumped by every change of the truth after step 0
         self._layers: Layers | None = None  # built by the first change
         self._movables: dict[str, Movable] = {}
+        self._movable_bodies = MovableBodies(self.space)
         self._debris: tuple[int, BoolGrid, BoolGrid] | None = None  # cache of debris()
 
     @property
@@ -181,6 +184,7 @@ class World:
         movable = Movable.make(name, footprint, at, self.shape, blocks_radio)
         self._truth_layers().add_cover(movable, +1)
         self._movables[name] = movable
+        self._movable_bodies.add(movable)
         return self._commit([movable.box])
 
     def move_movable(
@@ -195,6 +199,7 @@ class World:
         layers.add_cover(old, -1)
         layers.add_cover(new, +1)
         self._movables[name] = new
+        self._movable_bodies.move(new)
         return self._commit(join_boxes(old.box, new.box))
 
     def remove_movable(self, name: str) -> Change:
@@ -202,6 +207,7 @@ class World:
         old = self._movable(name)
         self._truth_layers().add_cover(old, -1)
         del self._movables[name]
+        self._movable_bodies.remove(name)
         return self._commit([old.box])
 
     def fits(
@@ -217,10 +223,8 @@ class World:
         but ``moving`` (the one being moved) and, unless ``over_walls``, of the static
         walls and rubble."""
         own = self._movables.get(moving) if moving is not None else None
-        if not self._truth_layers().clear(footprint, at, own, over_walls):
-            return False
-        cells = np.argwhere(footprint) + np.array([at[0], at[1]])
-        return not circles_cover(robots[:, :2], robots[:, 2], cells).any()
+        circles = np.ascontiguousarray(robots, dtype=np.float64)
+        return self._truth_layers().clear(footprint, at, own, over_walls, circles)
 
     @property
     def radio_occupied(self) -> BoolGrid:
@@ -280,8 +284,7 @@ class World:
         if not patches:
             return Change(self.version)
         self.version += 1
-        centres = np.array([tuple(b.position) for b in self.bodies], dtype=np.float64)
-        centres = centres.reshape(-1, 2)
+        centres = self._robot_xy  # where place_robots last stood the bodies
         hit = {int(i) for p in patches for i in circles_on_cells(centres, self._radii, p)}
         return Change(self.version, tuple(patches), tuple(sorted(hit)))
 

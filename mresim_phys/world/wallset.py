@@ -2,9 +2,9 @@
 
 :class:`WallSet` owns every static ``pymunk.Segment`` of the world together with
 its endpoints, the grid line it lies on, the unit edges it covers along that line
-and the kind of its occupied side (1 static wall, 2 movable obstacle, 3 movable
-obstacle that radio passes through, see
-``maps.edge_segments``). When cells change, :meth:`WallSet.rebuild` replaces
+and the kind of its occupied side (``maps.edge_segments``; the world gives it the
+static layer only, kind 1: movable obstacles are bodies of their own,
+``world/bodies.py``). When cells change, :meth:`WallSet.rebuild` replaces
 exactly the segments whose unit edges touch the changed cells: a segment is
 run-length merged along its line, so a long wall may cross the window; the
 window's span along each line is widened until no segment on those lines merely
