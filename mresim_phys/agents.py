@@ -100,6 +100,7 @@ class Robot(Agent):
     rng: np.random.Generator = field(default_factory=lambda: np.random.default_rng(0))
     decision: Decision | None = None
     terrain: TerrainGrid | None = None  # known terrain factors (knowledge/terrain.py); None: none
+    prior: BeliefGrid | None = None  # the map it knew before the mission (knowledge/prior.py)
 
     @property
     def alive(self) -> bool:

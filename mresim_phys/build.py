@@ -27,22 +27,24 @@ from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.errors import ScenarioError
 from mresim_phys.knowledge.latest import LatestCoverage
 from mresim_phys.knowledge.mapping import Coverage
+from mresim_phys.knowledge.prior import STREAM as PRIOR_STREAM
+from mresim_phys.knowledge.prior import prior_belief
 from mresim_phys.knowledge.teammates import BASE_NAME
 from mresim_phys.knowledge.terrain import unknown_terrain
 from mresim_phys.planning import PLANNERS
 from mresim_phys.rng import Streams
 from mresim_phys.scenario.load import load_scenario
+from mresim_phys.scenario.maps import MapSpec, PriorSpec
 from mresim_phys.scenario.readers import LoadedMap, load_image_map, load_ros_map, load_text_map
 from mresim_phys.scenario.schema import (
     BaseStationSpec,
-    MapSpec,
     RobotSpec,
     Scenario,
     SensorSpec,
     StartJitterSpec,
 )
 from mresim_phys.strategies import STRATEGIES
-from mresim_phys.types import FloatArray
+from mresim_phys.types import BeliefGrid, FloatArray
 from mresim_phys.world.debris import RandomDebris
 from mresim_phys.world.doors import Door
 from mresim_phys.world.elements import build_elements
@@ -288,6 +290,7 @@ class Setup:
     free_area: int = 0  # free cells of the map (the original's total area), known to robots
     elements: list[MovingObstacle | Door | RandomDebris] = field(default_factory=list)
     terrain: TerrainGrid | None = None  # true speed factor per cell; None: no terrain
+    prior: BeliefGrid | None = None  # the prior map the listed robots start with; None: none
 
     def sensing_streams(self) -> list[np.random.Generator]:
         """Each robot's laser-noise stream, in robot order."""
@@ -359,6 +362,27 @@ def build_terrain(
     return truth
 
 
+def build_prior(
+    spec: PriorSpec | None, robots: list[Robot], shape: tuple[int, int], streams: Streams
+) -> BeliefGrid | None:
+    """The degraded prior map (``knowledge/prior.py``), given to the robots it lists; a
+    ScenarioError naming ``prior.map`` if it is not of the map's size."""
+    if spec is None:
+        return None
+    loaded = load_map(spec.map)
+    if loaded.occupied.shape != shape:
+        (rows, cols), (prows, pcols) = shape, loaded.occupied.shape
+        raise ScenarioError(
+            f"prior.map.{spec.map.source[0]}: the prior map is {pcols}x{prows} cells but the map"
+            f" is {cols}x{rows}; give a prior map of the map's size (the same building)."
+        )
+    grid = prior_belief(loaded.occupied, spec.drop, spec.flip, streams.get(PRIOR_STREAM))
+    for robot in robots:
+        if spec.robots == "all" or robot.name in spec.robots:
+            robot.prior = grid
+    return grid
+
+
 def run_rules(scenario: Scenario) -> RunRules:
     """The scenario's cycle and stop rules as plain values."""
     sim, stop = scenario.simulation, scenario.stop
@@ -404,6 +428,7 @@ def build_setup(scenario: Scenario) -> Setup:
         for agent in [base, *robots]:
             agent.observed = np.full(world.shape, -1, dtype=np.int32)
     terrain = build_terrain(scenario.terrain, robots, world)
+    prior = build_prior(scenario.prior, robots, world.shape, streams)
     return Setup(
         truth=truth,
         world=world,
@@ -425,4 +450,5 @@ def build_setup(scenario: Scenario) -> Setup:
         free_area=int(np.count_nonzero(~truth.occupied)),
         elements=elements,
         terrain=terrain,
+        prior=prior,
     )

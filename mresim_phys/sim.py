@@ -256,9 +256,8 @@ class Simulation:
         effects.spend("mapping", perf_counter() - scanned)
         clearance = robot.radius + robot.body.wall_margin
         lookahead = LOOKAHEAD_STEPS * robot.speed
-        if robot.observed is not None and path_blocked(
-            robot.belief, robot.path, clearance, lookahead
-        ):
+        checks_path = robot.observed is not None or robot.prior is not None
+        if checks_path and path_blocked(robot.belief, robot.path, clearance, lookahead):
             robot.stop_for_replan()
         if update is not None:
             effects.touched.append((robot.belief, update))
@@ -303,6 +302,7 @@ class Simulation:
             vary_with_seed=self.rules.vary_with_seed,
             free_area=self.setup.free_area,
             terrain=read_only(robot.terrain) if robot.terrain is not None else None,
+            prior=robot.prior,
         )
 
     @property
@@ -368,6 +368,7 @@ class Simulation:
             world_version=self.world.version,
             latest=self.rules.latest,
             terrain=None if self.setup.terrain is None else read_only(self.setup.terrain),
+            prior=self.setup.prior,
             movables=movable_views(self.world, self.setup.elements),
             rubble=rubble,
             gave_way=gave_way,

@@ -136,6 +136,7 @@ class Snapshot:
     world_version: int = 0  # World.version: bumped by every change of the truth
     latest: bool = False  # robots' maps hold each cell's latest observation (belief: latest)
     terrain: NDArray[np.float32] | None = None  # true speed factors (static); None: no terrain
+    prior: NDArray[np.uint8] | None = None  # the prior map robots were given (static); None
     movables: tuple[MovableSnapshot, ...] = ()  # every obstacle and door, scenario order
     rubble: BoolGrid | None = None  # static walls that were free on the map (None: none yet)
     gave_way: BoolGrid | None = None  # free cells that were the map's walls

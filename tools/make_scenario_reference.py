@@ -20,6 +20,7 @@ sys.path.insert(0, str(ROOT))
 from mresim_phys import COMM_MODELS, STRATEGIES  # noqa: E402
 from mresim_phys.planning import PLANNERS  # noqa: E402
 from mresim_phys.scenario import schema  # noqa: E402
+from mresim_phys.scenario.maps import PriorSpec  # noqa: E402
 from mresim_phys.strict import MAX_FLOAT, MAX_INT, UNIT_BOUNDS, bounds_text  # noqa: E402
 from mresim_phys.world import debris, doors, obstacles, shapes, terrain  # noqa: E402
 from mresim_phys.world.events import EVENTS  # noqa: E402
@@ -52,6 +53,7 @@ SECTIONS: list[tuple[str, type[BaseModel]]] = [
     ("", shapes.MaskRegion),
     ("terrain", terrain.TerrainSpec),
     ("terrain.regions[i]", terrain.TerrainRegion),
+    ("prior", PriorSpec),
 ]
 NOTES = {
     "obstacles[i]": (
@@ -89,6 +91,18 @@ NOTES = {
     "terrain.regions[i]": (
         "One of `box`, `circle`, `polygon` or `mask`, as the regions above, with its `factor`."
     ),
+    "prior": (
+        "A map (`map`: the keys of `map` above, a file of the map's size) that the listed"
+        " robots know before the mission: the building plan, perhaps from before a collapse."
+        " It is degraded once per run from the stream `prior` of the seed: each cell dropped"
+        " (unknown) with probability `drop`, each kept cell flipped (free <-> wall) with"
+        " probability `flip`. Prior cells are not observations: they never count as explored"
+        " or known at the base and are never exchanged. A robot plans its paths and distance"
+        " fields on its own map with the prior filling the cells it does not know, so a scan"
+        " overrides the plan; its frontiers stay on its own map, and a robot whose sensed map"
+        " blocks its path replans. The `prior` video layer tints blue the cells the prior"
+        " holds as walls where the truth is free."
+    ),
 }
 
 
@@ -103,6 +117,7 @@ def type_name(annotation: Any) -> str:
         return " or ".join(repr(m) for m in members)
     text = getattr(annotation, "__name__", None) or str(annotation)
     text = text.replace("typing.", "").replace("mresim_phys.scenario.schema.", "")
+    text = text.replace("mresim_phys.scenario.maps.", "")
     for module in ("shapes", "obstacles", "doors", "debris", "terrain"):
         text = text.replace(f"mresim_phys.world.{module}.", "")
     return text.replace(" | ", " or ")

@@ -126,7 +126,7 @@ SNAPSHOT_LINE = {
 }
 # meta.json, the truth codec, per agent; then output.logworld and WORLD_GRIDS
 SNAPSHOT_ELSEWHERE: tuple[str, ...] = ("resolution", "truth", "agents")
-SNAPSHOT_ELSEWHERE += ("movables", "rubble", "gave_way", "terrain")  # terrain: truth.npz
+SNAPSHOT_ELSEWHERE += ("movables", "rubble", "gave_way", "terrain", "prior")  # in truth.npz
 SNAPSHOT_ELSEWHERE += ("latest",)  # meta.json "beliefs"
 RECOMPUTED = ("explored", "known_at_base", "alive")  # by the replay, from the deltas
 

@@ -104,6 +104,8 @@ class RunLogWriter:
         statics: dict[str, Any] = {"occupied": truth}
         if first.terrain is not None:
             statics["terrain"] = first.terrain
+        if first.prior is not None:
+            statics["prior"] = first.prior
         np.savez_compressed(self.log_dir / TRUTH_FILE, **statics)
         self._tracks = [Track(cells) for _ in first.agents]
         self._truth = flat_cells(np.asarray(first.truth, dtype=bool))
@@ -171,10 +173,16 @@ class RunLog:
     """A run log opened for reading: static data at once, steps streamed by :meth:`snapshots`."""
 
     def __init__(
-        self, log_dir: Path, meta: dict[str, Any], truth: BoolGrid, terrain: TerrainGrid | None
+        self,
+        log_dir: Path,
+        meta: dict[str, Any],
+        truth: BoolGrid,
+        terrain: TerrainGrid | None,
+        prior: BeliefGrid | None = None,
     ) -> None:
         self.log_dir, self.meta, self.truth = log_dir, meta, truth  # truth: at step 0
         self.terrain = terrain  # true speed factors (static), None without terrain
+        self.prior = prior  # the prior map robots were given, None without one
         self.names: list[str] = [a["name"] for a in meta["agents"]]  # base first, as in snapshots
         self.robot_names = [a["name"] for a in meta["agents"] if a["kind"] == "robot"]
         self.steps: int = meta["steps"]  # committed steps (whole chunks only if never closed)
@@ -186,7 +194,15 @@ class RunLog:
         if not (log_dir / META).is_file():
             raise MresimError(f"{log_dir}: no run log here (no {META}; `mresim run` writes one)")
         meta = read_meta(log_dir)
-        log = cls(log_dir, meta, read_truth(log_dir, meta), read_terrain(log_dir))
+        terrain = read_static(log_dir, "terrain")
+        prior = read_static(log_dir, "prior")
+        log = cls(
+            log_dir,
+            meta,
+            read_truth(log_dir, meta),
+            None if terrain is None else read_only(terrain.astype(np.float32)),
+            None if prior is None else read_only(prior.astype(np.uint8)),
+        )
         log.check_files()
         return log
 
@@ -243,14 +259,13 @@ def read_truth(log_dir: Path, meta: dict[str, Any]) -> BoolGrid:
         raise damaged(log_dir, f"{TRUTH_FILE}: {exc}") from None
 
 
-def read_terrain(log_dir: Path) -> TerrainGrid | None:
-    """The terrain factor grid of ``truth.npz`` (read-only), None if the run had none."""
+def read_static(log_dir: Path, name: str) -> np.ndarray | None:
+    """The static grid ``name`` of ``truth.npz`` (terrain, prior), None if the run had none."""
     try:
         with np.load(log_dir / TRUTH_FILE, allow_pickle=False) as data:
-            terrain = data["terrain"] if "terrain" in data.files else None
+            return data[name] if name in data.files else None
     except (OSError, ValueError, zipfile.BadZipFile) as exc:
         raise damaged(log_dir, f"{TRUTH_FILE}: {exc}") from None
-    return None if terrain is None else read_only(terrain.astype(np.float32))
 
 
 class Replay:
@@ -320,6 +335,7 @@ class Replay:
             agents=tuple(agents),
             resolution=self.log.meta.get("resolution"),
             terrain=self.log.terrain,
+            prior=self.log.prior,
             latest=self.latest,
         )
         return snap, record

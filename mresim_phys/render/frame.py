@@ -25,7 +25,13 @@ import numpy as np
 
 from mresim_phys.render.draw import ONE, Overlay
 from mresim_phys.render.layers import LayerSpec
-from mresim_phys.render.raster import LabelGrids, colour_labels, packed_colours, shade_terrain
+from mresim_phys.render.raster import (
+    LabelGrids,
+    colour_labels,
+    packed_colours,
+    shade_prior,
+    shade_terrain,
+)
 from mresim_phys.render.style import DEFAULT_STYLE, Style
 
 if TYPE_CHECKING:
@@ -88,6 +94,8 @@ class Renderer:
         image = self._colour(label)
         if snapshot.terrain is not None and "terrain" in self.layers.global_layers:
             shade_terrain(image, snapshot.terrain, snapshot.truth, self.map_size, self.style)
+        if snapshot.prior is not None and "prior" in self.layers.global_layers:
+            shade_prior(image, snapshot.prior, snapshot.truth, self.map_size, self.style)
         self._overlay.draw(image, snapshot, self._regions(snapshot))
         return image
 

@@ -44,6 +44,8 @@ class Style:
     skeleton: BGR = (0, 90, 200)
     terrain: BGR = (20, 60, 110)  # dark brown: slow ground is tinted toward it
     terrain_alpha: float = 0.7  # tint of the slowest ground (factor -> 0); factor 1: none
+    prior: BGR = (200, 110, 40)  # blue: walls of the prior map where the truth is free
+    prior_alpha: float = 0.5
     link: BGR = (128, 128, 0)
     hierarchy: BGR = (130, 0, 75)
     failed: BGR = (128, 128, 128)

@@ -21,6 +21,7 @@ from mresim_phys.knowledge.teammates import BASE_NAME
 from mresim_phys.planning import PLANNERS
 from mresim_phys.registry import Registry
 from mresim_phys.render.layers import parse_layers
+from mresim_phys.scenario.maps import MapSpec
 from mresim_phys.scenario.overrides import apply_overrides
 from mresim_phys.scenario.readers import read_yaml_mapping
 from mresim_phys.scenario.schema import (
@@ -151,12 +152,26 @@ def resolve_params(
 
 
 def resolve_map_path(scenario: Scenario, folder: Path, source: str = "<scenario>") -> Scenario:
-    """The scenario with its map path made absolute (relative paths are to the YAML file).
+    """The scenario with its map paths (``map``, and ``prior.map`` if given) made absolute
+    (relative paths are to the YAML file).
 
-    The file must exist (its content is read when the run is built); a missing file or
+    The files must exist (their content is read when the run is built); a missing file or
     a path the system cannot use is a :class:`MapError` naming ``source`` and the field.
     """
-    kind, value = scenario.map.source
+    prior = scenario.prior
+    if prior is not None:
+        prior = prior.model_copy(
+            update={"map": absolute_map(prior.map, folder, source, "prior.map")}
+        )
+    return scenario.model_copy(
+        update={"map": absolute_map(scenario.map, folder, source, "map"), "prior": prior}
+    )
+
+
+def absolute_map(spec: MapSpec, folder: Path, source: str, field: str) -> MapSpec:
+    """``spec`` with its file's path made absolute; a MapError naming ``field`` if the
+    file is missing."""
+    kind, value = spec.source
     try:
         path = (folder / Path(value).expanduser()).resolve()
         problem = None if path.is_file() else "is not a file" if path.exists() else "does not exist"
@@ -164,10 +179,10 @@ def resolve_map_path(scenario: Scenario, folder: Path, source: str = "<scenario>
         path, problem = Path(value), f"is not a usable path ({exc})"
     if problem is not None:
         raise MapError(
-            f"{source}: map.{kind}: {clip(str(path), 300)} {problem}. Check the path and its"
+            f"{source}: {field}.{kind}: {clip(str(path), 300)} {problem}. Check the path and its"
             " spelling; a relative path is relative to the scenario file's folder."
         )
-    return scenario.model_copy(update={"map": scenario.map.model_copy(update={kind: str(path)})})
+    return spec.model_copy(update={kind: str(path)})
 
 
 def absolute_mask(region: Region | None, folder: Path) -> Region | None:

@@ -21,6 +21,7 @@ from pydantic import (
     model_validator,
 )
 
+from mresim_phys.scenario.maps import MapSpec, PriorSpec
 from mresim_phys.strict import Strict
 from mresim_phys.world.debris import RandomDebrisParams
 from mresim_phys.world.doors import DoorParams
@@ -50,40 +51,6 @@ Name = Annotated[str, AfterValidator(check_name)]
 def shorthand(key: str, value: Any) -> Any:
     """A bare string ``x`` stands for ``{key: x}`` (``strategy: frontier``, ``model: disk``)."""
     return {key: value} if isinstance(value, str) else value
-
-
-class MapSpec(Strict):
-    """Where the ground truth comes from: exactly one of ``image``, ``grid``, ``ros``."""
-
-    image: str | None = Field(None, description="PNG/JPG/GIF/BMP floor plan; dark = obstacle.")
-    grid: str | None = Field(None, description="Text grid in the original MRESim format.")
-    ros: str | None = Field(None, description="ROS map_server YAML (with its PGM).")
-    resolution: float | None = Field(
-        None, gt=0, description="Metres per cell, only used to report metres."
-    )
-    threshold: float = Field(
-        0.5, gt=0, le=1, description="Image maps: luminance below threshold*255 is obstacle."
-    )
-    negate: bool = Field(False, description="Image maps: bright = obstacle instead of dark.")
-
-    @model_validator(mode="after")
-    def _one_source(self) -> MapSpec:
-        given = [k for k in ("image", "grid", "ros") if getattr(self, k) is not None]
-        if len(given) != 1:
-            raise ValueError(
-                "give exactly one map source: 'image: file.png', 'grid: file.txt' or"
-                f" 'ros: map.yaml' (got {given or 'none'})"
-            )
-        return self
-
-    @property
-    def source(self) -> tuple[str, str]:
-        """(kind, path) of the one map source."""
-        for kind in ("image", "grid", "ros"):
-            value = getattr(self, kind)
-            if value is not None:
-                return kind, value
-        raise AssertionError("validated MapSpec has a source")
 
 
 class PluginSpec(Strict):
@@ -376,6 +343,9 @@ class Scenario(Strict):
     terrain: TerrainSpec | None = Field(
         None, description="Variable terrain: a speed factor per cell (null: open floor)."
     )
+    prior: PriorSpec | None = Field(
+        None, description="A map robots know before the mission, maybe out of date (null: none)."
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -396,6 +366,18 @@ class Scenario(Strict):
                 f"render.snapshots: step{'s' if len(late) > 1 else ''} {late} past the step cap"
                 f" (steps: {self.steps}); give snapshot steps from 0 to {self.steps}"
             )
+        return self
+
+    @model_validator(mode="after")
+    def _prior_robots_exist(self) -> Scenario:
+        if self.prior is not None and self.prior.robots != "all":
+            names = [r.name for r in self.robots]
+            unknown = [n for n in self.prior.robots if n not in names]
+            if unknown:
+                raise ValueError(
+                    f"prior.robots: no robot called {', '.join(map(repr, unknown))}"
+                    f" (robots: {', '.join(names)}); list robot names or give 'all'"
+                )
         return self
 
     @field_validator("robots")

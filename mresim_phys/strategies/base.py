@@ -12,7 +12,9 @@ role, and the payload to send its teammates with its record from now on.
 :func:`plan_context` gives a strategy the configuration space and one distance
 field from the robot, computed once per decision, plans the path to a chosen
 goal with the robot's own planner (``RobotView.planner``) and gives the
-topological map of its known space (skeleton, junctions, node regions). With
+topological map of its known space (skeleton, junctions, node regions). A robot
+given a prior map plans on it where its own map is unknown (``RobotView.planning_map``).
+With
 terrain in the scenario, its fields and plans price moves by the terrain the robot
 KNOWS (``RobotView.terrain``, never the truth): ``PlanContext.slowness``.
 """
@@ -26,6 +28,7 @@ from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
+from mresim_phys.knowledge.prior import planning_map as belief_with_prior
 from mresim_phys.knowledge.teammates import Payload, TeammateInfo
 from mresim_phys.planning import Planner, TopologicalMap, shared_map
 from mresim_phys.planning.costs import slowness_of
@@ -71,6 +74,13 @@ class RobotView:
     vary_with_seed: bool = True  # the scenario lets the seed vary the run (initial random steps)
     free_area: int = 0  # free cells of the whole map, known before the mission (0: not known)
     terrain: FloatArray | None = None  # known terrain speed factors (1: open or unsensed); None
+    prior: BeliefGrid | None = None  # the map it knew before the mission; None: none
+
+    @property
+    def planning_map(self) -> BeliefGrid:
+        """Its belief, and the prior map where its belief is unknown (``knowledge/prior.py``):
+        what its paths and distance fields run on. Frontiers stay on its belief."""
+        return belief_with_prior(self.belief, self.prior)
 
     def tie_rank(self, name: str) -> int:
         """Where ``name`` stands in the team's tie-break order (unknown names last)."""
@@ -138,7 +148,7 @@ class PlanContext:
     @cached_property
     def passable(self) -> np.ndarray:
         """Known-free cells at least the robot's clearance from any known obstacle."""
-        return traversable(self.view.belief, self.view.clearance)
+        return traversable(self.view.planning_map, self.view.clearance)
 
     @cached_property
     def passable_box(self) -> Box | None:

@@ -37,6 +37,7 @@ from mresim_phys.knowledge.frontiers import (
     find_frontiers,
     frontier_targets,
 )
+from mresim_phys.knowledge.prior import walled_in
 from mresim_phys.knowledge.teammates import TeammateInfo
 from mresim_phys.plugin import Plugin
 from mresim_phys.strategies.base import (
@@ -238,12 +239,16 @@ class FrontierExploration(Plugin):
         return met
 
     def _frontiers(self, view: RobotView) -> Frontiers:
-        """This robot's frontier clusters, without the cells it has given up on."""
+        """This robot's frontier clusters, without the cells it has given up on (nor, with
+        a prior map, those behind which the plan shows only walls)."""
         if self._ignored is None:
             self._ignored = np.zeros(view.belief.shape, dtype=bool)
         if view.reached_goal and self._chasing is not None:
             give_up(self._ignored, self._chasing, view.position, self.params.give_up_radius)
-        return find_frontiers(view.belief, self.params.min_frontier_size, self._ignored)
+        exclude = self._ignored
+        if view.prior is not None:  # the plan shows only walls behind these cells
+            exclude = exclude | walled_in(view.belief, view.prior)
+        return find_frontiers(view.belief, self.params.min_frontier_size, exclude)
 
     def _candidates(self, frontiers: Frontiers, costs: FloatArray) -> IntArray:
         """Indices of the best reachable frontiers, best first."""
