@@ -10,6 +10,7 @@ import pytest
 
 from mresim_phys import STRATEGIES, Simulation, UnknownPluginError
 from mresim_phys.agents import TeammateInfo
+from mresim_phys.planning.goals import GoalCosts
 from mresim_phys.strategies import BUILT_IN, RobotView
 from mresim_phys.strategies.base import Strategy
 from mresim_phys.strategies.frontier import (
@@ -102,9 +103,9 @@ def test_auction_refines_estimates_before_a_teammate_wins() -> None:
     mate = Bidder("B", np.array([5.0, 50.0]), np.zeros(2, dtype=bool), (0.0, 0.0))
     searched: list[float] = []
 
-    def search(bidder: Bidder, limit: float) -> np.ndarray:
+    def search(bidder: Bidder, wanted: int, limit: float) -> GoalCosts:
         searched.append(limit)
-        return np.where(np.array([100.0, 100.0]) <= limit, 100.0, np.inf)
+        return GoalCosts(np.where(np.array([100.0, 100.0]) <= limit, 100.0, np.inf), limit)
 
     assert greedy_auction([me, mate], sizes, search) == 0
     assert mate.costs[0] > 10.0  # its bound rose past both estimates: no longer a threat
@@ -115,7 +116,9 @@ def test_auction_lets_a_teammate_nearer_by_path_win() -> None:
     sizes = np.array([10.0, 10.0])
     me = Bidder("A", np.array([10.0, 30.0]), np.ones(2, dtype=bool), (0.0, 0.0))
     mate = Bidder("B", np.array([4.0, 50.0]), np.zeros(2, dtype=bool), (0.0, 0.0))
-    won = greedy_auction([me, mate], sizes, lambda b, limit: np.array([5.0, 60.0]))
+    won = greedy_auction(
+        [me, mate], sizes, lambda b, k, limit: GoalCosts(np.array([5.0, 60.0]), limit)
+    )
     assert won == 1 and mate.exact.all()
 
 

@@ -156,8 +156,8 @@ def snap_to_passable(
 
 @njit(cache=True, nogil=True)
 def _dijkstra(
-    pad: NDArray[np.bool_], wp: int, source: int, limit: float
-) -> tuple[FloatArray, NDArray[np.int32]]:
+    pad: NDArray[np.bool_], wp: int, source: int, limit: float, stop_at: int = -1
+) -> tuple[FloatArray, NDArray[np.int32], int]:
     """Dijkstra over a flat padded mask (border cells blocked) with the module move rules.
 
     Dial's bucket queue: band ``b`` holds the cells whose cost is in ``[b, b + 1)``. Every
@@ -166,6 +166,11 @@ def _dijkstra(
     heap (same costs, ~4x faster). ``queued`` keeps a cell from entering a band's bucket
     twice, so no bucket outgrows the passable cell count. An entry whose cell has since moved
     to an earlier band is skipped. Costs above ``limit`` are never stored.
+
+    With a ``stop_at`` cell (>= 0) the search stops before expanding the first band ``b`` with
+    ``dist[stop_at] < b + 1``: every cell costing less than ``b + 1`` then has its final
+    cost, the others cost at least ``b + 1``. Returns (costs, predecessors, ``b``), ``b`` =
+    -1 when the search ran out of cells (no ``stop_at``, or it is not reached within ``limit``).
     """
     dist = np.full(pad.size, np.inf)
     pred = np.full(pad.size, _NO_PRED, dtype=np.int32)
@@ -177,6 +182,8 @@ def _dijkstra(
     step, beside_row, beside_col = flat_moves(wp)
     band = 0
     while sizes[band % 3] + sizes[(band + 1) % 3] > 0:
+        if stop_at >= 0 and dist[stop_at] < band + 1:
+            return dist, pred, band
         slot = band % 3
         for j in range(sizes[slot]):
             u = ring[slot, j]
@@ -202,7 +209,7 @@ def _dijkstra(
                         sizes[target % 3] += 1
         sizes[slot] = 0
         band += 1
-    return dist, pred
+    return dist, pred, -1
 
 
 def _search(
@@ -221,7 +228,7 @@ def _search(
     window = Window.around(passable, box)
     source = window.node(start_rc)
     if slowness is None:
-        dist, pred = _dijkstra(window.pad, window.wp, source, float(limit))
+        dist, pred, _ = _dijkstra(window.pad, window.wp, source, float(limit))
     else:
         slow = window.padded(slowness)
         dist, pred = dijkstra_weighted(window.pad, window.wp, source, float(limit), slow)

@@ -38,6 +38,7 @@ from mresim_phys.knowledge.frontiers import (
     frontier_targets,
 )
 from mresim_phys.knowledge.teammates import TeammateInfo
+from mresim_phys.planning.goals import GoalCosts, goal_costs
 from mresim_phys.plugin import Plugin
 from mresim_phys.strategies.base import (
     STRATEGIES,
@@ -57,7 +58,7 @@ SEARCH_GROWTH = 1.5  # a refinement searches to this multiple of the current low
 MAX_BOUNDED_SEARCH = 2000.0  # cells: beyond this a teammate's search is unbounded
 
 BoolArray = NDArray[np.bool_]
-PathSearch = Callable[["Bidder", float], "FloatArray | None"]
+PathSearch = Callable[["Bidder", int, float], "GoalCosts | None"]
 
 
 class FrontierParams(StrategyParams):
@@ -133,14 +134,16 @@ class Bidder:
         costs = straight_line(position, goals_rc)
         return cls(name, costs, np.zeros(len(costs), dtype=bool), position, rank)
 
-    def refine(self, found: FloatArray | None, limit: float) -> None:
-        """Take path costs searched up to ``limit``; beyond it the bound rises to ``limit``."""
-        if found is None:  # the teammate stands where this robot knows nothing: keep estimates
+    def refine(self, searched: GoalCosts | None) -> None:
+        """Take the exact path costs a search found; the bounds of the others rise to its
+        floor. Costs known exactly before stay (the same search from the same cell)."""
+        if searched is None:  # the teammate stands where this robot knows nothing: keep estimates
             self.exact[:] = True
             return
-        known = np.isfinite(found) | (limit == np.inf)
-        self.costs = np.where(known, found, np.maximum(self.costs, limit))
-        self.exact = known
+        known = np.isfinite(searched.found) | (searched.floor == np.inf)
+        raised = np.where(self.exact, self.costs, np.maximum(self.costs, searched.floor))
+        self.costs = np.where(known, searched.found, raised)
+        self.exact = self.exact | known
 
 
 def utility(sizes: FloatArray, costs: FloatArray) -> FloatArray:
@@ -270,7 +273,7 @@ class FrontierExploration(Plugin):
             Bidder.estimated(t.name, t.position, goals, rank(t.name)) for t in self._teammates(view)
         ]
         won = greedy_auction(
-            bidders, sizes, lambda b, limit: exact_costs(context, b.position, goals, limit)
+            bidders, sizes, lambda b, k, limit: exact_costs(context, b.position, goals, k, limit)
         )
         return int(candidates[won])
 
@@ -321,13 +324,18 @@ def straight_line(position: tuple[float, float], goals_rc: IntArray) -> FloatArr
 
 
 def exact_costs(
-    context: PlanContext, position: tuple[float, float], goals_rc: IntArray, limit: float
-) -> FloatArray | None:
-    """Path costs on this robot's map from a teammate's position (None if off the map)."""
-    field = context.field_from(position, limit)
-    if field.start_rc is None:
-        return None
-    return field.cost_at(goals_rc[:, 0], goals_rc[:, 1])
+    context: PlanContext,
+    position: tuple[float, float],
+    goals_rc: IntArray,
+    wanted: int,
+    limit: float,
+) -> GoalCosts | None:
+    """Path costs on this robot's map from a teammate's position, searched up to ``limit``
+    or until goal ``wanted``'s cost is known (None if the position is off the map)."""
+    return goal_costs(
+        context.passable, position, goals_rc, wanted, limit, context.passable_box,
+        context.slowness,
+    )  # fmt: skip
 
 
 def greedy_auction(bidders: list[Bidder], sizes: FloatArray, search: PathSearch) -> int:
@@ -335,7 +343,10 @@ def greedy_auction(bidders: list[Bidder], sizes: FloatArray, search: PathSearch)
 
     A pair whose cost is only a lower bound is refined before it can win: the
     teammate's path search runs to 1.5 times the bound (at least ``MIN_SEARCH``
-    cells more), so a teammate far away by path is ruled out by a small search.
+    cells more), so a teammate far away by path is ruled out by a small search, which
+    stops once the pair's cost is final (``planning.goals``). Which pair wins depends only
+    on the exact costs (lower bounds never win: they are refined first, and a bound's
+    utility is never below its exact one), so how far a search went never changes it.
     Utilities are one (bidders x frontiers) matrix; a refinement recomputes its row.
     """
     u = utility(sizes[None, :], np.array([b.costs for b in bidders]))
@@ -351,7 +362,7 @@ def greedy_auction(bidders: list[Bidder], sizes: FloatArray, search: PathSearch)
             bound = float(bidder.costs[which])
             limit = max(SEARCH_GROWTH * bound, bound + MIN_SEARCH)
             limit = np.inf if limit > MAX_BOUNDED_SEARCH else limit
-            bidder.refine(search(bidder, limit), limit)
+            bidder.refine(search(bidder, which, limit))
             u[who] = utility(sizes, bidder.costs)
             continue
         if who == 0:
