@@ -107,19 +107,30 @@ def traversable(belief: BeliefGrid, clearance: float) -> BoolGrid:
     Returns:
         Boolean grid of the same shape, True where the robot centre may be.
     """
-    free: BoolGrid = belief == FREE
-    box = bbox(free)
-    if box is None or clearance <= 0.0:
-        return free
+    return passable_cells(belief, clearance, bbox(belief == FREE))[0]
+
+
+def passable_cells(
+    belief: BeliefGrid, clearance: float, free_box: Box | None
+) -> tuple[BoolGrid, Box | None]:
+    """:func:`traversable` given the bounding box of the FREE cells (``bbox(belief ==
+    FREE)``), and the bounding box of its result, found on the processed crop alone."""
+    if free_box is None:
+        return np.zeros(belief.shape, dtype=bool), None
+    if clearance <= 0.0:
+        return belief == FREE, free_box
     kernel = clearance_kernel(float(clearance))
-    r0, r1, c0, c1 = _grow(box, kernel.shape[0] // 2, belief.shape)
-    occupied = (belief[r0:r1, c0:c1] == OCCUPIED).view(np.uint8)
+    r0, r1, c0, c1 = _grow(free_box, kernel.shape[0] // 2, belief.shape)
+    crop = belief[r0:r1, c0:c1]
+    occupied = (crop == OCCUPIED).view(np.uint8)
     # Border value 1: cells outside the grid are walls. Inner crop edges are >= the kernel
     # radius from every FREE cell, so the border never reaches them.
     blocked = cv2.dilate(occupied, kernel, borderType=cv2.BORDER_CONSTANT, borderValue=1)
+    inner = (crop == FREE) & (blocked == 0)
     out = np.zeros(belief.shape, dtype=bool)
-    out[r0:r1, c0:c1] = free[r0:r1, c0:c1] & (blocked == 0)
-    return out
+    out[r0:r1, c0:c1] = inner
+    box = bbox(inner)
+    return out, None if box is None else (box[0] + r0, box[1] + r0, box[2] + c0, box[3] + c0)
 
 
 # --------------------------------------------------------------------------- search

@@ -35,8 +35,8 @@ from pydantic import Field
 from mresim_phys.knowledge.frontiers import (
     Frontiers,
     any_frontier,
-    find_frontiers,
     frontier_targets,
+    frontiers_in,
 )
 from mresim_phys.knowledge.teammates import TeammateInfo
 from mresim_phys.planning.goals import GoalCosts, goal_costs
@@ -178,7 +178,7 @@ class FrontierExploration(Plugin):
             step = random_step(view, context)
             if step is not None:
                 return step
-        frontiers = self._frontiers(view)
+        frontiers = self._frontiers(view, context)
         reach = self.params.reach or view.clearance + 2.0
         fields = context.fields_growing(self.params.horizon * view.sensor_range)
         searching = len(frontiers) > 0 and not self._goal_met(view)
@@ -241,13 +241,14 @@ class FrontierExploration(Plugin):
         self._goal_was_met = self._goal_was_met or met
         return met
 
-    def _frontiers(self, view: RobotView) -> Frontiers:
+    def _frontiers(self, view: RobotView, context: PlanContext) -> Frontiers:
         """This robot's frontier clusters, without the cells it has given up on."""
         if self._ignored is None:
             self._ignored = np.zeros(view.belief.shape, dtype=bool)
         if view.reached_goal and self._chasing is not None:
             give_up(self._ignored, self._chasing, view.position, self.params.give_up_radius)
-        return find_frontiers(view.belief, self.params.min_frontier_size, self._ignored)
+        size = self.params.min_frontier_size
+        return frontiers_in(view.belief, context.free_box, size, self._ignored)
 
     def _candidates(self, frontiers: Frontiers, costs: FloatArray) -> IntArray:
         """Indices of the best reachable frontiers, best first."""
