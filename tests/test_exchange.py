@@ -8,10 +8,19 @@ from typing import Any
 
 import numpy as np
 import pytest
+from scipy.sparse import csr_matrix
+from scipy.sparse.csgraph import breadth_first_order, connected_components
 
 from mresim_phys import Simulation
 from mresim_phys.agents import Agent, empty_belief
-from mresim_phys.comms.exchange import Exchange, Traffic, hop_groups, stamp_base_contacts
+from mresim_phys.comms.exchange import (
+    Exchange,
+    Traffic,
+    hop_groups,
+    linked_groups,
+    spanning_tree,
+    stamp_base_contacts,
+)
 from mresim_phys.comms.ledger import Ledger
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 
@@ -245,3 +254,19 @@ def test_comm_metrics_count_bytes_latency_and_base_contact(scenario_file: Scenar
         contact = robot.base_contact
         assert contact <= last.step
         assert last.latency_max >= last.step - contact - 0 or contact == -1
+
+
+@pytest.mark.parametrize("seed", range(300))
+def test_groups_and_trees_are_scipys(seed: int) -> None:
+    """The dense searches give scipy.sparse.csgraph's groups and breadth-first order."""
+    rng = np.random.default_rng(seed)
+    n = int(rng.integers(1, 40))
+    links = rng.random((n, n)) < rng.uniform(0.0, 0.3)
+    if seed % 2:
+        links |= links.T  # links are usually mutual; one-way ones must also agree
+    count, labels = connected_components(csr_matrix(links), directed=False)
+    groups = [np.flatnonzero(labels == g).tolist() for g in range(count)]
+    assert linked_groups(links) == sorted((g for g in groups if len(g) > 1), key=lambda g: g[0])
+    root = int(rng.integers(n))
+    order, parents = breadth_first_order(csr_matrix(links), root, directed=False)
+    assert spanning_tree(links, root) == [(int(parents[c]), int(c)) for c in order[1:]]

@@ -10,12 +10,14 @@ import pytest
 
 from mresim_phys import STRATEGIES, Simulation, UnknownPluginError
 from mresim_phys.agents import TeammateInfo
+from mresim_phys.planning.goals import GoalCosts
 from mresim_phys.strategies import BUILT_IN, RobotView
 from mresim_phys.strategies.base import Strategy
 from mresim_phys.strategies.frontier import (
     Bidder,
     FrontierExploration,
     FrontierParams,
+    best_pair,
     greedy_auction,
 )
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
@@ -102,20 +104,46 @@ def test_auction_refines_estimates_before_a_teammate_wins() -> None:
     mate = Bidder("B", np.array([5.0, 50.0]), np.zeros(2, dtype=bool), (0.0, 0.0))
     searched: list[float] = []
 
-    def search(bidder: Bidder, limit: float) -> np.ndarray:
+    def search(bidder: Bidder, wanted: int, limit: float) -> GoalCosts:
         searched.append(limit)
-        return np.where(np.array([100.0, 100.0]) <= limit, 100.0, np.inf)
+        return GoalCosts(np.where(np.array([100.0, 100.0]) <= limit, 100.0, np.inf), limit)
 
     assert greedy_auction([me, mate], sizes, search) == 0
     assert mate.costs[0] > 10.0  # its bound rose past both estimates: no longer a threat
     assert searched and searched[0] < 100.0  # the first search was bounded
 
 
+def reference_best_pair(
+    u: np.ndarray, ranks: np.ndarray, active: np.ndarray, taken: np.ndarray
+) -> tuple[int, int]:
+    """The numpy rule ``best_pair`` compiles: row argmax, then the best bid, lowest rank."""
+    open_ = np.where(active[:, None] & ~taken[None, :], u, -np.inf)
+    which = np.argmax(open_, axis=1)
+    bids = open_[np.arange(len(u)), which]
+    if not (bids > -np.inf).any():
+        return -1, -1
+    best = bids == bids.max()
+    who = int(np.flatnonzero(best & (ranks == ranks[best].min()))[0])
+    return who, int(which[who])
+
+
+@pytest.mark.parametrize("seed", range(200))
+def test_best_pair_follows_the_numpy_rule(seed: int) -> None:
+    rng = np.random.default_rng(seed)
+    bidders, frontiers = int(rng.integers(1, 9)), int(rng.integers(1, 7))
+    u = rng.choice([-np.inf, 0.0, 1.0, 2.0, 3.5], size=(bidders, frontiers))  # many ties
+    ranks = rng.integers(0, 4, bidders)
+    active, taken = rng.random(bidders) < 0.8, rng.random(frontiers) < 0.3
+    assert best_pair(u, ranks, active, taken) == reference_best_pair(u, ranks, active, taken)
+
+
 def test_auction_lets_a_teammate_nearer_by_path_win() -> None:
     sizes = np.array([10.0, 10.0])
     me = Bidder("A", np.array([10.0, 30.0]), np.ones(2, dtype=bool), (0.0, 0.0))
     mate = Bidder("B", np.array([4.0, 50.0]), np.zeros(2, dtype=bool), (0.0, 0.0))
-    won = greedy_auction([me, mate], sizes, lambda b, limit: np.array([5.0, 60.0]))
+    won = greedy_auction(
+        [me, mate], sizes, lambda b, k, limit: GoalCosts(np.array([5.0, 60.0]), limit)
+    )
     assert won == 1 and mate.exact.all()
 
 

@@ -25,9 +25,10 @@ from functools import lru_cache
 import cv2
 import numpy as np
 from numba import njit
+from numpy.typing import NDArray
 
 from mresim_phys.planning.fields import DistanceField
-from mresim_phys.planning.grid import bbox
+from mresim_phys.planning.grid import Box, bbox
 from mresim_phys.types import (
     FREE,
     OCCUPIED,
@@ -39,6 +40,7 @@ from mresim_phys.types import (
 )
 
 _KERNEL_3X3 = np.ones((3, 3), dtype=np.uint8)
+_NO_EXCLUDE = np.zeros((0, 0), dtype=np.bool_)
 _EARLIER = ((0, -1), (-1, 0), (-1, -1), (-1, 1))  # 8-neighbours before a cell in raster order
 
 
@@ -182,6 +184,28 @@ def _join(parent: IntArray, a: int, b: int) -> None:
         parent[max(ra, rb)] = min(ra, rb)
 
 
+@njit(cache=True, nogil=True)
+def _frontier_flat(
+    crop: BeliefGrid, near_unknown: NDArray[np.uint8], exclude: BoolGrid, excluding: bool
+) -> IntArray:
+    """Flat indices (raster order) of the frontier cells of ``crop``: FREE, not
+    ``exclude``d (if ``excluding``), an UNKNOWN 8-neighbour within the crop
+    (``near_unknown``: the dilated UNKNOWN mask) that they can see (:func:`sees_unknown`)."""
+    h, w = crop.shape
+    out = np.empty(h * w, dtype=np.int64)  # only the pages written are ever touched
+    count = 0
+    for r in range(h):
+        for c in range(w):
+            if near_unknown[r, c] == 0 or crop[r, c] != FREE:
+                continue
+            if excluding and exclude[r, c]:
+                continue
+            if sees_unknown(crop, r, c):
+                out[count] = r * w + c
+                count += 1
+    return out[:count]
+
+
 def find_frontiers(
     belief: BeliefGrid, min_size: int = 3, exclude: BoolGrid | None = None
 ) -> Frontiers:
@@ -198,15 +222,28 @@ def find_frontiers(
     Returns:
         The kept clusters, ordered by their first cell in raster order.
     """
-    box = bbox(belief == FREE)
+    return frontiers_in(belief, bbox(belief == FREE), min_size, exclude)
+
+
+def frontiers_in(
+    belief: BeliefGrid, box: Box | None, min_size: int = 3, exclude: BoolGrid | None = None
+) -> Frontiers:
+    """:func:`find_frontiers` given the bounding box of the FREE cells (None: there are none).
+
+    The mask is ``cv2.dilate`` of the UNKNOWN cells, then one compiled pass
+    (:func:`_frontier_flat`) that keeps the FREE, visible, not excluded cells and lists them
+    (the numpy masks, the hidden-corner pass and ``np.flatnonzero`` it replaced each went
+    over the whole crop)."""
     if box is None:
         return _empty_frontiers()
     r0, r1 = max(box[0] - 1, 0), min(box[1] + 1, belief.shape[0])
     c0, c1 = max(box[2] - 1, 0), min(box[3] + 1, belief.shape[1])
-    frontier = frontier_mask(belief[r0:r1, c0:c1])
-    if exclude is not None:
-        frontier &= ~exclude[r0:r1, c0:c1]
-    flat = np.flatnonzero(frontier)  # raster order (5x faster than cv2.findNonZero)
+    crop = belief[r0:r1, c0:c1]
+    # cv2's default dilation border never wins, so outside the crop is "not unknown".
+    near_unknown = np.asarray(cv2.dilate((crop == UNKNOWN).view(np.uint8), _KERNEL_3X3), np.uint8)
+    excluding = exclude is not None
+    skip = exclude[r0:r1, c0:c1] if exclude is not None else _NO_EXCLUDE
+    flat = _frontier_flat(crop, near_unknown, skip, excluding)
     if flat.size == 0:
         return _empty_frontiers()
     width = c1 - c0

@@ -107,19 +107,30 @@ def traversable(belief: BeliefGrid, clearance: float) -> BoolGrid:
     Returns:
         Boolean grid of the same shape, True where the robot centre may be.
     """
-    free: BoolGrid = belief == FREE
-    box = bbox(free)
-    if box is None or clearance <= 0.0:
-        return free
+    return passable_cells(belief, clearance, bbox(belief == FREE))[0]
+
+
+def passable_cells(
+    belief: BeliefGrid, clearance: float, free_box: Box | None
+) -> tuple[BoolGrid, Box | None]:
+    """:func:`traversable` given the bounding box of the FREE cells (``bbox(belief ==
+    FREE)``), and the bounding box of its result, found on the processed crop alone."""
+    if free_box is None:
+        return np.zeros(belief.shape, dtype=bool), None
+    if clearance <= 0.0:
+        return belief == FREE, free_box
     kernel = clearance_kernel(float(clearance))
-    r0, r1, c0, c1 = _grow(box, kernel.shape[0] // 2, belief.shape)
-    occupied = (belief[r0:r1, c0:c1] == OCCUPIED).view(np.uint8)
+    r0, r1, c0, c1 = _grow(free_box, kernel.shape[0] // 2, belief.shape)
+    crop = belief[r0:r1, c0:c1]
+    occupied = (crop == OCCUPIED).view(np.uint8)
     # Border value 1: cells outside the grid are walls. Inner crop edges are >= the kernel
     # radius from every FREE cell, so the border never reaches them.
     blocked = cv2.dilate(occupied, kernel, borderType=cv2.BORDER_CONSTANT, borderValue=1)
+    inner = (crop == FREE) & (blocked == 0)
     out = np.zeros(belief.shape, dtype=bool)
-    out[r0:r1, c0:c1] = free[r0:r1, c0:c1] & (blocked == 0)
-    return out
+    out[r0:r1, c0:c1] = inner
+    box = bbox(inner)
+    return out, None if box is None else (box[0] + r0, box[1] + r0, box[2] + c0, box[3] + c0)
 
 
 # --------------------------------------------------------------------------- search
@@ -156,8 +167,8 @@ def snap_to_passable(
 
 @njit(cache=True, nogil=True)
 def _dijkstra(
-    pad: NDArray[np.bool_], wp: int, source: int, limit: float
-) -> tuple[FloatArray, NDArray[np.int32]]:
+    pad: NDArray[np.bool_], wp: int, source: int, limit: float, stop_at: int = -1
+) -> tuple[FloatArray, NDArray[np.int32], int]:
     """Dijkstra over a flat padded mask (border cells blocked) with the module move rules.
 
     Dial's bucket queue: band ``b`` holds the cells whose cost is in ``[b, b + 1)``. Every
@@ -166,6 +177,11 @@ def _dijkstra(
     heap (same costs, ~4x faster). ``queued`` keeps a cell from entering a band's bucket
     twice, so no bucket outgrows the passable cell count. An entry whose cell has since moved
     to an earlier band is skipped. Costs above ``limit`` are never stored.
+
+    With a ``stop_at`` cell (>= 0) the search stops before expanding the first band ``b`` with
+    ``dist[stop_at] < b + 1``: every cell costing less than ``b + 1`` then has its final
+    cost, the others cost at least ``b + 1``. Returns (costs, predecessors, ``b``), ``b`` =
+    -1 when the search ran out of cells (no ``stop_at``, or it is not reached within ``limit``).
     """
     dist = np.full(pad.size, np.inf)
     pred = np.full(pad.size, _NO_PRED, dtype=np.int32)
@@ -177,6 +193,8 @@ def _dijkstra(
     step, beside_row, beside_col = flat_moves(wp)
     band = 0
     while sizes[band % 3] + sizes[(band + 1) % 3] > 0:
+        if stop_at >= 0 and dist[stop_at] < band + 1:
+            return dist, pred, band
         slot = band % 3
         for j in range(sizes[slot]):
             u = ring[slot, j]
@@ -202,7 +220,7 @@ def _dijkstra(
                         sizes[target % 3] += 1
         sizes[slot] = 0
         band += 1
-    return dist, pred
+    return dist, pred, -1
 
 
 def _search(
@@ -221,7 +239,7 @@ def _search(
     window = Window.around(passable, box)
     source = window.node(start_rc)
     if slowness is None:
-        dist, pred = _dijkstra(window.pad, window.wp, source, float(limit))
+        dist, pred, _ = _dijkstra(window.pad, window.wp, source, float(limit))
     else:
         slow = window.padded(slowness)
         dist, pred = dijkstra_weighted(window.pad, window.wp, source, float(limit), slow)

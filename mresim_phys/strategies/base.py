@@ -32,12 +32,12 @@ from mresim_phys.knowledge.prior import planning_map as belief_with_prior
 from mresim_phys.knowledge.teammates import Payload, TeammateInfo
 from mresim_phys.planning import Planner, TopologicalMap, shared_map
 from mresim_phys.planning.costs import slowness_of
-from mresim_phys.planning.fields import DistanceField, distance_field, traversable
+from mresim_phys.planning.fields import DistanceField, distance_field, passable_cells
 from mresim_phys.planning.grid import Box, bbox
 from mresim_phys.planning.topological import TopologicalPlanner
 from mresim_phys.plugin import PluginParams
 from mresim_phys.registry import Registry
-from mresim_phys.types import BeliefGrid, FloatArray
+from mresim_phys.types import FREE, BeliefGrid, FloatArray
 
 
 class StrategyParams(PluginParams):
@@ -146,14 +146,27 @@ class PlanContext:
         self.view = view
 
     @cached_property
-    def passable(self) -> np.ndarray:
-        """Known-free cells at least the robot's clearance from any known obstacle."""
-        return traversable(self.view.planning_map, self.view.clearance)
+    def free_box(self) -> Box | None:
+        """The bounding box of the robot's FREE cells (None if none), found once."""
+        return bbox(self.view.belief == FREE)
 
     @cached_property
+    def _passable(self) -> tuple[np.ndarray, Box | None]:
+        if self.view.prior is None:
+            return passable_cells(self.view.belief, self.view.clearance, self.free_box)
+        planned = self.view.planning_map  # the prior fills what the belief does not know
+        return passable_cells(planned, self.view.clearance, bbox(planned == FREE))
+
+    @property
+    def passable(self) -> np.ndarray:
+        """Known-free cells at least the robot's clearance from any known obstacle (on its
+        planning map: with a prior, the prior's cells where its own map knows nothing)."""
+        return self._passable[0]
+
+    @property
     def passable_box(self) -> Box | None:
         """The bounding box of :attr:`passable` (None if no cell is), found once."""
-        return bbox(self.passable)
+        return self._passable[1]
 
     @cached_property
     def slowness(self) -> FloatArray | None:

@@ -28,17 +28,19 @@ from dataclasses import dataclass
 from typing import ClassVar
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 from pydantic import Field
 
 from mresim_phys.knowledge.frontiers import (
     Frontiers,
     any_frontier,
-    find_frontiers,
     frontier_targets,
+    frontiers_in,
 )
 from mresim_phys.knowledge.prior import walled_in
 from mresim_phys.knowledge.teammates import TeammateInfo
+from mresim_phys.planning.goals import GoalCosts, goal_costs
 from mresim_phys.plugin import Plugin
 from mresim_phys.strategies.base import (
     STRATEGIES,
@@ -58,7 +60,7 @@ SEARCH_GROWTH = 1.5  # a refinement searches to this multiple of the current low
 MAX_BOUNDED_SEARCH = 2000.0  # cells: beyond this a teammate's search is unbounded
 
 BoolArray = NDArray[np.bool_]
-PathSearch = Callable[["Bidder", float], "FloatArray | None"]
+PathSearch = Callable[["Bidder", int, float], "GoalCosts | None"]
 
 
 class FrontierParams(StrategyParams):
@@ -134,14 +136,16 @@ class Bidder:
         costs = straight_line(position, goals_rc)
         return cls(name, costs, np.zeros(len(costs), dtype=bool), position, rank)
 
-    def refine(self, found: FloatArray | None, limit: float) -> None:
-        """Take path costs searched up to ``limit``; beyond it the bound rises to ``limit``."""
-        if found is None:  # the teammate stands where this robot knows nothing: keep estimates
+    def refine(self, searched: GoalCosts | None) -> None:
+        """Take the exact path costs a search found; the bounds of the others rise to its
+        floor. Costs known exactly before stay (the same search from the same cell)."""
+        if searched is None:  # the teammate stands where this robot knows nothing: keep estimates
             self.exact[:] = True
             return
-        known = np.isfinite(found) | (limit == np.inf)
-        self.costs = np.where(known, found, np.maximum(self.costs, limit))
-        self.exact = known
+        known = np.isfinite(searched.found) | (searched.floor == np.inf)
+        raised = np.where(self.exact, self.costs, np.maximum(self.costs, searched.floor))
+        self.costs = np.where(known, searched.found, raised)
+        self.exact = self.exact | known
 
 
 def utility(sizes: FloatArray, costs: FloatArray) -> FloatArray:
@@ -175,7 +179,7 @@ class FrontierExploration(Plugin):
             step = random_step(view, context)
             if step is not None:
                 return step
-        frontiers = self._frontiers(view)
+        frontiers = self._frontiers(view, context)
         reach = self.params.reach or view.clearance + 2.0
         fields = context.fields_growing(self.params.horizon * view.sensor_range)
         searching = len(frontiers) > 0 and not self._goal_met(view)
@@ -238,7 +242,7 @@ class FrontierExploration(Plugin):
         self._goal_was_met = self._goal_was_met or met
         return met
 
-    def _frontiers(self, view: RobotView) -> Frontiers:
+    def _frontiers(self, view: RobotView, context: PlanContext) -> Frontiers:
         """This robot's frontier clusters, without the cells it has given up on (nor, with
         a prior map, those behind which the plan shows only walls)."""
         if self._ignored is None:
@@ -248,7 +252,8 @@ class FrontierExploration(Plugin):
         exclude = self._ignored
         if view.prior is not None:  # the plan shows only walls behind these cells
             exclude = exclude | walled_in(view.belief, view.prior)
-        return find_frontiers(view.belief, self.params.min_frontier_size, exclude)
+        size = self.params.min_frontier_size
+        return frontiers_in(view.belief, context.free_box, size, exclude)
 
     def _candidates(self, frontiers: Frontiers, costs: FloatArray) -> IntArray:
         """Indices of the best reachable frontiers, best first."""
@@ -275,7 +280,7 @@ class FrontierExploration(Plugin):
             Bidder.estimated(t.name, t.position, goals, rank(t.name)) for t in self._teammates(view)
         ]
         won = greedy_auction(
-            bidders, sizes, lambda b, limit: exact_costs(context, b.position, goals, limit)
+            bidders, sizes, lambda b, k, limit: exact_costs(context, b.position, goals, k, limit)
         )
         return int(candidates[won])
 
@@ -326,13 +331,18 @@ def straight_line(position: tuple[float, float], goals_rc: IntArray) -> FloatArr
 
 
 def exact_costs(
-    context: PlanContext, position: tuple[float, float], goals_rc: IntArray, limit: float
-) -> FloatArray | None:
-    """Path costs on this robot's map from a teammate's position (None if off the map)."""
-    field = context.field_from(position, limit)
-    if field.start_rc is None:
-        return None
-    return field.cost_at(goals_rc[:, 0], goals_rc[:, 1])
+    context: PlanContext,
+    position: tuple[float, float],
+    goals_rc: IntArray,
+    wanted: int,
+    limit: float,
+) -> GoalCosts | None:
+    """Path costs on this robot's map from a teammate's position, searched up to ``limit``
+    or until goal ``wanted``'s cost is known (None if the position is off the map)."""
+    return goal_costs(
+        context.passable, position, goals_rc, wanted, limit, context.passable_box,
+        context.slowness,
+    )  # fmt: skip
 
 
 def greedy_auction(bidders: list[Bidder], sizes: FloatArray, search: PathSearch) -> int:
@@ -340,7 +350,10 @@ def greedy_auction(bidders: list[Bidder], sizes: FloatArray, search: PathSearch)
 
     A pair whose cost is only a lower bound is refined before it can win: the
     teammate's path search runs to 1.5 times the bound (at least ``MIN_SEARCH``
-    cells more), so a teammate far away by path is ruled out by a small search.
+    cells more), so a teammate far away by path is ruled out by a small search, which
+    stops once the pair's cost is final (``planning.goals``). Which pair wins depends only
+    on the exact costs (lower bounds never win: they are refined first, and a bound's
+    utility is never below its exact one), so how far a search went never changes it.
     Utilities are one (bidders x frontiers) matrix; a refinement recomputes its row.
     """
     u = utility(sizes[None, :], np.array([b.costs for b in bidders]))
@@ -356,7 +369,7 @@ def greedy_auction(bidders: list[Bidder], sizes: FloatArray, search: PathSearch)
             bound = float(bidder.costs[which])
             limit = max(SEARCH_GROWTH * bound, bound + MIN_SEARCH)
             limit = np.inf if limit > MAX_BOUNDED_SEARCH else limit
-            bidder.refine(search(bidder, limit), limit)
+            bidder.refine(search(bidder, which, limit))
             u[who] = utility(sizes, bidder.costs)
             continue
         if who == 0:
@@ -366,6 +379,7 @@ def greedy_auction(bidders: list[Bidder], sizes: FloatArray, search: PathSearch)
     return int(np.argmax(utility(sizes, bidders[0].costs)))
 
 
+@njit(cache=True, nogil=True)
 def best_pair(
     u: FloatArray, ranks: IntArray, active: BoolArray, taken: BoolArray
 ) -> tuple[int, int]:
@@ -375,12 +389,16 @@ def best_pair(
     Each bidder bids for its best frontier (the first of equal ones); equal bids go
     to the bidder of lower rank (then the earlier bidder), so robots that see the same
     bids (robots started on one spot) agree on who wins instead of each taking the tie.
+    One compiled pass (comparisons only: the utilities are numpy's).
     """
-    open_ = np.where(active[:, None] & ~taken[None, :], u, -np.inf)
-    which = np.argmax(open_, axis=1)
-    bids = open_[np.arange(len(u)), which]
-    if not (bids > -np.inf).any():
-        return -1, -1
-    best = bids == bids.max()
-    who = int(np.flatnonzero(best & (ranks == ranks[best].min()))[0])
-    return who, int(which[who])
+    who, which, top, top_rank = -1, -1, -np.inf, 0
+    for i in range(u.shape[0]):
+        if not active[i]:
+            continue
+        bid, pick = -np.inf, -1
+        for j in range(u.shape[1]):
+            if not taken[j] and u[i, j] > bid:
+                bid, pick = u[i, j], j
+        if bid > top or (bid == top and bid > -np.inf and ranks[i] < top_rank):
+            who, which, top, top_rank = i, pick, bid, ranks[i]
+    return who, which

@@ -1,0 +1,74 @@
+"""Phase 4b (planning): path costs from one cell to a few goal cells, searched only as far as
+one goal needs.
+
+A teammate's bid in the frontier auction needs the path costs from the teammate to the
+auction's few goals, and only one of them is asked for at a time: :func:`goal_costs`
+runs the distance field's Dijkstra (``fields._dijkstra``, the same moves, bands and
+window) from the start and stops as soon as that goal's cost is final, instead of
+searching the whole window of ``limit``. A goal's cost is the same float whichever way
+the search ends: a cell's cost is the least ``cost(u) + move`` over its neighbours ``u``
+settled before it, whatever order they were expanded in. What the early stop leaves
+unknown is bounded from below (:class:`GoalCosts`), which is all the auction needs.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from mresim_phys.planning.costs import dijkstra_weighted
+from mresim_phys.planning.fields import _dijkstra, _window, snap_to_passable
+from mresim_phys.planning.grid import Box, Window
+from mresim_phys.types import BoolGrid, FloatArray, IntArray
+
+
+@dataclass(frozen=True)
+class GoalCosts:
+    """Exact path costs of some goals and a lower bound on the rest.
+
+    ``found[i]`` is goal ``i``'s exact path cost, or inf where it is not known; every goal
+    not known costs at least ``floor`` (inf: the unknown goals are unreachable).
+    """
+
+    found: FloatArray
+    floor: float
+
+
+def goal_costs(
+    passable: BoolGrid,
+    start_xy: tuple[float, float],
+    goals_rc: IntArray,
+    wanted: int,
+    limit: float,
+    box: Box | None,
+    slowness: FloatArray | None = None,
+    max_snap: float = 3.0,
+) -> GoalCosts | None:
+    """Path costs from ``start_xy`` (snapped as ``fields.distance_field`` snaps it) to the
+    goal cells ``goals_rc`` (rows of (row, col)), up to ``limit``; the search stops once goal
+    ``wanted``'s cost is final. None if the start has no passable cell within ``max_snap``.
+
+    ``box`` is ``bbox(passable)``. With terrain (``slowness``) the search runs to ``limit``.
+    """
+    start = snap_to_passable(passable, start_xy, max_snap)
+    if start is None or box is None:
+        return None
+    window = Window.around(passable, _window(start, box, limit))
+    rows = goals_rc[:, 0] - window.origin[0]
+    cols = goals_rc[:, 1] - window.origin[1]
+    hp = window.pad.size // window.wp
+    inside = (rows >= 0) & (rows < hp) & (cols >= 0) & (cols < window.wp)
+    nodes = np.where(inside, rows * window.wp + cols, -1)
+    if slowness is None:
+        target = int(nodes[wanted])
+        dist, _, band = _dijkstra(window.pad, window.wp, window.node(start), float(limit), target)
+    else:
+        slow = window.padded(slowness)
+        dist, _ = dijkstra_weighted(window.pad, window.wp, window.node(start), float(limit), slow)
+        band = -1
+    found = np.where(inside, dist[np.maximum(nodes, 0)], np.inf)
+    if band < 0:  # searched out to the limit: what it did not reach costs more
+        return GoalCosts(found, float(limit))
+    floor = min(band + 1.0, float(limit))
+    return GoalCosts(np.where(found < band + 1, found, np.inf), floor)
