@@ -143,15 +143,16 @@ def stop_with_error(robot: Robot, contact: tuple[float, float]) -> None:
     robot.reached_goal = False
 
 
-def path_blocked(belief: np.ndarray, path: np.ndarray, clearance: float, lookahead: float) -> bool:
-    """Whether the robot's map now holds an obstacle closer than ``clearance`` to one of
-    the path's points (after the first, where the robot stands) in its first ``lookahead``
-    cells: the path planner's own rule for a passable cell (``planning.fields``), so a
-    path planned on the same map is never blocked ('latest' beliefs: a person stepped
-    into the way, a door closed). A point whose clearance leaves the map blocks too."""
+def path_blocked(belief: np.ndarray, path: np.ndarray, radius: float, lookahead: float) -> bool:
+    """Whether the robot's map now holds an obstacle closer than ``radius`` (its body) to
+    one of the path's points (after the first, where the robot stands) in its first
+    ``lookahead`` cells: the body could not pass there ('latest' beliefs: a person stepped
+    into the way, a door closed; a prior map: rubble the plan did not show). A wall seen
+    within the planner's wall margin but clear of the body does not block, as it does not
+    stop the robot's motion. A point whose cells leave the map blocks too."""
     if len(path) < 2:
         return False
-    return _path_blocked(belief, path, clearance_offsets(float(clearance)), float(lookahead))
+    return _path_blocked(belief, path, clearance_offsets(float(radius)), float(lookahead))
 
 
 @lru_cache(maxsize=32)

@@ -254,10 +254,9 @@ class Simulation:
             learn_terrain(robot.terrain, self.setup.terrain, update)
         effects.spend("sensing", scanned - started)
         effects.spend("mapping", perf_counter() - scanned)
-        clearance = robot.radius + robot.body.wall_margin
         lookahead = LOOKAHEAD_STEPS * robot.speed
         checks_path = robot.observed is not None or robot.prior is not None
-        if checks_path and path_blocked(robot.belief, robot.path, clearance, lookahead):
+        if checks_path and path_blocked(robot.belief, robot.path, robot.radius, lookahead):
             robot.stop_for_replan()
         if update is not None:
             effects.touched.append((robot.belief, update))

@@ -75,13 +75,14 @@ def test_exchange_keeps_the_newer_observation(
     assert (int(belief[0, 2]), int(observed[0, 2])) == expected
 
 
-def test_a_path_is_blocked_only_by_what_breaks_the_planners_clearance() -> None:
+def test_a_path_is_blocked_only_where_the_body_cannot_pass() -> None:
     belief = np.full((20, 20), FREE, np.uint8)
     path = np.array([[2.5, 10.5], [3.5, 10.5], [4.5, 10.5], [5.5, 10.5], [6.5, 10.5]])
-    belief[12, 5] = OCCUPIED  # 2 rows away: clearance 1.4 keeps the path passable
+    belief[12, 5] = OCCUPIED  # 2 rows away: a body of radius 1.4 passes it
     assert not path_blocked(belief, path, 1.4, 10.0)
-    belief[11, 5] = OCCUPIED  # next to the path
+    belief[11, 5] = OCCUPIED  # next to the path: within the body
     assert path_blocked(belief, path, 1.4, 10.0)
+    assert not path_blocked(belief, path, 0.5, 10.0)  # a thin body passes it
     assert not path_blocked(belief, path, 1.4, 1.5)  # beyond the lookahead
 
 
