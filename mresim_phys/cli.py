@@ -27,6 +27,7 @@ from mresim_phys.output.session import INTERRUPTED, Outcome, run_session
 from mresim_phys.output.signals import StopRequest, stop_on_signals
 from mresim_phys.render.layers import GLOBAL_LAYERS, ROBOT_LAYERS
 from mresim_phys.sim import Simulation
+from mresim_phys.strategies import STRATEGIES
 
 EXIT_USER_ERROR = 2
 EXIT_INTERRUPTED = 130  # Ctrl-C outside a run's own handling (128 + SIGINT)
@@ -141,6 +142,14 @@ def make_parser() -> argparse.ArgumentParser:
         help="thread counts to compare, e.g. 1,2 or 1,auto (default 1): one run per count,"
         " stepped in turn",
     )
+    bench.add_argument(
+        "--strategies",
+        type=strategy_names,
+        default=("frontier",),
+        metavar="NAME,NAME",
+        help="strategies to compare, e.g. frontier,hungarian,min_pos (default frontier):"
+        " one run per strategy, stepped in turn",
+    )
     return parser
 
 
@@ -220,9 +229,22 @@ def thread_settings(text: str) -> tuple[int | Literal["auto"], ...]:
     return settings
 
 
+def strategy_names(text: str) -> tuple[str, ...]:
+    """argparse type: comma-separated registered strategy names (at least one)."""
+    names = tuple(part.strip() for part in text.split(",") if part.strip())
+    unknown = [n for n in names if n not in STRATEGIES.names()]
+    if not names or unknown:
+        known = ", ".join(sorted(STRATEGIES.names()))
+        raise argparse.ArgumentTypeError(f"expected strategy names ({known}), got {text!r}")
+    return names
+
+
 def bench_command(args: argparse.Namespace) -> int:
     """``mresim bench``: time full steps and print the cost split."""
-    print(run_bench(args.robots, args.map, args.warmup, args.steps, args.preset, args.threads))
+    report = run_bench(
+        args.robots, args.map, args.warmup, args.steps, args.preset, args.threads, args.strategies
+    )
+    print(report)
     return 0
 
 

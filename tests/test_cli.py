@@ -431,7 +431,20 @@ def test_bench_teams_of_any_size_start_clear_of_walls(robots: int) -> None:
 def test_bench_runs_32_robots(capsys: pytest.CaptureFixture[str]) -> None:
     code, out, err = cli(capsys, "bench", "--robots", "32", "--warmup", "0", "--steps", "1")
     assert code == 0, err
-    assert out.splitlines()[2].split()[0] == "32"
+    assert out.splitlines()[2].split()[:2] == ["frontier", "32"]
+
+
+def test_bench_compares_strategies_and_rejects_unknown_ones(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    args = ("bench", "--robots", "2", "--warmup", "0", "--steps", "1")
+    code, out, err = cli(capsys, *args, "--strategies", "frontier,min_pos")
+    assert code == 0, err
+    assert [line.split()[0] for line in out.splitlines()[2:4]] == ["frontier", "min_pos"]
+    with pytest.raises(SystemExit) as info:
+        cli(capsys, *args, "--strategies", "frontir")
+    err = capsys.readouterr().err
+    assert info.value.code == 2 and "frontier" in err and "Traceback" not in err
 
 
 def test_the_progress_bar_ends_at_the_steps_run(
@@ -469,4 +482,4 @@ def test_bench_presets_at_the_originals_settings(
     code, out, err = cli(capsys, "bench", "--preset", preset, "--robots", "2", "--warmup", "0",
                          "--steps", "1")  # fmt: skip
     assert code == 0, err
-    assert f"--preset {preset}" in out and out.splitlines()[2].split()[0] == "2"
+    assert f"--preset {preset}" in out and out.splitlines()[2].split()[1] == "2"

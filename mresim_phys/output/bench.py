@@ -103,6 +103,7 @@ class BenchResult:
     phase_ms: dict[str, float]
     explored: float
     threads: int | str = 1
+    strategy: str = "frontier"
 
 
 Point = tuple[float, float]
@@ -156,8 +157,10 @@ def team_scenario(
     steps: int,
     preset: Preset = OFFICE,
     threads: int | Literal["auto"] = 1,
+    strategy: str = "frontier",
 ) -> dict[str, Any]:
-    """A frontier team of ``robots`` starting beside the base (:func:`team_starts`)."""
+    """A team of ``robots`` (``strategy``: the preset's, frontier) starting beside the base
+    (:func:`team_starts`)."""
     starts = team_starts(robots, load_image_map(map_path).occupied, preset)
     return {
         "name": f"bench-{robots}",
@@ -166,7 +169,7 @@ def team_scenario(
         "stop": {"all_done": False, "stalled_for": None},
         "map": {"image": str(map_path)},
         "base_station": {"position": list(preset.base), "comm_range": preset.team["comm_range"]},
-        "team": preset.team,
+        "team": {**preset.team, "strategy": strategy},
         "robots": [{"name": f"R{i}", "start": list(s)} for i, s in enumerate(starts)],
         "simulation": {"threads": threads},
     }
@@ -193,7 +196,7 @@ class StepTimes:
             self.phases[name].append(seconds)
         self.phases["motion"].append(max(total - sum(spent.values()), 0.0))
 
-    def result(self, robots: int, threads: int | str) -> BenchResult:
+    def result(self, robots: int, threads: int | str, strategy: str) -> BenchResult:
         """Medians in milliseconds."""
         return BenchResult(
             robots,
@@ -202,6 +205,7 @@ class StepTimes:
             {name: 1e3 * statistics.median(v) for name, v in self.phases.items()},
             self.sim.record.explored,
             threads,
+            strategy,
         )
 
 
@@ -212,13 +216,15 @@ def time_team(
     measured: int,
     preset: Preset = OFFICE,
     threads: Sequence[int | Literal["auto"]] = (1,),
+    strategies: Sequence[str] = ("frontier",),
 ) -> list[BenchResult]:
     """Run warm-up steps, then time ``measured`` steps of a team of ``robots``, once per
-    thread count: the runs (identical but for their threads) step in turn, alternating
-    which goes first, so a busy spell on a shared machine hits them alike."""
+    (strategy, thread count): the runs step in turn, alternating which goes first, so a
+    busy spell on a shared machine hits them alike."""
+    variants = [(name, count) for name in strategies for count in threads]
     timers = []
-    for count in threads:
-        data = team_scenario(robots, map_path, warmup + measured, preset, count)
+    for name, count in variants:
+        data = team_scenario(robots, map_path, warmup + measured, preset, count, name)
         timers.append(StepTimes(Simulation(validate_scenario(data))))
     for timer in timers:
         for _ in range(warmup):
@@ -226,24 +232,23 @@ def time_team(
     for k in range(measured):
         for timer in timers if k % 2 == 0 else timers[::-1]:
             timer.step()
-    return [timer.result(robots, count) for timer, count in zip(timers, threads, strict=True)]
+    return [
+        timer.result(robots, count, name)
+        for timer, (name, count) in zip(timers, variants, strict=True)
+    ]
 
 
 def report(results: Sequence[BenchResult], map_path: Path, preset: Preset = OFFICE) -> str:
     """The results as a text table."""
     names = [*PHASES, "motion"]
-    head = f"{'robots':>6} {'threads':>7} {'median':>8} {'p90':>8} {'per robot':>9} " + " ".join(
-        f"{n:>13}" for n in names
-    )
-    lines = [
-        f"mresim bench --preset {preset.name}: frontier team on {map_path.name}, ms per step",
-        head,
-    ]
+    head = f"{'strategy':>10} {'robots':>6} {'threads':>7} {'median':>8} {'p90':>8} "
+    head += f"{'per robot':>9} " + " ".join(f"{n:>13}" for n in names)
+    lines = [f"mresim bench --preset {preset.name}: teams on {map_path.name}, ms per step", head]
     for r in results:
         split = " ".join(f"{r.phase_ms[n]:13.2f}" for n in names)
         per_robot = r.median_ms / r.robots
         times = f"{r.median_ms:8.2f} {r.p90_ms:8.2f} {per_robot:9.2f}"
-        lines.append(f"{r.robots:>6} {r.threads!s:>7} {times} {split}")
+        lines.append(f"{r.strategy:>10} {r.robots:>6} {r.threads!s:>7} {times} {split}")
     lines.append("(phase columns are per-step medians; they need not add up to the median;")
     lines.append(" with threads they add up the time spent on every thread)")
     return "\n".join(lines)
@@ -256,6 +261,7 @@ def run_bench(
     measured: int | None,
     preset_name: str = "office",
     threads: Sequence[int | Literal["auto"]] = (1,),
+    strategies: Sequence[str] = ("frontier",),
 ) -> str:
     """Time every team size with a preset (its map unless ``map_path``) and return the report."""
     preset = PRESETS[preset_name]
@@ -268,5 +274,9 @@ def run_bench(
         )
     warm = preset.warmup if warmup is None else warmup
     steps = preset.steps if measured is None else measured
-    results = [r for n in robot_counts for r in time_team(n, path, warm, steps, preset, threads)]
+    results = [
+        r
+        for n in robot_counts
+        for r in time_team(n, path, warm, steps, preset, threads, strategies)
+    ]
     return report(results, path, preset)

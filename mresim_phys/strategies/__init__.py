@@ -7,7 +7,7 @@ the ``mresim_phys.strategies`` entry-point group, or are named in a scenario as
 
 from __future__ import annotations
 
-from mresim_phys.strategies import frontier, random_walk
+from mresim_phys.strategies import assignment, frontier, random_walk
 from mresim_phys.strategies.base import (
     STRATEGIES,
     Decision,
@@ -17,8 +17,13 @@ from mresim_phys.strategies.base import (
     plan_context,
 )
 
-BUILT_IN = ("frontier", "random_walk")
-assert {frontier.FrontierExploration.name, random_walk.RandomWalk.name} == set(BUILT_IN)
+BUILT_IN = ("frontier", "random_walk", "hungarian", "min_pos")
+assert {
+    frontier.FrontierExploration.name,
+    random_walk.RandomWalk.name,
+    assignment.HungarianExploration.name,
+    assignment.MinPosExploration.name,
+} == set(BUILT_IN)
 
 __all__ = [
     "BUILT_IN",
