@@ -100,6 +100,11 @@ def make_parser() -> argparse.ArgumentParser:
     add_render_flags(run)
     run.add_argument("--no-log", action="store_true", help="do not write the run log")
     run.add_argument("--no-plots", action="store_true", help="do not draw plots at the end")
+    run.add_argument(
+        "--paired",
+        action="store_true",
+        help="also run the scenario without its faults as a baseline; write robustness.json",
+    )
     validate = commands.add_parser("validate", help="check a scenario without running it")
     validate.add_argument("scenario", type=Path, help="scenario YAML file")
     replay = commands.add_parser("replay", help="re-render a run (and its metrics) from its log")
@@ -233,6 +238,8 @@ def simulation_overrides(args: argparse.Namespace) -> dict[str, Any]:
         given["vary_with_seed"] = False
     if args.threads is not None:
         given["threads"] = args.threads
+    if args.paired:
+        given["paired"] = True
     return {"simulation": given} if given else {}
 
 

@@ -36,10 +36,12 @@ from mresim_phys.errors import ScenarioError, UnknownRobotError
 from mresim_phys.event_context import RunEventContext
 from mresim_phys.knowledge.latest import LatestCoverage
 from mresim_phys.knowledge.mapping import integrate_scan
+from mresim_phys.knowledge.robustness import FailureWatch, robot_states
 from mresim_phys.knowledge.teammates import presumed_lost
 from mresim_phys.knowledge.terrain import learn_terrain
 from mresim_phys.metrics import (
     CommTotals,
+    Curves,
     Milestones,
     RobotRecord,
     StallWatch,
@@ -50,6 +52,7 @@ from mresim_phys.metrics import (
 )
 from mresim_phys.motion import MoveRules, path_blocked, take_step, wants_plan
 from mresim_phys.parallel import Effects, RobotPool, thread_count
+from mresim_phys.scenario.faults import robustness_columns
 from mresim_phys.snapshot import (
     AgentSnapshot,
     CommSummary,
@@ -89,6 +92,9 @@ class Simulation:
         self.milestones = Milestones()
         self.comm_totals = CommTotals()
         self.stall = StallWatch(s.rules.stalled_for, s.rules.stalled_gain)
+        self.curves = Curves()
+        self.failures = FailureWatch([r.name for r in self.robots])
+        self.fault_columns = robustness_columns(scenario)  # metrics.csv gets the robustness columns
         self._sensing_rngs = s.sensing_streams()
         self._events = RunEventContext(
             self.agents, s.network, s.world, s.coverage, s.reachable, s.event_streams(),
@@ -372,6 +378,7 @@ class Simulation:
             movables=movable_views(self.world, self.setup.elements),
             rubble=rubble,
             gave_way=gave_way,
+            lost_knowledge=self.failures.lost_view(),
         )
 
     def measure(self) -> StepRecord:
@@ -382,6 +389,9 @@ class Simulation:
             RobotRecord(r.name, r.distance, r.state, r.last_base_contact) for r in self.robots
         )
         heard = {name: info.step for name, info in self.base.teammates.items()}
+        watch, coverage = self.failures, self.coverage
+        watch.update(self.t, robot_states(self.robots), self.base.belief, coverage.reachable,
+                     coverage.total)  # fmt: skip
         latency = base_latency(self.t, heard, [r.name for r in self.robots if r.alive])
         record = measure_step(
             self.t,
@@ -393,8 +403,10 @@ class Simulation:
             comm_bytes=self.comm.traffic.total,
             control_bytes=self.comm.control_traffic.total,
             latency=latency,
+            robustness=watch.columns() if self.fault_columns else None,
         )
         self.milestones.update(record)
+        self.curves.update(record)
         self.comm_totals.update(record)
         self.stall.update(record)
         self.phase_times["metrics"] += perf_counter() - started

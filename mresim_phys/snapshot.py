@@ -138,6 +138,8 @@ class Snapshot:
     terrain: NDArray[np.float32] | None = None  # true speed factors (static); None: no terrain
     prior: NDArray[np.uint8] | None = None  # the prior map robots were given (static); None
     movables: tuple[MovableSnapshot, ...] = ()  # every obstacle and door, scenario order
+    # cells only a failed robot knew when it fell silent (knowledge.robustness); None: none
+    lost_knowledge: BoolGrid | None = None
     rubble: BoolGrid | None = None  # static walls that were free on the map (None: none yet)
     gave_way: BoolGrid | None = None  # free cells that were the map's walls
 

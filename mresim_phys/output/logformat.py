@@ -14,7 +14,8 @@ Each field of :class:`~mresim_phys.snapshot.Snapshot` and of its
   and ``gave_way``) and point arrays (:class:`PointsField`: ``path``, ``rendezvous``);
 * ``movables``: what never changes in ``meta.json``, moves in the steps' lines
   (``output.logworld``);
-* not at all, recomputed on replay: ``explored``, ``known_at_base``, ``alive``.
+* not at all, recomputed on replay: ``explored``, ``known_at_base``, ``alive``,
+  ``lost_knowledge`` (``knowledge.robustness``, from the replayed maps and fault states).
 
 Importing this module fails if a dataclass field has no codec here (or a codec has no
 field), so a new snapshot field cannot be left out of the log by mistake.
@@ -128,7 +129,7 @@ SNAPSHOT_LINE = {
 SNAPSHOT_ELSEWHERE: tuple[str, ...] = ("resolution", "truth", "agents")
 SNAPSHOT_ELSEWHERE += ("movables", "rubble", "gave_way", "terrain", "prior")  # in truth.npz
 SNAPSHOT_ELSEWHERE += ("latest",)  # meta.json "beliefs"
-RECOMPUTED = ("explored", "known_at_base", "alive")  # by the replay, from the deltas
+RECOMPUTED = ("explored", "known_at_base", "alive", "lost_knowledge")  # by the replay
 
 
 def encode_line(codecs: Mapping[str, LineField], obj: object) -> dict[str, Any]:
