@@ -351,7 +351,10 @@ class Simulation:
 
     def snapshot(self) -> Snapshot:
         """The run at the end of the current step (views of the live grids, not copies)."""
-        agents = [agent_snapshot(self.base)] + [agent_snapshot(r) for r in self.robots]
+        silence = self.rules.presume_lost_after
+        agents = [
+            agent_snapshot(a, presumed_lost(a.teammates, self.t, silence)) for a in self.agents
+        ]
         rubble, gave_way = self.world.debris() or (None, None)
         return Snapshot(
             step=self.t,
@@ -379,6 +382,7 @@ class Simulation:
             rubble=rubble,
             gave_way=gave_way,
             lost_knowledge=self.failures.lost_view(),
+            failures=self.failures.notes(),
         )
 
     def measure(self) -> StepRecord:
@@ -413,8 +417,9 @@ class Simulation:
         return record
 
 
-def agent_snapshot(agent: Agent) -> AgentSnapshot:
-    """One agent as a snapshot (grids as read-only views).
+def agent_snapshot(agent: Agent, lost: frozenset[str] = frozenset()) -> AgentSnapshot:
+    """One agent as a snapshot (grids as read-only views); ``lost``: the teammates it
+    presumes lost.
 
     A strategy exposes extra views through its decision's ``info``: ``skeleton``
     (a bool grid, read-only) and ``rendezvous`` ((k, 2) float points) are passed on to
@@ -440,4 +445,5 @@ def agent_snapshot(agent: Agent) -> AgentSnapshot:
         rendezvous=points_or_none(info.get("rendezvous")),
         base_contact=agent.last_base_contact,
         broken=tuple(sorted(robot.broken)) if robot else (),
+        presumed_lost=tuple(sorted(lost)) if agent.alive else (),
     )

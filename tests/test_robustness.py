@@ -7,13 +7,16 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import cv2
 import numpy as np
 import pytest
+from test_runlog import assert_same_snapshot, record_run
 
 from mresim_phys.cli import main
 from mresim_phys.knowledge.robustness import FailureWatch, FaultState
 from mresim_phys.metrics import normalised_area
 from mresim_phys.output.runlog import RunLog, recompute_metrics
+from mresim_phys.render import DEFAULT_STYLE
 from mresim_phys.sim import Simulation
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 
@@ -211,3 +214,32 @@ def test_paired_without_faults_is_a_clear_error(
     assert "no faults to switch off" in err and "Traceback" not in err
     assert err.count("\n") == 1  # one paragraph
     assert not (tmp_path / "out").exists()
+
+
+def test_replayed_failure_views_equal_the_live_ones(
+    scenario_file: ScenarioFile, tmp_path: Path
+) -> None:
+    path = far_failure(scenario_file, simulation={"presume_lost_after": 15})
+    snaps, _, _ = record_run(path, tmp_path / "log", 70)
+    for got, want in zip(RunLog.open(tmp_path / "log").snapshots(), snaps, strict=True):
+        assert_same_snapshot(got, want)
+    last = snaps[-1]
+    assert last.failures == ((40, "B"),)
+    assert last.lost_knowledge is not None and last.lost_knowledge.any()
+    assert snaps[39].lost_knowledge is None
+    assert any(a.presumed_lost for a in last.agents)
+    assert last.robots[1].presumed_lost == ()  # a failed robot presumes nothing
+
+
+def test_failure_frames_replay_exactly(scenario_file: ScenarioFile, tmp_path: Path) -> None:
+    path = far_failure(scenario_file, steps=85, simulation={"presume_lost_after": 15})
+    out, flags = tmp_path / "run", ["--snapshot", "39,41,85", "--layers", "all"]
+    assert run_cli(str(path), "--out", str(out), *flags) == 0
+    assert main(["replay", str(out), *flags]) == 0
+    frames = {}
+    for step in (39, 41, 85):
+        live = cv2.imread(str(out / f"step-{step:05d}.png"))
+        assert np.array_equal(live, cv2.imread(str(out / f"replay-step-{step:05d}.png")))
+        frames[step] = live
+    red = [int(np.all(f[:60] == DEFAULT_STYLE.banner, axis=-1).sum()) for f in frames.values()]
+    assert red[0] == 0 and red[1] > 1000 and red[2] == 0  # the banner line, for a while

@@ -203,6 +203,13 @@ class FailureWatch:
         lost cells the team has not known again yet (summed over failures)."""
         return len(self.failures), self.knowledge_lost, self.lost_unrecovered
 
+    def notes(self) -> tuple[tuple[int, str], ...]:
+        """(step, robot and failed parts other than 'robot') of every failure so far."""
+        return tuple(
+            (f.step, " ".join([f.robot, *(p for p in f.parts if p != "robot")]))
+            for f in self.failures
+        )
+
     def lost_view(self) -> BoolGrid | None:
         """Every cell lost at some failure so far, read-only (None: none yet)."""
         if self.lost_mask is None:

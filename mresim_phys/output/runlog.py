@@ -354,6 +354,7 @@ class Replay:
             prior=self.log.prior,
             latest=self.latest,
             lost_knowledge=self.failures.lost_view(),
+            failures=self.failures.notes(),
         )
         return snap, record
 
