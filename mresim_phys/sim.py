@@ -52,7 +52,6 @@ from mresim_phys.metrics import (
 )
 from mresim_phys.motion import MoveRules, path_blocked, take_step, wants_plan
 from mresim_phys.parallel import Effects, RobotPool, thread_count
-from mresim_phys.scenario.faults import robustness_columns
 from mresim_phys.snapshot import (
     AgentSnapshot,
     CommSummary,
@@ -94,7 +93,7 @@ class Simulation:
         self.stall = StallWatch(s.rules.stalled_for, s.rules.stalled_gain)
         self.curves = Curves()
         self.failures = FailureWatch([r.name for r in self.robots])
-        self.fault_columns = robustness_columns(scenario)  # metrics.csv gets the robustness columns
+        self.fault_columns = s.rules.fault_columns  # metrics.csv has the robustness columns
         self._sensing_rngs = s.sensing_streams()
         self._events = RunEventContext(
             self.agents, s.network, s.world, s.coverage, s.reachable, s.event_streams(),

@@ -28,7 +28,6 @@ from mresim_phys.output.files import temp_sibling, write_json_atomic, write_text
 from mresim_phys.output.runlog import RunLogWriter
 from mresim_phys.output.video import VideoRecorder, default_video_path, write_png
 from mresim_phys.render import LayerSpec, Renderer, frame_scale, parse_layers
-from mresim_phys.scenario.faults import robustness_columns
 from mresim_phys.scenario.schema import RenderSpec, Scenario
 from mresim_phys.snapshot import Snapshot
 
@@ -76,9 +75,9 @@ class RunWriter:
         self._partial = temp_sibling(self.path)
         self._file = self._partial.open("w", newline="", encoding="utf-8")
         self._csv = csv.writer(self._file, lineterminator="\n")
-        latest = run_rules(scenario).latest  # a world that changes: a 'stale' column
-        names, faults = [r.name for r in scenario.robots], robustness_columns(scenario)
-        self._csv.writerow(csv_header(names, stale=latest, faults=faults))
+        rules = run_rules(scenario)  # a world that changes: 'stale'; paired faults: robustness
+        names = [r.name for r in scenario.robots]
+        self._csv.writerow(csv_header(names, stale=rules.latest, faults=rules.fault_columns))
 
     def on_step(self, record: StepRecord) -> None:
         """Append one row."""
