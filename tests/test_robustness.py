@@ -214,6 +214,9 @@ def test_paired_without_faults_is_a_clear_error(
     assert "no faults to switch off" in err and "Traceback" not in err
     assert err.count("\n") == 1  # one paragraph
     assert not (tmp_path / "out").exists()
+    paired = scenario_file(steps=5, simulation={"paired": True})
+    assert main(["validate", str(paired)]) == 2
+    assert "no faults to switch off" in capsys.readouterr().err
 
 
 def test_replayed_failure_views_equal_the_live_ones(

@@ -25,7 +25,7 @@ import numpy as np
 from mresim_phys.errors import ScenarioError
 from mresim_phys.metrics import Curves, normalised_area
 from mresim_phys.output.files import write_json_atomic
-from mresim_phys.scenario.faults import has_faults, without_faults
+from mresim_phys.scenario.faults import paired_problem, without_faults
 from mresim_phys.types import FREE
 
 if TYPE_CHECKING:
@@ -54,13 +54,9 @@ def run_robustness(sim: Simulation) -> dict[str, Any]:
 
 def check_paired(sim: Simulation) -> None:
     """A paired run needs faults to switch off: ScenarioError otherwise."""
-    if sim.scenario.simulation.paired and not has_faults(sim.scenario):
-        raise ScenarioError(
-            f"scenario {sim.scenario.name!r} asks for a paired run (--paired or"
-            " simulation.paired: true), but it has no faults to switch off: no 'fail' events,"
-            " so the baseline would be the same run. Add failures (e.g. events: [{step: 300,"
-            " fail: B}]) or run it without --paired / simulation.paired."
-        )
+    problem = paired_problem(sim.scenario)
+    if problem is not None:
+        raise ScenarioError(problem)
 
 
 def run_baseline(sim: Simulation, stop: StopRequest | None = None) -> Simulation | None:

@@ -35,6 +35,18 @@ def robustness_columns(scenario: Scenario) -> bool:
     return scenario.simulation.paired and has_faults(scenario)
 
 
+def paired_problem(scenario: Scenario) -> str | None:
+    """Why ``scenario`` cannot be a paired run (None: it can, or it is not paired)."""
+    if not scenario.simulation.paired or has_faults(scenario):
+        return None
+    return (
+        f"scenario {scenario.name!r} asks for a paired run (--paired or simulation.paired:"
+        " true), but it has no faults to switch off: no 'fail' events, so the baseline would"
+        " be the same run. Add failures (e.g. events: [{step: 300, fail: B}]) or run it"
+        " without --paired / simulation.paired."
+    )
+
+
 def without_faults(scenario: Scenario) -> Scenario:
     """``scenario`` with every fault switched off (and no baseline of its own)."""
     events = [e for e in scenario.events if not isinstance(e, FailParams)]
