@@ -302,12 +302,14 @@ def summary_line(sim: Simulation, outcome: Outcome, plotted: bool) -> str:
     """The one line ``mresim run`` prints at the end."""
     scenario, summary, out_dir = sim.scenario, outcome.summary, outcome.out_dir
     reason = outcome.reason + (f" by {outcome.signal}" if outcome.signal else "")
+    paired = scenario.simulation.paired
     return (
         f"{scenario.name} seed {scenario.seed}: {summary['steps']} steps ({reason}),"
         f" explored {summary['final_explored']:.3f}, at base"
         f" {summary['final_known_at_base']:.3f}, {summary['wall_time_s']:.1f} s -> {out_dir}"
         + (f"; video {outcome.video}" if outcome.video else "")
         + (f"; plots in {out_dir / 'plots'}" if plotted else "")
+        + (f"; baseline in {out_dir / 'robustness.json'}" if paired and not outcome.signal else "")
     )
 
 

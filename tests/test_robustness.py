@@ -194,11 +194,12 @@ def test_paired_run_baseline_equals_the_run_without_failures(
 
 
 def test_replay_recomputes_the_robustness_columns(
-    scenario_file: ScenarioFile, tmp_path: Path
+    scenario_file: ScenarioFile, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     path = far_failure(scenario_file, simulation={"paired": True}, render={"final_png": False})
     out = tmp_path / "run"
-    assert run_cli(str(path), "--out", str(out)) == 0
+    assert main(["run", str(path), "--out", str(out), "--no-plots"]) == 0
+    assert f"baseline in {out / 'robustness.json'}" in capsys.readouterr().out
     assert main(["replay", str(out), "--metrics"]) == 0
     assert (out / "metrics.csv").read_bytes() == (out / "metrics-replayed.csv").read_bytes()
     rows = list(recompute_metrics(RunLog.open(out / "log")))
