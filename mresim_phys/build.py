@@ -33,6 +33,7 @@ from mresim_phys.knowledge.teammates import BASE_NAME
 from mresim_phys.knowledge.terrain import unknown_terrain
 from mresim_phys.planning import PLANNERS
 from mresim_phys.rng import Streams
+from mresim_phys.scenario.faults import robustness_columns
 from mresim_phys.scenario.load import load_scenario
 from mresim_phys.scenario.maps import MapSpec, PriorSpec
 from mresim_phys.scenario.readers import LoadedMap, load_image_map, load_ros_map, load_text_map
@@ -268,6 +269,7 @@ class RunRules:
     presume_lost_after: int = 200  # steps of silence after which a teammate is presumed lost
     vary_with_seed: bool = True  # the seed varies initial random steps, ties and starts
     latest: bool = False  # beliefs hold each cell's latest observation (a changing world)
+    fault_columns: bool = False  # metrics.csv has the robustness columns (scenario.faults)
 
 
 @dataclass
@@ -399,6 +401,7 @@ def run_rules(scenario: Scenario) -> RunRules:
         presume_lost_after=sim.presume_lost_after,
         vary_with_seed=sim.vary_with_seed,
         latest=latest,
+        fault_columns=robustness_columns(scenario),
     )
 
 

@@ -101,6 +101,11 @@ def make_parser() -> argparse.ArgumentParser:
     add_render_flags(run)
     run.add_argument("--no-log", action="store_true", help="do not write the run log")
     run.add_argument("--no-plots", action="store_true", help="do not draw plots at the end")
+    run.add_argument(
+        "--paired",
+        action="store_true",
+        help="also run the scenario without its faults as a baseline; write robustness.json",
+    )
     validate = commands.add_parser("validate", help="check a scenario without running it")
     validate.add_argument("scenario", type=Path, help="scenario YAML file")
     replay = commands.add_parser("replay", help="re-render a run (and its metrics) from its log")
@@ -255,6 +260,8 @@ def simulation_overrides(args: argparse.Namespace) -> dict[str, Any]:
         given["vary_with_seed"] = False
     if args.threads is not None:
         given["threads"] = args.threads
+    if args.paired:
+        given["paired"] = True
     return {"simulation": given} if given else {}
 
 
@@ -317,12 +324,14 @@ def summary_line(sim: Simulation, outcome: Outcome, plotted: bool) -> str:
     """The one line ``mresim run`` prints at the end."""
     scenario, summary, out_dir = sim.scenario, outcome.summary, outcome.out_dir
     reason = outcome.reason + (f" by {outcome.signal}" if outcome.signal else "")
+    paired = scenario.simulation.paired
     return (
         f"{scenario.name} seed {scenario.seed}: {summary['steps']} steps ({reason}),"
         f" explored {summary['final_explored']:.3f}, at base"
         f" {summary['final_known_at_base']:.3f}, {summary['wall_time_s']:.1f} s -> {out_dir}"
         + (f"; video {outcome.video}" if outcome.video else "")
         + (f"; plots in {out_dir / 'plots'}" if plotted else "")
+        + (f"; baseline in {out_dir / 'robustness.json'}" if paired and not outcome.signal else "")
     )
 
 

@@ -54,6 +54,9 @@ class StepRecord:
     latency_max: float = 0.0
     latency_mean: float = 0.0
     stale: int | None = None  # cells some robot's map holds wrong now ('latest' beliefs only)
+    # runs with faults (knowledge.robustness): failures so far, cells they lost (summed over
+    # failures), lost cells the team has not known again yet; None: no such columns
+    robustness: tuple[int, int, int] | None = None
 
     def csv_row(self) -> list[str]:
         """Values in :func:`csv_header` order, floats as exact round-trip text."""
@@ -73,11 +76,16 @@ class StepRecord:
         row += [repr(r.distance) for r in self.robots]
         row += [r.state for r in self.robots]
         row += [str(r.base_contact) for r in self.robots]
-        return row if self.stale is None else [*row, str(self.stale)]
+        row = row if self.stale is None else [*row, str(self.stale)]
+        return row if self.robustness is None else [*row, *map(str, self.robustness)]
 
 
-def csv_header(robot_names: list[str], stale: bool = False) -> list[str]:
-    """Column names of ``metrics.csv`` (``stale`` last, for a world that changes)."""
+ROBUSTNESS_COLUMNS = ["failures", "knowledge_lost", "lost_unrecovered"]
+
+
+def csv_header(robot_names: list[str], stale: bool = False, faults: bool = False) -> list[str]:
+    """Column names of ``metrics.csv`` (``stale`` for a world that changes, then the
+    robustness columns for a run with faults, last)."""
     return (
         ["step", "explored", "known_at_base", "distance", "alive", "links"]
         + ["comm_bytes", "control_links", "control_bytes", "latency_max", "latency_mean"]
@@ -85,6 +93,7 @@ def csv_header(robot_names: list[str], stale: bool = False) -> list[str]:
         + [f"state_{n}" for n in robot_names]
         + [f"base_contact_{n}" for n in robot_names]
         + (["stale"] if stale else [])
+        + (ROBUSTNESS_COLUMNS if faults else [])
     )
 
 
@@ -99,6 +108,7 @@ def measure_step(
     comm_bytes: int,
     control_bytes: int,
     latency: tuple[float, float],
+    robustness: tuple[int, int, int] | None = None,
 ) -> StepRecord:
     """The step's row of metrics, for a live run and a replay alike.
 
@@ -112,6 +122,7 @@ def measure_step(
         comm_bytes: Main-channel bytes sent this step.
         control_bytes: Control-channel bytes sent this step.
         latency: (max, mean) age of the robots' newest reports at the base.
+        robustness: (failures, knowledge_lost, lost_unrecovered) in a run with faults.
     """
     return StepRecord(
         step=step,
@@ -127,6 +138,7 @@ def measure_step(
         latency_max=latency[0],
         latency_mean=latency[1],
         stale=getattr(coverage, "stale", None),
+        robustness=robustness,
     )
 
 
@@ -234,3 +246,36 @@ class CommTotals:
             "latency_max": self.latency_max,
             "latency_mean": self.latency_sum / self.steps if self.steps else 0.0,
         }
+
+
+@dataclass
+class Curves:
+    """The explored and known-at-base curves of the run, step by step (for their areas)."""
+
+    explored: list[float] = field(default_factory=list)
+    known_at_base: list[float] = field(default_factory=list)
+
+    def update(self, record: StepRecord) -> None:
+        """Add one step (steps come in order from 0)."""
+        self.explored.append(record.explored)
+        self.known_at_base.append(record.known_at_base)
+
+
+def normalised_area(curve: Sequence[float], steps: int | None = None) -> float:
+    """Area under ``curve`` (values at steps 0, 1, ...) by the trapezoid rule, divided by
+    the number of steps: 1.0 for a curve at 1 from the start. With ``steps`` beyond the
+    curve's end, its last value holds until then (a run that stopped early keeps what it
+    knew); a one-point curve's area is its value.
+
+    >>> normalised_area([0.0, 0.5, 1.0])
+    0.5
+    >>> normalised_area([0.0, 1.0], steps=3)
+    0.8333333333333334
+    """
+    values = list(curve)
+    if steps is not None and steps + 1 > len(values) and values:
+        values += [values[-1]] * (steps + 1 - len(values))
+    if len(values) < 2:
+        return float(values[0]) if values else 0.0
+    inner = sum(values[1:-1])
+    return float((values[0] / 2 + inner + values[-1] / 2) / (len(values) - 1))

@@ -36,10 +36,12 @@ from mresim_phys.errors import ScenarioError, UnknownRobotError
 from mresim_phys.event_context import RunEventContext
 from mresim_phys.knowledge.latest import LatestCoverage
 from mresim_phys.knowledge.mapping import integrate_scan
+from mresim_phys.knowledge.robustness import FailureWatch, robot_states
 from mresim_phys.knowledge.teammates import presumed_lost
 from mresim_phys.knowledge.terrain import learn_terrain
 from mresim_phys.metrics import (
     CommTotals,
+    Curves,
     Milestones,
     RobotRecord,
     StallWatch,
@@ -89,6 +91,9 @@ class Simulation:
         self.milestones = Milestones()
         self.comm_totals = CommTotals()
         self.stall = StallWatch(s.rules.stalled_for, s.rules.stalled_gain)
+        self.curves = Curves()
+        self.failures = FailureWatch([r.name for r in self.robots])
+        self.fault_columns = s.rules.fault_columns  # metrics.csv has the robustness columns
         self._sensing_rngs = s.sensing_streams()
         self._events = RunEventContext(
             self.agents, s.network, s.world, s.coverage, s.reachable, s.event_streams(),
@@ -344,7 +349,10 @@ class Simulation:
 
     def snapshot(self) -> Snapshot:
         """The run at the end of the current step (views of the live grids, not copies)."""
-        agents = [agent_snapshot(self.base)] + [agent_snapshot(r) for r in self.robots]
+        silence = self.rules.presume_lost_after
+        agents = [
+            agent_snapshot(a, presumed_lost(a.teammates, self.t, silence)) for a in self.agents
+        ]
         rubble, gave_way = self.world.debris() or (None, None)
         return Snapshot(
             step=self.t,
@@ -371,6 +379,8 @@ class Simulation:
             movables=movable_views(self.world, self.setup.elements),
             rubble=rubble,
             gave_way=gave_way,
+            lost_knowledge=self.failures.lost_view(),
+            failures=self.failures.notes(),
         )
 
     def measure(self) -> StepRecord:
@@ -381,6 +391,9 @@ class Simulation:
             RobotRecord(r.name, r.distance, r.state, r.last_base_contact) for r in self.robots
         )
         heard = {name: info.step for name, info in self.base.teammates.items()}
+        watch, coverage = self.failures, self.coverage
+        watch.update(self.t, robot_states(self.robots), self.base.belief, coverage.reachable,
+                     coverage.total)  # fmt: skip
         latency = base_latency(self.t, heard, [r.name for r in self.robots if r.alive])
         record = measure_step(
             self.t,
@@ -392,16 +405,19 @@ class Simulation:
             comm_bytes=self.comm.traffic.total,
             control_bytes=self.comm.control_traffic.total,
             latency=latency,
+            robustness=watch.columns() if self.fault_columns else None,
         )
         self.milestones.update(record)
+        self.curves.update(record)
         self.comm_totals.update(record)
         self.stall.update(record)
         self.phase_times["metrics"] += perf_counter() - started
         return record
 
 
-def agent_snapshot(agent: Agent) -> AgentSnapshot:
-    """One agent as a snapshot (grids as read-only views).
+def agent_snapshot(agent: Agent, lost: frozenset[str] = frozenset()) -> AgentSnapshot:
+    """One agent as a snapshot (grids as read-only views); ``lost``: the teammates it
+    presumes lost.
 
     A strategy exposes extra views through its decision's ``info``: ``skeleton``
     (a bool grid, read-only) and ``rendezvous`` ((k, 2) float points) are passed on to
@@ -427,4 +443,5 @@ def agent_snapshot(agent: Agent) -> AgentSnapshot:
         rendezvous=points_or_none(info.get("rendezvous")),
         base_contact=agent.last_base_contact,
         broken=tuple(sorted(robot.broken)) if robot else (),
+        presumed_lost=tuple(sorted(lost)) if agent.alive else (),
     )

@@ -59,6 +59,7 @@ class AgentSnapshot:
     rendezvous: FloatArray | None = None  # (k, 2) points from Decision.info["rendezvous"]
     base_contact: int = -1  # last step this agent's data reached the base (-1: never)
     broken: tuple[str, ...] = ()  # parts that failed for good (drive, radio, sensor)
+    presumed_lost: tuple[str, ...] = ()  # teammates it has not heard of for too long
 
 
 @dataclass(frozen=True)
@@ -138,6 +139,9 @@ class Snapshot:
     terrain: NDArray[np.float32] | None = None  # true speed factors (static); None: no terrain
     prior: NDArray[np.uint8] | None = None  # the prior map robots were given (static); None
     movables: tuple[MovableSnapshot, ...] = ()  # every obstacle and door, scenario order
+    # cells only a failed robot knew when it fell silent (knowledge.robustness); None: none
+    lost_knowledge: BoolGrid | None = None
+    failures: tuple[tuple[int, str], ...] = ()  # (step, "B" or "C radio") of every failure
     rubble: BoolGrid | None = None  # static walls that were free on the map (None: none yet)
     gave_way: BoolGrid | None = None  # free cells that were the map's walls
 

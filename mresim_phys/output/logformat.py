@@ -8,13 +8,15 @@ Each field of :class:`~mresim_phys.snapshot.Snapshot` and of its
 * ``steps.jsonl``, one JSON line per step (:class:`LineField`): ``step``, ``events``,
   ``links``, ``comm``, ``world_version`` (:data:`SNAPSHOT_LINE`) and per agent
   ``position``, ``heading``, ``state``, ``role``, ``goal``, ``distance``, ``parent``,
-  ``base_contact`` (:data:`AGENT_LINE`);
+  ``base_contact``, ``broken``, ``presumed_lost`` (:data:`AGENT_LINE`);
 * delta chunks, as changes since the previous logged step: grids (:class:`GridField`:
   ``belief``, ``safe``, ``skeleton``, the ``truth`` when the world changed, ``rubble``
   and ``gave_way``) and point arrays (:class:`PointsField`: ``path``, ``rendezvous``);
 * ``movables``: what never changes in ``meta.json``, moves in the steps' lines
   (``output.logworld``);
-* not at all, recomputed on replay: ``explored``, ``known_at_base``, ``alive``.
+* not at all, recomputed on replay: ``explored``, ``known_at_base``, ``alive``,
+  ``lost_knowledge`` and ``failures`` (``knowledge.robustness``, from the replayed maps and
+  fault states).
 
 Importing this module fails if a dataclass field has no codec here (or a codec has no
 field), so a new snapshot field cannot be left out of the log by mistake.
@@ -116,6 +118,7 @@ AGENT_LINE = {
     "parent": LineField(str, plain, omit_none=True),
     "base_contact": LineField(int, to_int),
     "broken": LineField(list, to_events, omit_empty=True),
+    "presumed_lost": LineField(list, to_events, omit_empty=True),
 }
 SNAPSHOT_LINE = {
     "step": LineField(int, to_int),
@@ -128,7 +131,7 @@ SNAPSHOT_LINE = {
 SNAPSHOT_ELSEWHERE: tuple[str, ...] = ("resolution", "truth", "agents")
 SNAPSHOT_ELSEWHERE += ("movables", "rubble", "gave_way", "terrain", "prior")  # in truth.npz
 SNAPSHOT_ELSEWHERE += ("latest",)  # meta.json "beliefs"
-RECOMPUTED = ("explored", "known_at_base", "alive")  # by the replay, from the deltas
+RECOMPUTED = ("explored", "known_at_base", "alive", "lost_knowledge", "failures")  # replayed
 
 
 def encode_line(codecs: Mapping[str, LineField], obj: object) -> dict[str, Any]:

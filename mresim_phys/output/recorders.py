@@ -75,8 +75,9 @@ class RunWriter:
         self._partial = temp_sibling(self.path)
         self._file = self._partial.open("w", newline="", encoding="utf-8")
         self._csv = csv.writer(self._file, lineterminator="\n")
-        latest = run_rules(scenario).latest  # a world that changes: a 'stale' column
-        self._csv.writerow(csv_header([r.name for r in scenario.robots], stale=latest))
+        rules = run_rules(scenario)  # a world that changes: 'stale'; paired faults: robustness
+        names = [r.name for r in scenario.robots]
+        self._csv.writerow(csv_header(names, stale=rules.latest, faults=rules.fault_columns))
 
     def on_step(self, record: StepRecord) -> None:
         """Append one row."""
@@ -141,14 +142,16 @@ class MetricsRecorder:
 class LogRecorder:
     """The run log (every snapshot field, as map deltas and JSON lines) for replay."""
 
-    def __init__(self, log_dir: Path, name: str, seed: int) -> None:
-        self.log_dir, self.name, self.seed = log_dir, name, seed
+    def __init__(self, log_dir: Path, name: str, seed: int, faults: bool = False) -> None:
+        self.log_dir, self.name, self.seed, self.faults = log_dir, name, seed, faults
         self.writer: RunLogWriter | None = None
 
     def on_step(self, record: StepRecord, snapshot: SnapshotSource) -> None:
         """Log the step (the first call writes the static data and step 0)."""
         if self.writer is None:
-            self.writer = RunLogWriter(self.log_dir, snapshot(), name=self.name, seed=self.seed)
+            self.writer = RunLogWriter(
+                self.log_dir, snapshot(), name=self.name, seed=self.seed, faults=self.faults
+            )
         else:
             self.writer.write(snapshot())
 
@@ -276,7 +279,8 @@ def make_recorders(sim: Simulation, out_dir: Path) -> tuple[RunWriter, list[Reco
         raise
     recorders: list[Recorder] = [MetricsRecorder(writer)]
     if spec.log:
-        recorders.append(LogRecorder(out_dir / "log", scenario.name, scenario.seed))
+        log = LogRecorder(out_dir / "log", scenario.name, scenario.seed, sim.fault_columns)
+        recorders.append(log)
     if frames is not None:
         recorders.append(frames)
     return writer, recorders, video_path(spec, scenario.name, scenario.seed)

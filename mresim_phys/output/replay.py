@@ -146,7 +146,8 @@ def replay_metrics(log: RunLog, run_dir: Path) -> tuple[list[str], bool]:
     latest = log.meta.get("beliefs") == "latest"
     with atomic_path(out) as tmp, tmp.open("w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle, lineterminator="\n")
-        writer.writerow(csv_header(log.names[1:], stale=latest))
+        faults = bool(log.meta.get("fault_columns", False))
+        writer.writerow(csv_header(log.names[1:], stale=latest, faults=faults))
         for record in recompute_metrics(log):
             writer.writerow(record.csv_row())
     live = run_dir / "metrics.csv"

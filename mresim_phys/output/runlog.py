@@ -26,6 +26,7 @@ import numpy as np
 from mresim_phys.errors import MresimError
 from mresim_phys.knowledge.latest import LatestCoverage
 from mresim_phys.knowledge.mapping import Coverage
+from mresim_phys.knowledge.robustness import FailureWatch, robot_states
 from mresim_phys.metrics import RobotRecord, StepRecord, measure_step, update_known_at_base
 from mresim_phys.output.files import write_json_atomic
 from mresim_phys.output.logformat import (
@@ -59,9 +60,12 @@ def chunk_file(index: int) -> str:
     return f"deltas-{index:05d}.npz"
 
 
-def new_meta(first: Snapshot, name: str, seed: int, chunk_steps: int) -> dict[str, Any]:
-    """meta.json of a log about to get its first step."""
-    return {
+def new_meta(
+    first: Snapshot, name: str, seed: int, chunk_steps: int, faults: bool = False
+) -> dict[str, Any]:
+    """meta.json of a log about to get its first step (``fault_columns``: the run had
+    faults, so its metrics.csv has the robustness columns; only written when true)."""
+    meta: dict[str, Any] = {
         "format": FORMAT,
         "version": VERSION,
         "name": name,
@@ -76,6 +80,9 @@ def new_meta(first: Snapshot, name: str, seed: int, chunk_steps: int) -> dict[st
         "steps": 0,
         "closed": False,
     }
+    if faults:
+        meta["fault_columns"] = True
+    return meta
 
 
 def flat_cells(grid: np.ndarray) -> np.ndarray:
@@ -88,7 +95,14 @@ class RunLogWriter:
     """Streams a run's snapshots into ``log_dir``; ``first`` (step 0) is logged at once."""
 
     def __init__(
-        self, log_dir: Path, first: Snapshot, *, name: str, seed: int, chunk_steps: int = 100
+        self,
+        log_dir: Path,
+        first: Snapshot,
+        *,
+        name: str,
+        seed: int,
+        chunk_steps: int = 100,
+        faults: bool = False,
     ) -> None:
         if chunk_steps < 1:
             raise ValueError(f"chunk_steps must be at least 1, not {chunk_steps}")
@@ -99,7 +113,7 @@ class RunLogWriter:
         self.log_dir.mkdir(parents=True, exist_ok=True)
         for stale in self.log_dir.glob("deltas-*.npz"):
             stale.unlink()
-        self.meta = new_meta(first, name, seed, chunk_steps)
+        self.meta = new_meta(first, name, seed, chunk_steps, faults)
         truth = np.packbits(first.truth, axis=None)
         statics: dict[str, Any] = {"occupied": truth}
         if first.terrain is not None:
@@ -293,6 +307,8 @@ class Replay:
             else Coverage(reachable)
         )
         self._maps: dict[int, BeliefGrid] = {}  # each robot's map as one stable 2-D view
+        self.failures = FailureWatch(log.robot_names)
+        self.fault_columns = bool(log.meta.get("fault_columns", False))
         self.known_at_base, self.first = 0.0, True
         self.version: int | None = None
 
@@ -337,6 +353,8 @@ class Replay:
             terrain=self.log.terrain,
             prior=self.log.prior,
             latest=self.latest,
+            lost_knowledge=self.failures.lost_view(),
+            failures=self.failures.notes(),
         )
         return snap, record
 
@@ -400,6 +418,9 @@ class Replay:
                 self.known_at_base, base, self.coverage, not self.latest
             )
         self.first = False
+        watch, coverage = self.failures, self.coverage
+        base = agents[0].belief
+        watch.update(step, robot_states(agents[1:]), base, coverage.reachable, coverage.total)
         return measure_step(
             step,
             self.coverage,
@@ -410,6 +431,7 @@ class Replay:
             comm_bytes=comm.comm_bytes,
             control_bytes=comm.control_bytes,
             latency=(comm.latency_max, comm.latency_mean),
+            robustness=watch.columns() if self.fault_columns else None,
         )
 
     def count_free(self, idx: IntArray) -> None:

@@ -22,6 +22,7 @@ from pathlib import Path
 
 from mresim_phys.metrics import StepRecord
 from mresim_phys.output.recorders import Recorder, SnapshotSource, make_recorders, summarise
+from mresim_phys.output.robustness import check_paired, run_robustness, write_robustness
 from mresim_phys.output.rundir import StagedRun
 from mresim_phys.output.signals import StopRequest, stop_on_signals
 from mresim_phys.sim import Simulation
@@ -79,6 +80,7 @@ def run_session(
     if stop is None:
         with stop_on_signals() as own:
             return run_session(sim, out_dir, on_step, overwrite=overwrite, stop=own, finish=finish)
+    check_paired(sim)
     staged = StagedRun(out_dir, sim.scenario.name, overwrite)
     try:
         outcome = record_run(sim, staged.folder, on_step, stop)
@@ -110,10 +112,13 @@ def record_run(
     natural = sim.stop_reason()
     reason = natural if natural is not None else INTERRUPTED
     summary = summarise(sim.scenario, sim.record, sim.milestones, elapsed, reason, sim.comm_totals)
+    summary |= run_robustness(sim)
     interrupted = reason == INTERRUPTED
     if interrupted:
         summary["signal"] = stop.name
     writer.write_summary(summary)
+    if not interrupted:
+        write_robustness(sim, folder, stop)
     status = stop.exit_status if interrupted else 0
     return Outcome(summary, folder, video, reason, stop.name if interrupted else None, status)
 

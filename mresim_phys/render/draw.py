@@ -31,6 +31,7 @@ LEGEND["known_at_base"] = "known_at_base"  # global layer -> Style colour, in le
 TRIANGLE_TURNS = np.array((0.0, 2.4, -2.4))  # radians from the heading: tip, two corners
 TRIANGLE_REACH = np.array((1.6, 1.0, 1.0))  # in robot glyph sizes
 FAR_PX = 2**24  # fixed-point pixels (a million whole pixels): farther points are clipped here
+BANNER_STEPS = 40  # a failure's banner line stays in the header this many steps
 DASH_PX = 6  # length of a dash of an open door's line, pixels
 CROSS_ARMS = np.array(((1, 1), (1, -1)), dtype=np.int32) * ONE  # half-diagonals of an 'x'
 
@@ -76,14 +77,16 @@ class Overlay:
         if "location" in layers[0]:
             c, half = centres[0], 5 * ONE
             cv2.rectangle(image, c - half, c + half, style.base, -1, cv2.LINE_8, SHIFT)
-            draw_label(image, snap.base.name, centres[0], 5.0, style.base, style)
+            label = robot_label(snap.base, "presumed_lost" in layers[0])
+            draw_label(image, label, centres[0], 5.0, style.base, style)
         sizes = [max(style.robot_px, robot.radius * self.scale) for robot in snap.robots]
         triangles = robot_triangles(snap.robots, centres[1:], sizes)
         for i, robot in enumerate(snap.robots, start=1):
             if "location" in layers[i]:
                 at, size = centres[i], sizes[i - 1]
                 draw_robot(image, robot.state, triangles[i - 1], at, size, colours[i], style)
-                draw_label(image, robot_label(robot), at, size, colours[i], style)
+                label = robot_label(robot, "presumed_lost" in layers[i])
+                draw_label(image, label, at, size, colours[i], style)
         if "header" in on:
             draw_header(image, snap, style)
         if "legend" in on:
@@ -231,9 +234,11 @@ def draw_robot(
         draw_cross(image, at, max(round(size * 0.8), 3), style.error)
 
 
-def robot_label(robot: AgentSnapshot) -> str:
-    """A robot's name, with its failed parts if any (``B [radio]``)."""
-    return f"{robot.name} [{','.join(robot.broken)}]" if robot.broken else robot.name
+def robot_label(robot: AgentSnapshot, lost: bool = False) -> str:
+    """A robot's name, with its failed parts if any (``B [radio]``) and, with ``lost``, the
+    teammates it presumes lost (``A lost?B,C``: the ``presumed_lost`` layer)."""
+    text = f"{robot.name} [{','.join(robot.broken)}]" if robot.broken else robot.name
+    return f"{text} lost?{','.join(robot.presumed_lost)}" if lost and robot.presumed_lost else text
 
 
 def draw_label(
@@ -247,12 +252,20 @@ def draw_label(
 
 
 def draw_header(image: np.ndarray, snap: Snapshot, style: Style) -> None:
-    """Step, explored %, known at base % and alive robots, in a band at the top."""
+    """Step, explored %, known at base % and alive robots, in a band at the top; below it,
+    for ``BANNER_STEPS`` steps after a failure, a red line naming it."""
     text = f"step {snap.step}   explored {snap.explored:.1%}   at base {snap.known_at_base:.1%}"
     text += f"   robots {snap.alive}/{len(snap.robots)}"
     (_, th), base = cv2.getTextSize(text, FONT, style.font_scale, 1)
     cv2.rectangle(image, (0, 0), (image.shape[1], th + base + 5), style.header_bg, -1)
     cv2.putText(image, text, (4, th + 3), FONT, style.font_scale, style.header_text, 1, AA)
+    recent = [f"{what} at step {step}" for step, what in snap.failures
+              if 0 <= snap.step - step < BANNER_STEPS]  # fmt: skip
+    if recent:
+        top, height = th + base + 5, th + base + 5
+        cv2.rectangle(image, (0, top), (image.shape[1], top + height), style.banner, -1)
+        line = "FAILED: " + ", ".join(recent)
+        cv2.putText(image, line, (4, top + th + 3), FONT, style.font_scale, (255, 255, 255), 1, AA)
 
 
 def world_legend(snap: Snapshot, on: frozenset[str]) -> tuple[str, ...]:

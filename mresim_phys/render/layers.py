@@ -1,8 +1,9 @@
 """Views (phase 8), layers: what a frame may show, and the ``--layers`` mini-language.
 
 Global layers (map classes; moving obstacles, doors and debris of a changing world;
-links, hierarchy, legend, header, terrain shading, a prior map's walls) and per-robot layers
-(location, path, goal, free and safe space, frontiers, comm range, skeleton, rendezvous);
+links, hierarchy, legend, header, terrain shading, a prior map's walls, the knowledge lost
+at failures) and per-robot layers (location, path, goal, free and safe space, frontiers,
+comm range, skeleton, rendezvous, the teammates it presumes lost);
 a :class:`LayerSpec` says which are on, for all robots and for named ones;
 :func:`parse_layers` reads the ``--layers`` / ``render.layers`` text.
 
@@ -20,8 +21,9 @@ from types import MappingProxyType
 GLOBAL_LAYERS: tuple[str, ...] = ("walls", "unexplored", "team_known", "known_at_base")
 GLOBAL_LAYERS += ("obstacles", "doors", "debris")  # a changing world: drawn over the walls
 GLOBAL_LAYERS += ("links", "hierarchy", "legend", "header", "terrain", "prior")
+GLOBAL_LAYERS += ("lost_knowledge",)  # cells only a robot that fell silent knew
 ROBOT_LAYERS: tuple[str, ...] = ("location", "path", "free_space", "safe_space", "frontiers")
-ROBOT_LAYERS += ("comm_range", "goal", "skeleton", "rendezvous")
+ROBOT_LAYERS += ("comm_range", "goal", "skeleton", "rendezvous", "presumed_lost")
 LAYERS = GLOBAL_LAYERS + ROBOT_LAYERS
 DEFAULT_GLOBAL = frozenset(GLOBAL_LAYERS)
 DEFAULT_ROBOT = frozenset(ROBOT_LAYERS) - {"free_space", "safe_space"}

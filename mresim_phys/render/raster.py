@@ -17,7 +17,8 @@ last pass (:func:`finish_labels`) adds the known-at-base and wall classes and th
 then :func:`mark_world` puts the changing world's solid labels (rubble, closed doors,
 moving obstacles; ``style.RUBBLE`` ...) over them, and :func:`shade_terrain` tints slow
 ground brown (the ``terrain`` layer) and :func:`shade_prior` tints blue where a prior map
-holds walls the truth does not have (the ``prior`` layer).
+holds walls the truth does not have (the ``prior`` layer); :func:`shade_lost` tints crimson
+the cells lost at robot failures (the ``lost_knowledge`` layer).
 These replaced ~20 numpy/cv2 calls per robot (bounding rectangle, masks, products and
 maxima, a dilation) that swept the same cells again and again: on an 8-robot office frame
 (800x600, ``benchmarks/bench_render.py``) the label grid went from ~5.2 to ~1.0-1.3 ms.
@@ -265,6 +266,13 @@ def shade_prior(
     ghost = (prior == OCCUPIED) & ~truth
     tint_cells(image, np.float32(style.prior_alpha) * ghost.astype(np.float32), style.prior,
                map_size)  # fmt: skip
+
+
+def shade_lost(image: np.ndarray, lost: BoolGrid, map_size: tuple[int, int], style: Style) -> None:
+    """Tint the cells lost at failures (only a robot that fell silent knew them then)
+    toward ``style.lost_knowledge`` by ``lost_alpha`` (the ``lost_knowledge`` layer). In place."""
+    tint_cells(image, np.float32(style.lost_alpha) * lost.astype(np.float32),
+               style.lost_knowledge, map_size)  # fmt: skip
 
 
 def tint_cells(

@@ -46,6 +46,9 @@ class Style:
     terrain_alpha: float = 0.7  # tint of the slowest ground (factor -> 0); factor 1: none
     prior: BGR = (200, 110, 40)  # blue: walls of the prior map where the truth is free
     prior_alpha: float = 0.5
+    lost_knowledge: BGR = (60, 20, 220)  # crimson: cells only a failed robot knew
+    lost_alpha: float = 0.6
+    banner: BGR = (40, 40, 200)  # the header's failure line
     link: BGR = (128, 128, 0)
     hierarchy: BGR = (130, 0, 75)
     failed: BGR = (128, 128, 128)

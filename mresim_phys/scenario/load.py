@@ -21,6 +21,7 @@ from mresim_phys.knowledge.teammates import BASE_NAME
 from mresim_phys.planning import PLANNERS
 from mresim_phys.registry import Registry
 from mresim_phys.render.layers import parse_layers
+from mresim_phys.scenario.faults import paired_problem
 from mresim_phys.scenario.maps import MapSpec
 from mresim_phys.scenario.overrides import apply_overrides
 from mresim_phys.scenario.readers import read_yaml_mapping
@@ -61,6 +62,9 @@ def validate_scenario(data: dict[str, Any], source: str = "<scenario>") -> Scena
         raise ScenarioError(describe_errors(source, exc)) from None
     check_event_robots(scenario, source)
     check_layers(scenario, source)
+    problem = paired_problem(scenario)
+    if problem is not None:
+        raise ScenarioError(f"{source}: {problem}")
     team = resolve_robot_plugins(scenario.team, source, "team")
     robots = [
         resolve_robot_plugins(r, source, f"robots[{i}]") for i, r in enumerate(scenario.robots)

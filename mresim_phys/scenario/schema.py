@@ -238,6 +238,13 @@ class SimulationSpec(Strict):
             " debris, collapse or cells events), grow otherwise."
         ),
     )
+    paired: bool = Field(
+        False,
+        description=(
+            "Also run the same scenario and seed with every fault switched off (no fail"
+            " events) as a baseline, and write robustness.json (as `mresim run --paired`)."
+        ),
+    )
     threads: Annotated[int, Field(ge=1, le=MAX_THREADS)] | Literal["auto"] = Field(
         1,
         description=(
