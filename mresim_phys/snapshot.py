@@ -58,7 +58,8 @@ class AgentSnapshot:
     skeleton: BoolGrid | None = None  # from a strategy's Decision.info["skeleton"], if any
     rendezvous: FloatArray | None = None  # (k, 2) points from Decision.info["rendezvous"]
     base_contact: int = -1  # last step this agent's data reached the base (-1: never)
-    broken: tuple[str, ...] = ()  # parts that failed for good (drive, radio, sensor)
+    broken: tuple[str, ...] = ()  # parts that do not work now (drive, radio, sensor, degraded)
+    battery: float | None = None  # battery level left, a fraction of capacity; None: none
 
 
 @dataclass(frozen=True)
@@ -137,6 +138,7 @@ class Snapshot:
     latest: bool = False  # robots' maps hold each cell's latest observation (belief: latest)
     terrain: NDArray[np.float32] | None = None  # true speed factors (static); None: no terrain
     prior: NDArray[np.uint8] | None = None  # the prior map robots were given (static); None
+    hazards: NDArray[np.float32] | None = None  # hazard zones' failure probability (static)
     movables: tuple[MovableSnapshot, ...] = ()  # every obstacle and door, scenario order
     rubble: BoolGrid | None = None  # static walls that were free on the map (None: none yet)
     gave_way: BoolGrid | None = None  # free cells that were the map's walls

@@ -83,6 +83,8 @@ class Overlay:
             if "location" in layers[i]:
                 at, size = centres[i], sizes[i - 1]
                 draw_robot(image, robot.state, triangles[i - 1], at, size, colours[i], style)
+                if robot.broken and robot.state != "failed":
+                    draw_ring(image, at, size, style.partial)
                 draw_label(image, robot_label(robot), at, size, colours[i], style)
         if "header" in on:
             draw_header(image, snap, style)
@@ -231,9 +233,17 @@ def draw_robot(
         draw_cross(image, at, max(round(size * 0.8), 3), style.error)
 
 
+def draw_ring(image: np.ndarray, at: np.ndarray, size: float, colour: BGR) -> None:
+    """A ring around a robot (fixed-point centre ``at``): a part failed or degraded."""
+    centre = (int(at[0]), int(at[1]))
+    cv2.circle(image, centre, round((size * 1.9 + 2) * ONE), colour, 2, AA, SHIFT)
+
+
 def robot_label(robot: AgentSnapshot) -> str:
-    """A robot's name, with its failed parts if any (``B [radio]``)."""
-    return f"{robot.name} [{','.join(robot.broken)}]" if robot.broken else robot.name
+    """A robot's name, with its failed parts if any and its battery level if it has one
+    (``B [radio] 73%``)."""
+    text = f"{robot.name} [{','.join(robot.broken)}]" if robot.broken else robot.name
+    return text if robot.battery is None else f"{text} {robot.battery:.0%}"
 
 
 def draw_label(

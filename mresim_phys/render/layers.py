@@ -1,7 +1,8 @@
 """Views (phase 8), layers: what a frame may show, and the ``--layers`` mini-language.
 
 Global layers (map classes; moving obstacles, doors and debris of a changing world;
-links, hierarchy, legend, header, terrain shading, a prior map's walls) and per-robot layers
+links, hierarchy, legend, header, terrain shading, a prior map's walls, hazard zones) and
+per-robot layers
 (location, path, goal, free and safe space, frontiers, comm range, skeleton, rendezvous);
 a :class:`LayerSpec` says which are on, for all robots and for named ones;
 :func:`parse_layers` reads the ``--layers`` / ``render.layers`` text.
@@ -20,6 +21,7 @@ from types import MappingProxyType
 GLOBAL_LAYERS: tuple[str, ...] = ("walls", "unexplored", "team_known", "known_at_base")
 GLOBAL_LAYERS += ("obstacles", "doors", "debris")  # a changing world: drawn over the walls
 GLOBAL_LAYERS += ("links", "hierarchy", "legend", "header", "terrain", "prior")
+GLOBAL_LAYERS += ("hazards",)  # hazard zones of a faults: block
 ROBOT_LAYERS: tuple[str, ...] = ("location", "path", "free_space", "safe_space", "frontiers")
 ROBOT_LAYERS += ("comm_range", "goal", "skeleton", "rendezvous")
 LAYERS = GLOBAL_LAYERS + ROBOT_LAYERS

@@ -46,6 +46,9 @@ class Style:
     terrain_alpha: float = 0.7  # tint of the slowest ground (factor -> 0); factor 1: none
     prior: BGR = (200, 110, 40)  # blue: walls of the prior map where the truth is free
     prior_alpha: float = 0.5
+    hazard: BGR = (0, 80, 255)  # orange-red: hazard zones (fire, water)
+    hazard_alpha: float = 0.35  # tint of a hazard zone's free cells
+    partial: BGR = (0, 165, 255)  # orange ring: a robot with a part failed or degraded
     link: BGR = (128, 128, 0)
     hierarchy: BGR = (130, 0, 75)
     failed: BGR = (128, 128, 128)
