@@ -222,11 +222,17 @@ class Simulation:
     def move_and_sense(self, given: set[str], due: set[str]) -> None:
         """Move phase: each robot replans if due, then moves up to its speed, scanning (and
         replanning) on the way; one task per robot (on threads if ``simulation.threads``
-        allows), shared effects applied in robot order afterwards."""
+        allows), shared effects applied in robot order afterwards. A robot whose drive has
+        failed (and whose sensor works) scans once where it stands."""
         movers = [r for r in self.robots if r.can_move]
         tasks = [partial(self.robot_turn, r, r.name in due, r.name in given) for r in movers]
         for effects in self.pool.run(tasks):
             self.apply(effects)
+        for robot in self.robots:
+            if robot.alive and not robot.can_move and robot.can_sense:
+                effects = Effects()
+                self.sense(robot, effects)
+                self.apply(effects)
 
     def robot_turn(self, robot: Robot, due: bool, given: bool) -> Effects:
         """One robot's decide and move phases; what they did to shared state, held back."""

@@ -3,7 +3,8 @@
 At every replan the robot finds the frontiers of its own map, scores each as
 ``U = size * 1e8 / d**4`` (``d`` = path length; original ``FrontierExploration``)
 and runs a greedy auction with the teammates it heard from within
-``teammate_memory`` steps: the best (robot, frontier) pair is fixed, that robot
+``teammate_memory`` steps and does not presume lost (``RobotView.lost``: a silent
+teammate's frontier is auctioned again): the best (robot, frontier) pair is fixed, that robot
 and that frontier leave the auction, until the best pair is this robot's. So two
 robots in contact do not chase the same frontier. A teammate's distance starts as
 the straight line from its last known position and is replaced by its exact path
@@ -294,6 +295,7 @@ class FrontierExploration(Plugin):
                 and t.role == "explorer"
                 and t.state in ("active", "error")
                 and view.step - t.step <= memory
+                and t.name not in view.lost
             ),
             key=lambda t: t.name,
         )
