@@ -511,7 +511,7 @@ def test_frames_show_hazard_zones_battery_levels_and_a_ring_for_partial_failures
     scenario_file: ScenarioFile,
 ) -> None:
     from mresim_phys.render import Renderer, frame_scale, parse_layers
-    from mresim_phys.render.draw import robot_label
+    from mresim_phys.render.draw import robot_label, world_legend
 
     zone = {"region": {"box": [60, 40, 78, 58]}, "probability": 0.1}
     faults = {"battery": {"capacity": 100}, "hazards": [zone]}
@@ -520,12 +520,13 @@ def test_frames_show_hazard_zones_battery_levels_and_a_ring_for_partial_failures
     snap = sim.snapshot()
     assert snap.hazards is not None and robot_label(snap.robots[1]).startswith("B [sensor] ")
     assert robot_label(snap.robots[0]).endswith("%")
+    assert world_legend(snap, frozenset({"hazards"})) == ("hazard",)
     shape = snap.truth.shape
     frames = {}
-    for layers in ("all", "all,-hazards"):
+    for layers in ("all,-legend", "all,-legend,-hazards"):
         renderer = Renderer(shape, parse_layers(layers), frame_scale(shape, 1))
         frames[layers] = renderer.render(snap)
-    differ = np.any(frames["all"] != frames["all,-hazards"], axis=2)
+    differ = np.any(frames["all,-legend"] != frames["all,-legend,-hazards"], axis=2)
     per_cell = renderer.map_size[0] / shape[1]  # pixels per cell
     rows, cols = np.nonzero(differ)
     assert len(rows) and rows.min() >= 40 * per_cell - 1 and cols.min() >= 60 * per_cell - 1

@@ -267,11 +267,13 @@ def draw_header(image: np.ndarray, snap: Snapshot, style: Style) -> None:
 
 def world_legend(snap: Snapshot, on: frozenset[str]) -> tuple[str, ...]:
     """The changing world's legend entries (Style colour names) a frame shows: obstacle and
-    door if the run has them, rubble once some has fallen (a static run: none)."""
+    door if the run has them, rubble once some has fallen, hazard zones (a static run
+    without faults: none)."""
     kinds = {m.kind for m in snap.movables}
     rubble = snap.rubble is not None and bool(snap.rubble.any())
     present = [("obstacle", "obstacles", "obstacle" in kinds), ("door", "doors", "door" in kinds)]
     present.append(("rubble", "debris", rubble))
+    present.append(("hazard", "hazards", snap.hazards is not None))
     return tuple(name for name, layer, shown in present if shown and layer in on)
 
 
