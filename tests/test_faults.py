@@ -248,7 +248,7 @@ def test_exposure_budget_is_geometric() -> None:
 def test_a_hazard_zone_fails_a_robot_only_inside_it(scenario_file: ScenarioFile) -> None:
     zone = {"region": {"box": [0, 0, 80, 60]}, "probability": 1.0, "robots": ["B"]}
     sim = Simulation.from_yaml(scenario_file(faults={"hazards": [zone]}))
-    assert sim.events_now == ["hazard 0 fails B"] and sim.robot("A").alive
+    assert sim.events_now == ["fail B (hazard 0)"] and sim.robot("A").alive
     far = {"region": {"box": [70, 50, 80, 60]}, "probability": 1.0}
     sim = run(scenario_file(faults={"hazards": [far]}, steps=20), 10)
     assert all(r.alive for r in sim.robots)
@@ -258,7 +258,7 @@ def test_a_hazard_zone_fails_a_robot_only_inside_it(scenario_file: ScenarioFile)
 def test_a_hazard_can_fail_one_part(scenario_file: ScenarioFile) -> None:
     zone = {"region": {"circle": [8, 40, 5]}, "probability": 1.0, "part": "radio"}
     sim = Simulation.from_yaml(scenario_file(faults={"hazards": [zone]}))
-    assert sim.events_now == ["hazard 0 fails B radio"] and not sim.robot("B").speaking
+    assert sim.events_now == ["fail B radio (hazard 0)"] and not sim.robot("B").speaking
 
 
 def test_a_battery_drains_with_motion_scans_and_messages_then_the_robot_fails(
@@ -274,7 +274,7 @@ def test_a_battery_drains_with_motion_scans_and_messages_then_the_robot_fails(
     assert levels[0] is not None and levels[0] < 1.0  # step 0: a scan and messages
     assert all(x is not None and y is not None and y <= x for x, y in itertools.pairwise(levels))
     assert not a.alive and a.battery == 0.0
-    assert f"battery of {a.name} empty" in sim.events_now
+    assert f"fail {a.name} (battery empty)" in sim.events_now
     assert a.distance <= 30 and sim.view_of(sim.robot("B")).battery is not None
 
 

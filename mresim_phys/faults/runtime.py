@@ -111,7 +111,7 @@ class Faults:
             for robot in self.robots:
                 if hazard.strikes(robot):
                     robot.fail(hazard.spec.part, hazard.spec.factors)
-                    lines.append(f"hazard {k} fails {robot.name}{suffix(hazard.spec.part)}")
+                    lines.append(f"fail {robot.name}{suffix(hazard.spec.part)} (hazard {k})")
         if self.contact_limit is not None:
             lines += self.out_of_contact(step, self.contact_limit)
         return lines
@@ -140,7 +140,7 @@ class Faults:
             messages = sum(int(np.count_nonzero(s[robot.index])) for s in sent)
             if use(battery, robot, messages) and robot.alive:
                 robot.fail("robot")
-                lines.append(f"battery of {robot.name} empty")
+                lines.append(f"fail {robot.name} (battery empty)")
         return lines
 
 
