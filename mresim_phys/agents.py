@@ -184,9 +184,17 @@ class Robot(Agent):
         return "done" if self.done else "active"
 
     def own_record(self, step: int) -> TeammateInfo:
-        """Position, goal, state, role and payload, stamped with ``step``."""
+        """Position, goal, state, role, payload and failed parts, stamped with ``step``."""
+        broken = tuple(sorted(self.broken)) if self.holds or self.degradations else ()
         return TeammateInfo(
-            self.name, self.position, self.goal, self.state, self.role, step, payload=self.payload
+            self.name,
+            self.position,
+            self.goal,
+            self.state,
+            self.role,
+            step,
+            payload=self.payload,
+            broken=broken,
         )
 
     def stop_for_replan(self) -> None:

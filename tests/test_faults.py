@@ -398,6 +398,30 @@ def test_the_frontier_auction_reauctions_a_presumed_lost_teammates_frontier() ->
     assert lost.goal is not None and lost.goal[0] < 50
 
 
+def test_the_frontier_auction_leaves_out_a_teammate_whose_drive_or_sensor_failed() -> None:
+    from test_strategies import corridor_view
+
+    from mresim_phys.knowledge.teammates import TeammateInfo
+    from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams
+
+    goals = {}
+    for broken in ((), ("drive",), ("sensor",), ("radio",)):
+        mate = TeammateInfo("B", (30.5, 10.5), None, "active", "explorer", step=9, broken=broken)
+        decision = FrontierExploration(FrontierParams()).decide(
+            corridor_view({"B": mate}, (45.5, 10.5))
+        )
+        assert decision.goal is not None
+        goals[broken] = decision.goal[0] < 50
+    assert goals == {(): False, ("drive",): True, ("sensor",): True, ("radio",): False}
+
+
+def test_a_robot_with_a_failed_part_says_so_in_its_record(scenario_file: ScenarioFile) -> None:
+    sim = run(scenario_file(events=[{"step": 2, "fail": "B", "part": "sensor"}]), 4)
+    heard = sim.robot("A").teammates["B"]
+    assert heard.broken == ("sensor",) and heard.state == "active" and heard.step == 4
+    assert sim.robot("B").teammates["A"].broken == ()
+
+
 def corridor_scenario(tmp_path: Path, lost_after: int) -> Path:
     """A 236-cell corridor; A starts heading left, B right, both in range of everyone."""
     occ = np.zeros((16, 240), dtype=bool)
