@@ -11,7 +11,7 @@ linked agents.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Literal
 
 import numpy as np
@@ -26,6 +26,8 @@ from mresim_phys.world.terrain import TerrainGrid
 
 RobotState = Literal["active", "error", "done", "failed"]
 Part = Literal["drive", "sensor", "radio"]
+FailingPart = Literal["robot", "drive", "sensor", "radio", "degraded"]
+Factors = tuple[float, float]  # (speed factor, sensor range factor) of a degraded robot
 
 
 @dataclass(frozen=True)
@@ -87,7 +89,10 @@ class Robot(Agent):
     body: Body | None = None
     strategy: Strategy | None = None
     planner: Planner | None = None
-    broken: frozenset[Part] = frozenset()  # parts that failed for good
+    holds: dict[str, int] = field(default_factory=dict)  # failures in force per part
+    degradations: tuple[Factors, ...] = ()  # (speed, range) factors of degradations in force
+    battery: float | None = None  # level left, a fraction of the capacity; None: no battery
+    scans: int = 0  # scans taken so far (a battery drains per scan)
     payload: Payload | None = None  # what its strategy sends with its record
     heading: float = 0.0
     path: FloatArray = field(default_factory=lambda: np.zeros((0, 2)))
@@ -122,12 +127,54 @@ class Robot(Agent):
         """Alive with a working laser."""
         return self.alive and "sensor" not in self.broken
 
-    def fail(self, part: Literal["robot"] | Part) -> None:
-        """Lose ``part`` for good (``robot``: everything, the robot is ``failed``)."""
+    @property
+    def broken(self) -> frozenset[str]:
+        """The parts that do not work now (``degraded`` while a degradation is in force)."""
+        parts = {p for p, n in self.holds.items() if n > 0 and p != "robot"}
+        return frozenset(parts | ({"degraded"} if self.degradations else set()))
+
+    def fail(self, part: FailingPart, factors: Factors = (1.0, 1.0)) -> None:
+        """Lose ``part`` until a matching :meth:`repair` (``robot``: everything, the robot is
+        ``failed``; ``degraded``: speed and sensor range scaled by ``factors``). Failures
+        of one part add up: it works again once each has been repaired."""
+        if part == "degraded":
+            self.degradations = (*self.degradations, factors)
+            return
+        self.holds = {**self.holds, part: self.holds.get(part, 0) + 1}
         if part == "robot":
             self.status, self.path = "failed", self.path[:0]
-        else:
-            self.broken = self.broken | {part}
+
+    def repair(self, part: FailingPart, factors: Factors = (1.0, 1.0)) -> None:
+        """Undo one failure of ``part`` (a reboot); the part works again once no failure of
+        it is in force. A robot back from a whole failure replans at once."""
+        if part == "degraded":
+            if factors in self.degradations:
+                k = self.degradations.index(factors)
+                self.degradations = self.degradations[:k] + self.degradations[k + 1 :]
+            return
+        left = max(self.holds.get(part, 0) - 1, 0)
+        self.holds = {**self.holds, part: left}
+        if part == "robot" and left == 0 and self.status == "failed":
+            self.status = "active"
+            self.stop_for_replan()
+
+    @property
+    def speed_factor(self) -> float:
+        """The product of the speed factors of the degradations in force (1: none)."""
+        return math.prod(f[0] for f in self.degradations)
+
+    @property
+    def range_factor(self) -> float:
+        """The product of the sensor range factors of the degradations in force (1: none)."""
+        return math.prod(f[1] for f in self.degradations)
+
+    @property
+    def laser(self) -> Laser:
+        """Its laser as it works now (range scaled while degraded)."""
+        assert self.body is not None
+        factor = self.range_factor
+        laser = self.body.laser
+        return laser if factor == 1.0 else replace(laser, range=laser.range * factor)
 
     @property
     def state(self) -> str:
@@ -137,9 +184,17 @@ class Robot(Agent):
         return "done" if self.done else "active"
 
     def own_record(self, step: int) -> TeammateInfo:
-        """Position, goal, state, role and payload, stamped with ``step``."""
+        """Position, goal, state, role, payload and failed parts, stamped with ``step``."""
+        broken = tuple(sorted(self.broken)) if self.holds or self.degradations else ()
         return TeammateInfo(
-            self.name, self.position, self.goal, self.state, self.role, step, payload=self.payload
+            self.name,
+            self.position,
+            self.goal,
+            self.state,
+            self.role,
+            step,
+            payload=self.payload,
+            broken=broken,
         )
 
     def stop_for_replan(self) -> None:
@@ -162,9 +217,10 @@ class Robot(Agent):
 
     @property
     def speed(self) -> float:
-        """Cells moved at most per step."""
+        """Cells moved at most per step (scaled while degraded)."""
         assert self.body is not None
-        return self.body.speed
+        factor = self.speed_factor
+        return self.body.speed if factor == 1.0 else self.body.speed * factor
 
     @property
     def radius(self) -> float:

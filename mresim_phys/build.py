@@ -25,6 +25,7 @@ from mresim_phys.comms.ledger import Ledger
 from mresim_phys.comms.network import Channel, Network
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.errors import ScenarioError
+from mresim_phys.faults.runtime import Faults, build_faults
 from mresim_phys.knowledge.latest import LatestCoverage
 from mresim_phys.knowledge.mapping import Coverage
 from mresim_phys.knowledge.prior import STREAM as PRIOR_STREAM
@@ -293,6 +294,7 @@ class Setup:
     elements: list[MovingObstacle | Door | RandomDebris] = field(default_factory=list)
     terrain: TerrainGrid | None = None  # true speed factor per cell; None: no terrain
     prior: BeliefGrid | None = None  # the prior map the listed robots start with; None: none
+    faults: Faults | None = None  # random failures, batteries, hazard zones; None: none
 
     def sensing_streams(self) -> list[np.random.Generator]:
         """Each robot's laser-noise stream, in robot order."""
@@ -454,4 +456,5 @@ def build_setup(scenario: Scenario) -> Setup:
         elements=elements,
         terrain=terrain,
         prior=prior,
+        faults=build_faults(scenario.faults, robots, world.shape, streams),
     )

@@ -78,12 +78,23 @@ class RunEventContext:
         """The applying event's own named stream."""
         return self.streams[self._current]
 
-    def fail(self, robot: str, part: RobotPart = "robot") -> None:
-        """Robot ``robot`` loses ``part`` for good."""
-        agent = self.agents[robot]
+    def fail(
+        self, robot: str, part: RobotPart = "robot", factors: tuple[float, float] = (1.0, 1.0)
+    ) -> None:
+        """Robot ``robot`` loses ``part`` until a matching :meth:`repair`."""
+        self._robot(robot).fail(part, factors)
+
+    def repair(
+        self, robot: str, part: RobotPart = "robot", factors: tuple[float, float] = (1.0, 1.0)
+    ) -> None:
+        """Undo one failure of ``part`` of robot ``robot``."""
+        self._robot(robot).repair(part, factors)
+
+    def _robot(self, name: str) -> Robot:
+        agent = self.agents[name]
         if not isinstance(agent, Robot):
-            raise ValueError(f"{robot!r} is not a robot")
-        agent.fail(part)
+            raise ValueError(f"{name!r} is not a robot")
+        return agent
 
     def silence(self, agents: Sequence[str], until: int, channels: Channels) -> None:
         """``agents`` neither send nor receive on ``channels`` from now until before ``until``."""

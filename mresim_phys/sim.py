@@ -28,12 +28,14 @@ from time import perf_counter
 from typing import Any
 
 import numpy as np
+from numpy.typing import NDArray
 
 from mresim_phys.agents import Agent, Robot
 from mresim_phys.build import Scenario, Setup, build_setup, load_scenario
 from mresim_phys.comms.ledger import box_around, sensed_tick
 from mresim_phys.errors import ScenarioError, UnknownRobotError
 from mresim_phys.event_context import RunEventContext
+from mresim_phys.faults.runtime import hazard_grid
 from mresim_phys.knowledge.latest import LatestCoverage
 from mresim_phys.knowledge.mapping import integrate_scan
 from mresim_phys.knowledge.robustness import FailureWatch, robot_states
@@ -95,6 +97,8 @@ class Simulation:
         self.failures = FailureWatch([r.name for r in self.robots])
         self.fault_columns = s.rules.fault_columns  # metrics.csv has the robustness columns
         self._sensing_rngs = s.sensing_streams()
+        # the hazard zones' failure probability per cell and step (static; None: no zones)
+        self.hazards: NDArray[np.float32] | None = hazard_grid(s.faults, s.world.shape)
         self._events = RunEventContext(
             self.agents, s.network, s.world, s.coverage, s.reachable, s.event_streams(),
             s.elements,
@@ -107,6 +111,7 @@ class Simulation:
             self.sense(robot, effects)
         self.apply(effects)
         self.communicate()
+        self.drain_batteries()
         self.record = self.measure()
 
     @classmethod
@@ -144,6 +149,7 @@ class Simulation:
         self.move_and_sense(given, due)
         self.world.place_robots([r.position for r in self.robots])
         self.communicate()
+        self.drain_batteries()
         self.record = self.measure()
         return self.record
 
@@ -184,8 +190,17 @@ class Simulation:
         return all(not r.alive or (r.done and len(r.path) == 0) for r in self.robots)
 
     def apply_events(self) -> None:
-        """Events phase: every scheduled event acts through the run's event context."""
+        """Events phase: every scheduled event acts through the run's event context, then
+        the random faults (``faults/``), if the scenario has any."""
         self.events_now = self._events.run(self.setup.events, self.t)
+        if self.setup.faults is not None:
+            self.events_now += self.setup.faults.apply(self.t)
+
+    def drain_batteries(self) -> None:
+        """After the communication phase: batteries pay for the step (``faults/``)."""
+        if self.setup.faults is not None:
+            sent = [self.comm.traffic.sent, self.comm.control_traffic.sent]
+            self.events_now += self.setup.faults.drain(sent, self.t)
 
     def decide(self, actions: Mapping[str, Decision]) -> tuple[set[str], set[str]]:
         """Decide phase: supplied decisions are adopted; returns (given, due).
@@ -212,11 +227,17 @@ class Simulation:
     def move_and_sense(self, given: set[str], due: set[str]) -> None:
         """Move phase: each robot replans if due, then moves up to its speed, scanning (and
         replanning) on the way; one task per robot (on threads if ``simulation.threads``
-        allows), shared effects applied in robot order afterwards."""
+        allows), shared effects applied in robot order afterwards. A robot whose drive has
+        failed (and whose sensor works) scans once where it stands."""
         movers = [r for r in self.robots if r.can_move]
         tasks = [partial(self.robot_turn, r, r.name in due, r.name in given) for r in movers]
         for effects in self.pool.run(tasks):
             self.apply(effects)
+        for robot in self.robots:
+            if robot.alive and not robot.can_move and robot.can_sense:
+                effects = Effects()
+                self.sense(robot, effects)
+                self.apply(effects)
 
     def robot_turn(self, robot: Robot, due: bool, given: bool) -> Effects:
         """One robot's decide and move phases; what they did to shared state, held back."""
@@ -241,7 +262,8 @@ class Simulation:
         if not robot.can_sense or self.world.buried(robot.position):
             return
         assert robot.body is not None
-        laser = robot.body.laser
+        laser = robot.laser
+        robot.scans += 1
         started = perf_counter()
         result = scan(
             self.world,
@@ -290,7 +312,7 @@ class Simulation:
             radius=robot.radius,
             clearance=robot.radius + robot.body.wall_margin,
             speed=robot.speed,
-            sensor_range=robot.body.laser.range,
+            sensor_range=robot.laser.range,
             role=robot.role,
             base_position=self.base.position,
             teammates=dict(robot.teammates),
@@ -307,6 +329,7 @@ class Simulation:
             free_area=self.setup.free_area,
             terrain=read_only(robot.terrain) if robot.terrain is not None else None,
             prior=robot.prior,
+            battery=robot.battery,
         )
 
     @property
@@ -376,6 +399,7 @@ class Simulation:
             latest=self.rules.latest,
             terrain=None if self.setup.terrain is None else read_only(self.setup.terrain),
             prior=self.setup.prior,
+            hazards=self.hazards,
             movables=movable_views(self.world, self.setup.elements),
             rubble=rubble,
             gave_way=gave_way,
@@ -444,4 +468,5 @@ def agent_snapshot(agent: Agent, lost: frozenset[str] = frozenset()) -> AgentSna
         base_contact=agent.last_base_contact,
         broken=tuple(sorted(robot.broken)) if robot else (),
         presumed_lost=tuple(sorted(lost)) if agent.alive else (),
+        battery=robot.battery if robot else None,
     )

@@ -58,8 +58,9 @@ class AgentSnapshot:
     skeleton: BoolGrid | None = None  # from a strategy's Decision.info["skeleton"], if any
     rendezvous: FloatArray | None = None  # (k, 2) points from Decision.info["rendezvous"]
     base_contact: int = -1  # last step this agent's data reached the base (-1: never)
-    broken: tuple[str, ...] = ()  # parts that failed for good (drive, radio, sensor)
+    broken: tuple[str, ...] = ()  # parts that do not work now (drive, radio, sensor, degraded)
     presumed_lost: tuple[str, ...] = ()  # teammates it has not heard of for too long
+    battery: float | None = None  # battery level left, a fraction of capacity; None: none
 
 
 @dataclass(frozen=True)
@@ -138,6 +139,7 @@ class Snapshot:
     latest: bool = False  # robots' maps hold each cell's latest observation (belief: latest)
     terrain: NDArray[np.float32] | None = None  # true speed factors (static); None: no terrain
     prior: NDArray[np.uint8] | None = None  # the prior map robots were given (static); None
+    hazards: NDArray[np.float32] | None = None  # hazard zones' failure probability (static)
     movables: tuple[MovableSnapshot, ...] = ()  # every obstacle and door, scenario order
     # cells only a failed robot knew when it fell silent (knowledge.robustness); None: none
     lost_knowledge: BoolGrid | None = None

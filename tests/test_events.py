@@ -52,9 +52,10 @@ def test_a_part_failure_names_a_known_part(scenario_file: ScenarioFile) -> None:
 
 def test_resolved_scenario_round_trips_its_events(scenario_file: ScenarioFile) -> None:
     events = [
-        {"step": 3, "fail": "A", "part": "sensor"},
+        {"step": 3, "fail": "A", "part": "degraded", "speed_factor": 0.5, "range_factor": None},
         {"step": 4, "until": 9, "blackout": ["base", "B"], "channel": "main"},
     ]
+    events[0]["until"] = 7
     scenario = load_scenario(scenario_file(events=events))
     dumped = scenario.model_dump(mode="json")["events"]
     assert dumped == events

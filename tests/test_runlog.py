@@ -339,12 +339,12 @@ def test_a_snapshot_field_without_a_codec_is_refused(monkeypatch: pytest.MonkeyP
     logformat.check_codecs()  # as shipped: every field has one
 
     @dataclasses.dataclass(frozen=True)
-    class WithBattery(AgentSnapshot):
-        battery: float = 1.0  # a field someone adds to AgentSnapshot
+    class WithFuel(AgentSnapshot):
+        fuel: float = 1.0  # a field someone adds to AgentSnapshot
 
     stored = logformat.stored_fields()[AgentSnapshot]
-    monkeypatch.setattr(logformat, "stored_fields", lambda: {WithBattery: stored})
-    with pytest.raises(TypeError, match=re.escape("fields without a codec ['battery']")):
+    monkeypatch.setattr(logformat, "stored_fields", lambda: {WithFuel: stored})
+    with pytest.raises(TypeError, match=re.escape("fields without a codec ['fuel']")):
         logformat.check_codecs()
     monkeypatch.undo()
     monkeypatch.setitem(logformat.AGENT_LINE, "skeleton", logformat.AGENT_LINE["heading"])

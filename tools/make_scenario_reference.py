@@ -18,6 +18,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from mresim_phys import COMM_MODELS, STRATEGIES  # noqa: E402
+from mresim_phys.faults import spec as fault_spec  # noqa: E402
 from mresim_phys.planning import PLANNERS  # noqa: E402
 from mresim_phys.scenario import schema  # noqa: E402
 from mresim_phys.scenario.maps import PriorSpec  # noqa: E402
@@ -47,13 +48,20 @@ SECTIONS: list[tuple[str, type[BaseModel]]] = [
     ("", obstacles.StillMotion),
     ("doors[i]", doors.DoorParams),
     ("random_debris", debris.RandomDebrisParams),
-    ("regions (collapse, random_debris.region): one of", shapes.BoxRegion),
+    (
+        "regions (collapse, random_debris.region, faults.hazards[i].region): one of",
+        shapes.BoxRegion,
+    ),
     ("", shapes.CircleRegion),
     ("", shapes.PolygonRegion),
     ("", shapes.MaskRegion),
     ("terrain", terrain.TerrainSpec),
     ("terrain.regions[i]", terrain.TerrainRegion),
     ("prior", PriorSpec),
+    ("faults", fault_spec.FaultsSpec),
+    ("faults.random[i]", fault_spec.RandomFaultSpec),
+    ("faults.battery", fault_spec.BatterySpec),
+    ("faults.hazards[i]", fault_spec.HazardSpec),
 ]
 NOTES = {
     "obstacles[i]": (
@@ -102,6 +110,42 @@ NOTES = {
         " overrides the plan; its frontiers stay on its own map, and a robot whose sensed map"
         " blocks its path replans. The `prior` video layer tints blue the cells the prior"
         " holds as walls where the truth is free."
+    ),
+    "faults": (
+        "Faults act in the events phase, after the scheduled events and the world's"
+        " elements: random failure clocks, then hazard zones, then the out-of-contact rule"
+        " (a working robot without a main-channel link for more than"
+        " `fail_if_out_of_contact_for` steps fails). Batteries are paid after the"
+        " communication phase; a robot whose battery is empty fails there and then. Nobody"
+        " is told: teammates and the base see only silence (a teammate silent for"
+        " `simulation.presume_lost_after` steps is presumed lost). What fails (`part`) is as"
+        " in `fail` events; failures of one part add up (it works again once each is"
+        " repaired). Details: docs/faults.md."
+    ),
+    "faults.random[i]": (
+        "Exactly one law: `mtbf` (exponential times between failures), `shape` and `scale`"
+        " (Weibull) or `probability` (per step: geometric). Common random numbers: each"
+        " robot's times are drawn from the stream `fault/<i>` of the seed keyed by its name,"
+        " so the strategy never changes when a robot fails. The first failure comes at"
+        " `after` plus a drawn time; with `recover_after` the part works again that many steps"
+        " later and the next time is drawn from then on, up to `max_failures`; without it the"
+        " part is lost for good (one failure). No failure comes after `until`."
+    ),
+    "faults.battery": (
+        "Each listed robot starts full; after each step's communication phase its charge"
+        " drops by `per_cell` per cell moved, `per_scan` per scan and `per_message` per"
+        " message (bytes sent to one agent in one step, on either channel). At 0 it fails."
+        " Its level, a fraction of `capacity`, is part of its own knowledge (`RobotView."
+        "battery`) and is drawn by its name in videos."
+    ),
+    "faults.hazards[i]": (
+        "Each step a working robot starts with its centre in the zone counts as a step of"
+        " exposure; it fails (its `part`) on the step that spends an exposure budget drawn"
+        " once at the start from the stream `hazard/<i>` keyed by its name (geometric with"
+        " `probability`: the law of a failure with that probability at each step inside). So"
+        " a robot fails after the same number of steps inside whatever its strategy. One"
+        " failure per zone and robot. A zone must cover a cell of the map; the `hazards`"
+        " video layer tints it."
     ),
 }
 

@@ -66,7 +66,10 @@ class TeammateInfo:
 
     ``step`` is when the record was true (its sender's step); ``learned`` the step at
     which the holder received it (-1 for an agent's own record, not yet sent).
-    ``payload`` is what the teammate's strategy asked to send with it.
+    ``payload`` is what the teammate's strategy asked to send with it; ``broken`` the
+    parts that did not work when it was sent (``drive``, ``sensor``, ``radio``,
+    ``degraded``: a robot with a failed part still talks and says so; its size is part of
+    the state's bytes).
     """
 
     name: str
@@ -77,6 +80,7 @@ class TeammateInfo:
     step: int
     learned: int = -1
     payload: Payload | None = None
+    broken: tuple[str, ...] = ()
 
     def nbytes(self) -> int:
         """Bytes this record takes on the radio."""

@@ -8,7 +8,7 @@ Each field of :class:`~mresim_phys.snapshot.Snapshot` and of its
 * ``steps.jsonl``, one JSON line per step (:class:`LineField`): ``step``, ``events``,
   ``links``, ``comm``, ``world_version`` (:data:`SNAPSHOT_LINE`) and per agent
   ``position``, ``heading``, ``state``, ``role``, ``goal``, ``distance``, ``parent``,
-  ``base_contact``, ``broken``, ``presumed_lost`` (:data:`AGENT_LINE`);
+  ``base_contact``, ``broken``, ``presumed_lost``, ``battery`` (:data:`AGENT_LINE`);
 * delta chunks, as changes since the previous logged step: grids (:class:`GridField`:
   ``belief``, ``safe``, ``skeleton``, the ``truth`` when the world changed, ``rubble``
   and ``gave_way``) and point arrays (:class:`PointsField`: ``path``, ``rendezvous``);
@@ -119,6 +119,7 @@ AGENT_LINE = {
     "base_contact": LineField(int, to_int),
     "broken": LineField(list, to_events, omit_empty=True),
     "presumed_lost": LineField(list, to_events, omit_empty=True),
+    "battery": LineField(float, to_float, omit_none=True),
 }
 SNAPSHOT_LINE = {
     "step": LineField(int, to_int),
@@ -130,6 +131,7 @@ SNAPSHOT_LINE = {
 # meta.json, the truth codec, per agent; then output.logworld and WORLD_GRIDS
 SNAPSHOT_ELSEWHERE: tuple[str, ...] = ("resolution", "truth", "agents")
 SNAPSHOT_ELSEWHERE += ("movables", "rubble", "gave_way", "terrain", "prior")  # in truth.npz
+SNAPSHOT_ELSEWHERE += ("hazards",)  # in truth.npz
 SNAPSHOT_ELSEWHERE += ("latest",)  # meta.json "beliefs"
 RECOMPUTED = ("explored", "known_at_base", "alive", "lost_knowledge", "failures")  # replayed
 

@@ -120,6 +120,8 @@ class RunLogWriter:
             statics["terrain"] = first.terrain
         if first.prior is not None:
             statics["prior"] = first.prior
+        if first.hazards is not None:
+            statics["hazards"] = first.hazards
         np.savez_compressed(self.log_dir / TRUTH_FILE, **statics)
         self._tracks = [Track(cells) for _ in first.agents]
         self._truth = flat_cells(np.asarray(first.truth, dtype=bool))
@@ -193,10 +195,12 @@ class RunLog:
         truth: BoolGrid,
         terrain: TerrainGrid | None,
         prior: BeliefGrid | None = None,
+        hazards: TerrainGrid | None = None,
     ) -> None:
         self.log_dir, self.meta, self.truth = log_dir, meta, truth  # truth: at step 0
         self.terrain = terrain  # true speed factors (static), None without terrain
         self.prior = prior  # the prior map robots were given, None without one
+        self.hazards = hazards  # hazard zones' failure probability per cell, None without
         self.names: list[str] = [a["name"] for a in meta["agents"]]  # base first, as in snapshots
         self.robot_names = [a["name"] for a in meta["agents"] if a["kind"] == "robot"]
         self.steps: int = meta["steps"]  # committed steps (whole chunks only if never closed)
@@ -210,12 +214,14 @@ class RunLog:
         meta = read_meta(log_dir)
         terrain = read_static(log_dir, "terrain")
         prior = read_static(log_dir, "prior")
+        hazards = read_static(log_dir, "hazards")
         log = cls(
             log_dir,
             meta,
             read_truth(log_dir, meta),
             None if terrain is None else read_only(terrain.astype(np.float32)),
             None if prior is None else read_only(prior.astype(np.uint8)),
+            None if hazards is None else read_only(hazards.astype(np.float32)),
         )
         log.check_files()
         return log
@@ -352,6 +358,7 @@ class Replay:
             resolution=self.log.meta.get("resolution"),
             terrain=self.log.terrain,
             prior=self.log.prior,
+            hazards=self.log.hazards,
             latest=self.latest,
             lost_knowledge=self.failures.lost_view(),
             failures=self.failures.notes(),

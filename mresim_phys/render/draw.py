@@ -85,6 +85,8 @@ class Overlay:
             if "location" in layers[i]:
                 at, size = centres[i], sizes[i - 1]
                 draw_robot(image, robot.state, triangles[i - 1], at, size, colours[i], style)
+                if robot.broken and robot.state != "failed":
+                    draw_ring(image, at, size, style.partial)
                 label = robot_label(robot, "presumed_lost" in layers[i])
                 draw_label(image, label, at, size, colours[i], style)
         if "header" in on:
@@ -234,10 +236,18 @@ def draw_robot(
         draw_cross(image, at, max(round(size * 0.8), 3), style.error)
 
 
+def draw_ring(image: np.ndarray, at: np.ndarray, size: float, colour: BGR) -> None:
+    """A ring around a robot (fixed-point centre ``at``): a part failed or degraded."""
+    centre = (int(at[0]), int(at[1]))
+    cv2.circle(image, centre, round((size * 1.9 + 2) * ONE), colour, 2, AA, SHIFT)
+
+
 def robot_label(robot: AgentSnapshot, lost: bool = False) -> str:
-    """A robot's name, with its failed parts if any (``B [radio]``) and, with ``lost``, the
-    teammates it presumes lost (``A lost?B,C``: the ``presumed_lost`` layer)."""
+    """A robot's name, with its failed parts if any, its battery level if it has one
+    (``B [radio] 73%``) and, with ``lost``, the teammates it presumes lost (``A lost?B,C``:
+    the ``presumed_lost`` layer)."""
     text = f"{robot.name} [{','.join(robot.broken)}]" if robot.broken else robot.name
+    text = text if robot.battery is None else f"{text} {robot.battery:.0%}"
     return f"{text} lost?{','.join(robot.presumed_lost)}" if lost and robot.presumed_lost else text
 
 
@@ -270,11 +280,13 @@ def draw_header(image: np.ndarray, snap: Snapshot, style: Style) -> None:
 
 def world_legend(snap: Snapshot, on: frozenset[str]) -> tuple[str, ...]:
     """The changing world's legend entries (Style colour names) a frame shows: obstacle and
-    door if the run has them, rubble once some has fallen (a static run: none)."""
+    door if the run has them, rubble once some has fallen, hazard zones (a static run
+    without faults: none)."""
     kinds = {m.kind for m in snap.movables}
     rubble = snap.rubble is not None and bool(snap.rubble.any())
     present = [("obstacle", "obstacles", "obstacle" in kinds), ("door", "doors", "door" in kinds)]
     present.append(("rubble", "debris", rubble))
+    present.append(("hazard", "hazards", snap.hazards is not None))
     return tuple(name for name, layer, shown in present if shown and layer in on)
 
 

@@ -29,6 +29,7 @@ from mresim_phys.render.raster import (
     LabelGrids,
     colour_labels,
     packed_colours,
+    shade_hazards,
     shade_lost,
     shade_prior,
     shade_terrain,
@@ -99,6 +100,8 @@ class Renderer:
             shade_prior(image, snapshot.prior, snapshot.truth, self.map_size, self.style)
         if snapshot.lost_knowledge is not None and "lost_knowledge" in self.layers.global_layers:
             shade_lost(image, snapshot.lost_knowledge, self.map_size, self.style)
+        if snapshot.hazards is not None and "hazards" in self.layers.global_layers:
+            shade_hazards(image, snapshot.hazards, snapshot.truth, self.map_size, self.style)
         self._overlay.draw(image, snapshot, self._regions(snapshot))
         return image
 

@@ -2,8 +2,8 @@
 
 Global layers (map classes; moving obstacles, doors and debris of a changing world;
 links, hierarchy, legend, header, terrain shading, a prior map's walls, the knowledge lost
-at failures) and per-robot layers (location, path, goal, free and safe space, frontiers,
-comm range, skeleton, rendezvous, the teammates it presumes lost);
+at failures, hazard zones) and per-robot layers (location, path, goal, free and safe
+space, frontiers, comm range, skeleton, rendezvous, the teammates it presumes lost);
 a :class:`LayerSpec` says which are on, for all robots and for named ones;
 :func:`parse_layers` reads the ``--layers`` / ``render.layers`` text.
 
@@ -22,6 +22,7 @@ GLOBAL_LAYERS: tuple[str, ...] = ("walls", "unexplored", "team_known", "known_at
 GLOBAL_LAYERS += ("obstacles", "doors", "debris")  # a changing world: drawn over the walls
 GLOBAL_LAYERS += ("links", "hierarchy", "legend", "header", "terrain", "prior")
 GLOBAL_LAYERS += ("lost_knowledge",)  # cells only a robot that fell silent knew
+GLOBAL_LAYERS += ("hazards",)  # hazard zones of a faults: block
 ROBOT_LAYERS: tuple[str, ...] = ("location", "path", "free_space", "safe_space", "frontiers")
 ROBOT_LAYERS += ("comm_range", "goal", "skeleton", "rendezvous", "presumed_lost")
 LAYERS = GLOBAL_LAYERS + ROBOT_LAYERS

@@ -275,6 +275,17 @@ def shade_lost(image: np.ndarray, lost: BoolGrid, map_size: tuple[int, int], sty
                style.lost_knowledge, map_size)  # fmt: skip
 
 
+def shade_hazards(
+    image: np.ndarray, hazards: NDArray[np.float32], truth: BoolGrid, map_size: tuple[int, int],
+    style: Style,
+) -> None:  # fmt: skip
+    """Tint the free cells of hazard zones toward ``style.hazard`` by ``hazard_alpha`` (the
+    ``hazards`` layer: where each step fails a robot with some probability). In place."""
+    zone = (hazards > 0) & ~truth
+    tint_cells(image, np.float32(style.hazard_alpha) * zone.astype(np.float32), style.hazard,
+               map_size)  # fmt: skip
+
+
 def tint_cells(
     image: np.ndarray, alpha: NDArray[np.float32], colour: tuple[int, int, int],
     map_size: tuple[int, int],

@@ -49,6 +49,9 @@ class Style:
     lost_knowledge: BGR = (60, 20, 220)  # crimson: cells only a failed robot knew
     lost_alpha: float = 0.6
     banner: BGR = (40, 40, 200)  # the header's failure line
+    hazard: BGR = (0, 80, 255)  # orange-red: hazard zones (fire, water)
+    hazard_alpha: float = 0.35  # tint of a hazard zone's free cells
+    partial: BGR = (0, 165, 255)  # orange ring: a robot with a part failed or degraded
     link: BGR = (128, 128, 0)
     hierarchy: BGR = (130, 0, 75)
     failed: BGR = (128, 128, 128)

@@ -25,7 +25,7 @@ def fault_events(scenario: Scenario) -> list[FailParams]:
 
 def has_faults(scenario: Scenario) -> bool:
     """Whether anything in ``scenario`` makes a robot (or a part of one) fail."""
-    return bool(fault_events(scenario))
+    return bool(fault_events(scenario)) or scenario.faults is not None
 
 
 def robustness_columns(scenario: Scenario) -> bool:
@@ -41,9 +41,10 @@ def paired_problem(scenario: Scenario) -> str | None:
         return None
     return (
         f"scenario {scenario.name!r} asks for a paired run (--paired or simulation.paired:"
-        " true), but it has no faults to switch off: no 'fail' events, so the baseline would"
-        " be the same run. Add failures (e.g. events: [{step: 300, fail: B}]) or run it"
-        " without --paired / simulation.paired."
+        " true), but it has no faults to switch off: no 'fail' events and no 'faults' block,"
+        " so the baseline would be the same run. Add failures (e.g. events: [{step: 300,"
+        " fail: B}] or faults: {random: [{mtbf: 800}]}) or run it without --paired /"
+        " simulation.paired."
     )
 
 
@@ -51,4 +52,6 @@ def without_faults(scenario: Scenario) -> Scenario:
     """``scenario`` with every fault switched off (and no baseline of its own)."""
     events = [e for e in scenario.events if not isinstance(e, FailParams)]
     simulation = scenario.simulation.model_copy(update={"paired": False})
-    return scenario.model_copy(update={"events": events, "simulation": simulation})
+    return scenario.model_copy(
+        update={"events": events, "faults": None, "simulation": simulation}
+    )

@@ -209,8 +209,14 @@ def resolve_mask_paths(scenario: Scenario, folder: Path) -> Scenario:
     if debris is not None:
         debris = debris.model_copy(update={"region": absolute_mask(debris.region, folder)})
     terrain = absolute_terrain(scenario.terrain, folder)
+    faults = scenario.faults
+    if faults is not None:
+        hazards = [
+            h.model_copy(update={"region": absolute_mask(h.region, folder)}) for h in faults.hazards
+        ]
+        faults = faults.model_copy(update={"hazards": hazards})
     return scenario.model_copy(
-        update={"events": events, "random_debris": debris, "terrain": terrain}
+        update={"events": events, "random_debris": debris, "terrain": terrain, "faults": faults}
     )
 
 

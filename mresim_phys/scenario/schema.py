@@ -21,11 +21,12 @@ from pydantic import (
     model_validator,
 )
 
+from mresim_phys.faults.spec import FaultsSpec
 from mresim_phys.scenario.maps import MapSpec, PriorSpec
 from mresim_phys.strict import Strict
 from mresim_phys.world.debris import RandomDebrisParams
 from mresim_phys.world.doors import DoorParams
-from mresim_phys.world.events import EVENTS, EventParams
+from mresim_phys.world.events import EVENTS, EventParams, FailParams
 from mresim_phys.world.obstacles import ObstacleParams
 from mresim_phys.world.terrain import TerrainSpec
 
@@ -353,6 +354,10 @@ class Scenario(Strict):
     prior: PriorSpec | None = Field(
         None, description="A map robots know before the mission, maybe out of date (null: none)."
     )
+    faults: FaultsSpec | None = Field(
+        None,
+        description="Random failures, battery, hazard zones, out-of-contact rule (null: none).",
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -385,6 +390,33 @@ class Scenario(Strict):
                     f"prior.robots: no robot called {', '.join(map(repr, unknown))}"
                     f" (robots: {', '.join(names)}); list robot names or give 'all'"
                 )
+        return self
+
+    @model_validator(mode="after")
+    def _fault_robots_exist(self) -> Scenario:
+        names = [r.name for r in self.robots]
+        for where, robots in self.faults.robot_lists() if self.faults is not None else []:
+            unknown = [n for n in robots if n not in names] if robots != "all" else []
+            if unknown:
+                raise ValueError(
+                    f"{where}: no robot called {', '.join(map(repr, unknown))}"
+                    f" (robots: {', '.join(names)}); list robot names or give 'all'"
+                )
+        return self
+
+    @model_validator(mode="after")
+    def _one_failure_per_part_and_step(self) -> Scenario:
+        seen: dict[tuple[str, str, int], int] = {}
+        for i, event in enumerate(self.events):
+            if isinstance(event, FailParams):
+                key = (event.fail, event.part, event.step)
+                if key in seen:
+                    raise ValueError(
+                        f"events[{seen[key]}] and events[{i}] both fail the {event.part} of"
+                        f" robot {event.fail!r} at step {event.step}; give one event per part,"
+                        " robot and step"
+                    )
+                seen[key] = i
         return self
 
     @field_validator("robots")

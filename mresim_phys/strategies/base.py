@@ -75,6 +75,7 @@ class RobotView:
     free_area: int = 0  # free cells of the whole map, known before the mission (0: not known)
     terrain: FloatArray | None = None  # known terrain speed factors (1: open or unsensed); None
     prior: BeliefGrid | None = None  # the map it knew before the mission; None: none
+    battery: float | None = None  # its battery level left, a fraction of capacity; None: none
 
     @property
     def planning_map(self) -> BeliefGrid:

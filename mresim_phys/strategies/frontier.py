@@ -3,7 +3,9 @@
 At every replan the robot finds the frontiers of its own map, scores each as
 ``U = size * 1e8 / d**4`` (``d`` = path length; original ``FrontierExploration``)
 and runs a greedy auction with the teammates it heard from within
-``teammate_memory`` steps: the best (robot, frontier) pair is fixed, that robot
+``teammate_memory`` steps and does not presume lost (``RobotView.lost``: a silent
+teammate's frontier is auctioned again), nor whose record says its drive or sensor has
+failed (it cannot explore a frontier): the best (robot, frontier) pair is fixed, that robot
 and that frontier leave the auction, until the best pair is this robot's. So two
 robots in contact do not chase the same frontier. A teammate's distance starts as
 the straight line from its last known position and is replaced by its exact path
@@ -58,6 +60,7 @@ UTILITY_SCALE = 1e8  # original: U = area * 10^8 / d^4
 MIN_SEARCH = 10.0  # cells: smallest extra horizon when refining a teammate's bid
 SEARCH_GROWTH = 1.5  # a refinement searches to this multiple of the current lower bound
 MAX_BOUNDED_SEARCH = 2000.0  # cells: beyond this a teammate's search is unbounded
+EXPLORES_WITHOUT = frozenset({"drive", "sensor"})  # a teammate with either failed takes no frontier
 
 BoolArray = NDArray[np.bool_]
 PathSearch = Callable[["Bidder", int, float], "GoalCosts | None"]
@@ -294,6 +297,8 @@ class FrontierExploration(Plugin):
                 and t.role == "explorer"
                 and t.state in ("active", "error")
                 and view.step - t.step <= memory
+                and t.name not in view.lost
+                and not EXPLORES_WITHOUT.intersection(t.broken)
             ),
             key=lambda t: t.name,
         )

@@ -19,13 +19,14 @@ from typing import ClassVar, Literal, Protocol, runtime_checkable
 import numpy as np
 from pydantic import Field, model_validator
 
+from mresim_phys.faults.spec import FaultPart, check_part, factor_field, factors_of, part_field
 from mresim_phys.plugin import Plugin, PluginParams
 from mresim_phys.registry import Registry
 from mresim_phys.types import BoolGrid
 from mresim_phys.world.debris import Crush
 from mresim_phys.world.shapes import BoxRegion, Region
 
-RobotPart = Literal["robot", "drive", "sensor", "radio"]
+RobotPart = FaultPart
 Channels = Literal["main", "control", "both"]
 Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)
 
@@ -64,8 +65,17 @@ class EventContext(Protocol):
         """The applying event's own named random stream (same seed, same draws)."""
         ...
 
-    def fail(self, robot: str, part: RobotPart = "robot") -> None:
-        """Robot ``robot`` loses ``part`` for good (``robot``: everything)."""
+    def fail(
+        self, robot: str, part: RobotPart = "robot", factors: tuple[float, float] = (1.0, 1.0)
+    ) -> None:
+        """Robot ``robot`` loses ``part`` (``robot``: everything; ``degraded``: its speed
+        and sensor range are scaled by ``factors``) until a matching :meth:`repair`."""
+        ...
+
+    def repair(
+        self, robot: str, part: RobotPart = "robot", factors: tuple[float, float] = (1.0, 1.0)
+    ) -> None:
+        """Undo one failure of ``part`` of robot ``robot`` (a reboot)."""
         ...
 
     def silence(self, agents: Sequence[str], until: int, channels: Channels) -> None:
@@ -112,23 +122,31 @@ EVENTS: Registry[Event] = Registry("event", "mresim_phys.events")
 
 
 class FailParams(EventParams):
-    """At ``step``, robot ``fail`` stops for good (or loses one ``part``)."""
+    """At ``step``, robot ``fail`` stops (or loses one ``part``), for good or until ``until``."""
 
     fail: str = Field(description="Name of the robot that fails.")
-    part: RobotPart = Field(
-        "robot",
-        description="What fails: 'robot' (no motion, sensing or communication), 'drive'"
-        " (cannot move), 'sensor' (no scans) or 'radio' (cannot communicate).",
+    part: RobotPart = part_field()
+    speed_factor: float | None = factor_field("the robot's speed")
+    range_factor: float | None = factor_field("the sensor range")
+    until: int | None = Field(
+        None, ge=1, description="Step at which the part works again (null: never)."
     )
 
     def agent_names(self) -> list[tuple[str, str, bool]]:
         """The failing robot."""
         return [("fail", self.fail, False)]
 
+    @model_validator(mode="after")
+    def _checked(self) -> FailParams:
+        check_part(self.part, self.speed_factor, self.range_factor)
+        if self.until is not None and self.until <= self.step:
+            raise ValueError(f"'until' ({self.until}) must come after 'step' ({self.step})")
+        return self
+
 
 @EVENTS.register
 class Failure(Plugin):
-    """A robot, or one of its parts, fails for good."""
+    """A robot, or one of its parts, fails (for good, or until a later step)."""
 
     name = "fail"
     Params: ClassVar[type[EventParams]] = FailParams
@@ -138,11 +156,16 @@ class Failure(Plugin):
         self.params = params
 
     def apply(self, context: EventContext) -> None:
-        """Fail the robot (or part) at its step."""
-        if context.step == self.params.step:
-            context.fail(self.params.fail, self.params.part)
-            suffix = "" if self.params.part == "robot" else f" {self.params.part}"
-            context.log(f"fail {self.params.fail}{suffix}")
+        """Fail the robot (or part) at its step; repair it at ``until``."""
+        p = self.params
+        factors = factors_of(p.speed_factor, p.range_factor)
+        suffix = "" if p.part == "robot" else f" {p.part}"
+        if context.step == p.step:
+            context.fail(p.fail, p.part, factors)
+            context.log(f"fail {p.fail}{suffix}")
+        elif context.step == p.until:
+            context.repair(p.fail, p.part, factors)
+            context.log(f"recover {p.fail}{suffix}")
 
 
 class BlackoutParams(EventParams):
