@@ -193,6 +193,21 @@ def test_paired_run_baseline_equals_the_run_without_failures(
     assert "failures" not in (tmp_path / "clean" / "metrics.csv").read_text().splitlines()[0]
 
 
+def test_a_paired_baseline_switches_off_the_faults_block_too(
+    scenario_file: ScenarioFile, tmp_path: Path
+) -> None:
+    faults = {"random": [{"probability": 0.2, "robots": ["B"]}], "fail_if_out_of_contact_for": 500}
+    path = far_failure(scenario_file, events=[], faults=faults, render={"final_png": False})
+    assert run_cli(str(path), "--out", str(tmp_path / "paired"), "--paired") == 0
+    report = json.loads((tmp_path / "paired" / "robustness.json").read_text())
+    assert report["run"]["failures"] >= 1 and report["baseline"]["failures"] == 0
+    clean = far_failure(scenario_file, events=[], render={"final_png": False})
+    assert run_cli(str(clean), "--out", str(tmp_path / "clean")) == 0
+    alone = json.loads((tmp_path / "clean" / "summary.json").read_text())
+    assert report["baseline"]["auc_explored"] == alone["auc_explored"]
+    assert report["baseline"]["steps"] == alone["steps"]
+
+
 def test_replay_recomputes_the_robustness_columns(
     scenario_file: ScenarioFile, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
