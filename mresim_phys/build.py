@@ -15,11 +15,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from pathlib import Path
 
 import numpy as np
 
 from mresim_phys.agents import Agent, Body, Robot, empty_belief
+from mresim_phys.build_world import (
+    build_prior,
+    build_terrain,
+    check_event_boxes,
+    check_world_events,
+    load_map,
+    world_can_change,
+)
 from mresim_phys.comms import COMM_MODELS
 from mresim_phys.comms.ledger import Ledger
 from mresim_phys.comms.network import Channel, Network
@@ -28,16 +35,12 @@ from mresim_phys.errors import ScenarioError
 from mresim_phys.faults.runtime import Faults, build_faults
 from mresim_phys.knowledge.latest import LatestCoverage
 from mresim_phys.knowledge.mapping import Coverage
-from mresim_phys.knowledge.prior import STREAM as PRIOR_STREAM
-from mresim_phys.knowledge.prior import prior_belief
 from mresim_phys.knowledge.teammates import BASE_NAME
-from mresim_phys.knowledge.terrain import unknown_terrain
 from mresim_phys.planning import PLANNERS
 from mresim_phys.rng import Streams
 from mresim_phys.scenario.faults import robustness_columns
 from mresim_phys.scenario.load import load_scenario
-from mresim_phys.scenario.maps import MapSpec, PriorSpec
-from mresim_phys.scenario.readers import LoadedMap, load_image_map, load_ros_map, load_text_map
+from mresim_phys.scenario.readers import LoadedMap
 from mresim_phys.scenario.schema import (
     BaseStationSpec,
     RobotSpec,
@@ -51,20 +54,14 @@ from mresim_phys.world.debris import RandomDebris
 from mresim_phys.world.doors import Door
 from mresim_phys.world.elements import build_elements
 from mresim_phys.world.events import (
-    Cells,
-    Close,
-    Collapse,
-    DoorEventParams,
     Event,
-    Open,
     make_event,
 )
 from mresim_phys.world.obstacles import MovingObstacle
 from mresim_phys.world.reach import Reachable
 from mresim_phys.world.sensing import Laser
-from mresim_phys.world.shapes import region_cells
 from mresim_phys.world.space import World
-from mresim_phys.world.terrain import TerrainGrid, TerrainSpec, terrain_grid
+from mresim_phys.world.terrain import TerrainGrid
 
 __all__ = ["RunRules", "Scenario", "Setup", "build_setup", "load_scenario", "region_probe"]
 
@@ -303,88 +300,6 @@ class Setup:
     def event_streams(self) -> list[np.random.Generator]:
         """Each event's own stream, in scenario order."""
         return [self.streams.get("event", k) for k in range(len(self.events))]
-
-
-def load_map(spec: MapSpec) -> LoadedMap:
-    """Read the ground truth named by ``spec`` (paths already resolved)."""
-    kind, path = spec.source
-    if kind == "image":
-        return load_image_map(Path(path), threshold=spec.threshold, negate=spec.negate)
-    if kind == "grid":
-        return load_text_map(Path(path))
-    return load_ros_map(Path(path))
-
-
-def check_event_boxes(scenario: Scenario, world: World) -> None:
-    """Every map window an event names must lie inside the map."""
-    rows, cols = world.shape
-    for i, event in enumerate(scenario.events):
-        for where, (row0, row1, col0, col1) in event.boxes():
-            if not (0 <= row0 < row1 <= rows and 0 <= col0 < col1 <= cols):
-                raise ScenarioError(
-                    f"events[{i}].{where}: the window x {col0}..{col1}, y {row0}..{row1} is not"
-                    f" inside the {cols}x{rows} map; give 0 <= x0 < x1 <= {cols} and"
-                    f" 0 <= y0 < y1 <= {rows}."
-                )
-
-
-def check_world_events(scenario: Scenario, events: list[Event], world: World) -> None:
-    """Doors named by close / open events must exist; collapse regions must lie on the map
-    (their cells are fixed here, once)."""
-    doors = {d.name for d in scenario.doors}
-    for i, (params, event) in enumerate(zip(scenario.events, events, strict=True)):
-        if isinstance(params, DoorEventParams) and params.door() not in doors:
-            known = ", ".join(sorted(doors)) or "none: add a 'doors' list"
-            raise ScenarioError(
-                f"events[{i}]: there is no door called {params.door()!r} (doors: {known})."
-            )
-        if isinstance(event, Collapse):
-            try:
-                event.cells = region_cells(event.params.collapse, world.shape)
-            except ValueError as exc:
-                raise ScenarioError(f"events[{i}].collapse: {exc}") from None
-
-
-def world_can_change(scenario: Scenario) -> bool:
-    """Whether anything in the scenario changes the truth during the run."""
-    changing = (Cells, Collapse, Close, Open)
-    events = any(isinstance(make_event(e), changing) for e in scenario.events)
-    return bool(scenario.obstacles or scenario.doors or scenario.random_debris or events)
-
-
-def build_terrain(
-    spec: TerrainSpec | None, robots: list[Robot], world: World
-) -> TerrainGrid | None:
-    """The true terrain grid (a ScenarioError naming the field if it cannot be built); each
-    robot starts knowing none of it."""
-    try:
-        truth = terrain_grid(spec, world.shape)
-    except ValueError as exc:
-        raise ScenarioError(str(exc)) from None
-    for robot in robots:
-        robot.terrain = unknown_terrain(truth)
-    return truth
-
-
-def build_prior(
-    spec: PriorSpec | None, robots: list[Robot], shape: tuple[int, int], streams: Streams
-) -> BeliefGrid | None:
-    """The degraded prior map (``knowledge/prior.py``), given to the robots it lists; a
-    ScenarioError naming ``prior.map`` if it is not of the map's size."""
-    if spec is None:
-        return None
-    loaded = load_map(spec.map)
-    if loaded.occupied.shape != shape:
-        (rows, cols), (prows, pcols) = shape, loaded.occupied.shape
-        raise ScenarioError(
-            f"prior.map.{spec.map.source[0]}: the prior map is {pcols}x{prows} cells but the map"
-            f" is {cols}x{rows}; give a prior map of the map's size (the same building)."
-        )
-    grid = prior_belief(loaded.occupied, spec.drop, spec.flip, streams.get(PRIOR_STREAM))
-    for robot in robots:
-        if spec.robots == "all" or robot.name in spec.robots:
-            robot.prior = grid
-    return grid
 
 
 def run_rules(scenario: Scenario) -> RunRules:

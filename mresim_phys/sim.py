@@ -30,6 +30,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
+from mresim_phys.agent_views import agent_snapshot, robot_view
 from mresim_phys.agents import Agent, Robot
 from mresim_phys.build import Scenario, Setup, build_setup, load_scenario
 from mresim_phys.comms.ledger import box_around, sensed_tick
@@ -55,11 +56,8 @@ from mresim_phys.metrics import (
 from mresim_phys.motion import MoveRules, path_blocked, take_step, wants_plan
 from mresim_phys.parallel import Effects, RobotPool, thread_count
 from mresim_phys.snapshot import (
-    AgentSnapshot,
     CommSummary,
     Snapshot,
-    bool_view,
-    points_or_none,
     read_only,
 )
 from mresim_phys.strategies import Decision, RobotView
@@ -300,37 +298,11 @@ class Simulation:
 
     def view_of(self, robot: Robot) -> RobotView:
         """The robot's knowledge, read-only, as its strategy may see it."""
-        assert robot.body is not None
-        belief = robot.belief.view()
-        belief.flags.writeable = False
-        return RobotView(
-            step=self.t,
-            name=robot.name,
-            position=robot.position,
-            heading=robot.heading,
-            belief=belief,
-            radius=robot.radius,
-            clearance=robot.radius + robot.body.wall_margin,
-            speed=robot.speed,
-            sensor_range=robot.laser.range,
-            role=robot.role,
-            base_position=self.base.position,
-            teammates=dict(robot.teammates),
-            rng=robot.rng,
-            bumped=robot.status == "error",
-            reached_goal=robot.reached_goal,
-            planner=robot.planner,
-            comm_range=robot.comm_range,
-            links=robot.links,
-            base_contact=robot.last_base_contact,
-            lost=presumed_lost(robot.teammates, self.t, self.rules.presume_lost_after),
-            team_order=self.setup.team_order,
-            vary_with_seed=self.rules.vary_with_seed,
-            free_area=self.setup.free_area,
-            terrain=read_only(robot.terrain) if robot.terrain is not None else None,
-            prior=robot.prior,
-            battery=robot.battery,
-        )
+        setup = self.setup
+        return robot_view(
+            robot, self.t, self.base.position, self.rules.presume_lost_after,
+            setup.team_order, self.rules.vary_with_seed, setup.free_area,
+        )  # fmt: skip
 
     @property
     def links(self) -> np.ndarray:
@@ -437,36 +409,3 @@ class Simulation:
         self.stall.update(record)
         self.phase_times["metrics"] += perf_counter() - started
         return record
-
-
-def agent_snapshot(agent: Agent, lost: frozenset[str] = frozenset()) -> AgentSnapshot:
-    """One agent as a snapshot (grids as read-only views); ``lost``: the teammates it
-    presumes lost.
-
-    A strategy exposes extra views through its decision's ``info``: ``skeleton``
-    (a bool grid, read-only) and ``rendezvous`` ((k, 2) float points) are passed on to
-    renderers and the run log.
-    """
-    robot = agent if isinstance(agent, Robot) else None
-    info = robot.decision.info if robot is not None and robot.decision is not None else {}
-    return AgentSnapshot(
-        name=agent.name,
-        kind="robot" if robot else "base",
-        position=agent.position,
-        heading=robot.heading if robot else 0.0,
-        radius=robot.radius if robot else 0.0,
-        state=agent.state if robot else "base",
-        role=agent.role,
-        comm_range=agent.comm_range,
-        belief=read_only(agent.belief),
-        safe=read_only(agent.safe),
-        path=robot.path.copy() if robot else np.zeros((0, 2)),
-        goal=robot.goal if robot else None,
-        distance=robot.distance if robot else 0.0,
-        skeleton=bool_view(info.get("skeleton")),
-        rendezvous=points_or_none(info.get("rendezvous")),
-        base_contact=agent.last_base_contact,
-        broken=tuple(sorted(robot.broken)) if robot else (),
-        presumed_lost=tuple(sorted(lost)) if agent.alive else (),
-        battery=robot.battery if robot else None,
-    )

@@ -52,6 +52,4 @@ def without_faults(scenario: Scenario) -> Scenario:
     """``scenario`` with every fault switched off (and no baseline of its own)."""
     events = [e for e in scenario.events if not isinstance(e, FailParams)]
     simulation = scenario.simulation.model_copy(update={"paired": False})
-    return scenario.model_copy(
-        update={"events": events, "faults": None, "simulation": simulation}
-    )
+    return scenario.model_copy(update={"events": events, "faults": None, "simulation": simulation})

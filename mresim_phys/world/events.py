@@ -19,11 +19,11 @@ from typing import ClassVar, Literal, Protocol, runtime_checkable
 import numpy as np
 from pydantic import Field, model_validator
 
-from mresim_phys.faults.spec import FaultPart, check_part, factor_field, factors_of, part_field
 from mresim_phys.plugin import Plugin, PluginParams
 from mresim_phys.registry import Registry
 from mresim_phys.types import BoolGrid
 from mresim_phys.world.debris import Crush
+from mresim_phys.world.parts import FaultPart, check_part, factor_field, factors_of, part_field
 from mresim_phys.world.shapes import BoxRegion, Region
 
 RobotPart = FaultPart

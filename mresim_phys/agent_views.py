@@ -1,0 +1,92 @@
+"""Views (phases 4 and 8): an agent as its strategy sees it, and as a snapshot records it.
+
+:func:`robot_view` is the :class:`~mresim_phys.strategies.base.RobotView` a strategy
+decides from (its robot's knowledge, read-only, never the truth); :func:`agent_snapshot`
+is one agent in a :class:`~mresim_phys.snapshot.Snapshot` (views of the live grids, for
+renderers and the run log). The simulation (``sim.py``) builds both every step.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from mresim_phys.agents import Agent, Robot
+from mresim_phys.knowledge.teammates import presumed_lost
+from mresim_phys.snapshot import AgentSnapshot, bool_view, points_or_none, read_only
+from mresim_phys.strategies import RobotView
+
+
+def robot_view(
+    robot: Robot,
+    step: int,
+    base_position: tuple[float, float],
+    presume_lost_after: int,
+    team_order: tuple[str, ...],
+    vary_with_seed: bool,
+    free_area: int,
+) -> RobotView:
+    """``robot``'s knowledge at ``step``, read-only, as its strategy may see it."""
+    assert robot.body is not None
+    belief = robot.belief.view()
+    belief.flags.writeable = False
+    return RobotView(
+        step=step,
+        name=robot.name,
+        position=robot.position,
+        heading=robot.heading,
+        belief=belief,
+        radius=robot.radius,
+        clearance=robot.radius + robot.body.wall_margin,
+        speed=robot.speed,
+        sensor_range=robot.laser.range,
+        role=robot.role,
+        base_position=base_position,
+        teammates=dict(robot.teammates),
+        rng=robot.rng,
+        bumped=robot.status == "error",
+        reached_goal=robot.reached_goal,
+        planner=robot.planner,
+        comm_range=robot.comm_range,
+        links=robot.links,
+        base_contact=robot.last_base_contact,
+        lost=presumed_lost(robot.teammates, step, presume_lost_after),
+        team_order=team_order,
+        vary_with_seed=vary_with_seed,
+        free_area=free_area,
+        terrain=read_only(robot.terrain) if robot.terrain is not None else None,
+        prior=robot.prior,
+        battery=robot.battery,
+    )
+
+
+def agent_snapshot(agent: Agent, lost: frozenset[str] = frozenset()) -> AgentSnapshot:
+    """One agent as a snapshot (grids as read-only views); ``lost``: the teammates it
+    presumes lost.
+
+    A strategy exposes extra views through its decision's ``info``: ``skeleton``
+    (a bool grid, read-only) and ``rendezvous`` ((k, 2) float points) are passed on to
+    renderers and the run log.
+    """
+    robot = agent if isinstance(agent, Robot) else None
+    info = robot.decision.info if robot is not None and robot.decision is not None else {}
+    return AgentSnapshot(
+        name=agent.name,
+        kind="robot" if robot else "base",
+        position=agent.position,
+        heading=robot.heading if robot else 0.0,
+        radius=robot.radius if robot else 0.0,
+        state=agent.state if robot else "base",
+        role=agent.role,
+        comm_range=agent.comm_range,
+        belief=read_only(agent.belief),
+        safe=read_only(agent.safe),
+        path=robot.path.copy() if robot else np.zeros((0, 2)),
+        goal=robot.goal if robot else None,
+        distance=robot.distance if robot else 0.0,
+        skeleton=bool_view(info.get("skeleton")),
+        rendezvous=points_or_none(info.get("rendezvous")),
+        base_contact=agent.last_base_contact,
+        broken=tuple(sorted(robot.broken)) if robot else (),
+        presumed_lost=tuple(sorted(lost)) if agent.alive else (),
+        battery=robot.battery if robot else None,
+    )
