@@ -56,6 +56,9 @@ def robot_view(
         terrain=read_only(robot.terrain) if robot.terrain is not None else None,
         prior=robot.prior,
         battery=robot.battery,
+        parent=robot.parent,
+        children=robot.children,
+        hops=robot.hops,
     )
 
 
@@ -89,4 +92,5 @@ def agent_snapshot(agent: Agent, lost: frozenset[str] = frozenset()) -> AgentSna
         broken=tuple(sorted(robot.broken)) if robot else (),
         presumed_lost=tuple(sorted(lost)) if agent.alive else (),
         battery=robot.battery if robot else None,
+        parent=agent.parent,
     )

@@ -59,6 +59,9 @@ class Agent:
     teammates: dict[str, TeammateInfo] = field(default_factory=dict)
     last_base_contact: int = -1
     links: tuple[str, ...] = ()  # agents linked on the main channel at the last exchange
+    parent: str | None = None  # its parent in the team's hierarchy ('base', a robot, or none)
+    children: tuple[str, ...] = ()  # the robots whose parent it is
+    hops: int = 0  # robots from the base down to it along its parents (0: not under the base)
     # step of each cell's latest observation (-1: never), kept when beliefs are 'latest'
     observed: NDArray[np.int32] | None = None
 

@@ -168,11 +168,24 @@ def make_team(
     for spec in robots:
         check_start(world, spec)
     team = [make_robot(s, i + 1, streams, world.shape) for i, s in enumerate(robots)]
+    place_in_hierarchy(team, robots)
     if jitter is not None and (jitter.position > 0 or jitter.heading_deg > 0):
         for robot in team:
             jitter_start(robot, jitter, streams.of_robot("start-jitter", robot.name), world)
     world.place_robots([r.position for r in team])
     return team
+
+
+def place_in_hierarchy(team: list[Robot], robots: list[RobotSpec]) -> None:
+    """Each robot's parent, children and hops from the base (validated by the schema)."""
+    parents = {spec.name: spec.parent for spec in robots}
+    for robot in team:
+        robot.parent = parents[robot.name]
+        robot.children = tuple(sorted(n for n, p in parents.items() if p == robot.name))
+        hops, at = 0, robot.parent
+        while at is not None and at != "base":
+            hops, at = hops + 1, parents[at]
+        robot.hops = hops + 1 if at == "base" else 0
 
 
 JITTER_TRIES = 100  # draws of a shifted start before the declared one is kept

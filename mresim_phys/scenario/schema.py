@@ -154,6 +154,14 @@ class RobotSpec(RobotParams):
     name: Name = Field(description=f"Unique robot name: {NAME_RULE}.")
     start: Point = Field(description="Start position [x, y] in cells (x = column, y = row).")
     heading_deg: float = Field(0.0, description="Start heading; 0 = +x, 90 = +y (down).")
+    parent: str | None = Field(
+        None,
+        description=(
+            "Its parent in the team's hierarchy: 'base' or a robot's name (null: none). Drawn"
+            " by the hierarchy video layer; leader_follower keeps every robot in its parent's"
+            " range."
+        ),
+    )
 
 
 class BaseStationSpec(Strict):
@@ -419,6 +427,11 @@ class Scenario(Strict):
                 seen[key] = i
         return self
 
+    @model_validator(mode="after")
+    def _hierarchy(self) -> Scenario:
+        check_hierarchy(self.robots)
+        return self
+
     @field_validator("robots")
     @classmethod
     def _unique_names(cls, robots: list[RobotSpec]) -> list[RobotSpec]:
@@ -429,6 +442,36 @@ class Scenario(Strict):
         if "base" in names:
             raise ValueError("'base' is the base station's name; give the robot another name")
         return robots
+
+
+def check_hierarchy(robots: list[RobotSpec]) -> None:
+    """Parents name the base or another robot of the team, without cycles; a relay has a
+    child (a relay nobody relays for has nothing to carry)."""
+    names = {r.name for r in robots}
+    parents = {r.name: r.parent for r in robots}
+    for robot in robots:
+        if robot.parent is not None and robot.parent not in names | {"base"}:
+            raise ValueError(
+                f"robots: {robot.name}'s parent {robot.parent!r} is neither 'base' nor a robot"
+                f" of the team ({', '.join(sorted(names))})"
+            )
+        seen, at = [robot.name], robot.parent
+        while at is not None and at != "base":
+            if at in seen:
+                chain = " -> ".join([*seen, at])
+                raise ValueError(
+                    f"robots: the parents form a cycle ({chain}); end chains at 'base'"
+                )
+            seen.append(at)
+            at = parents[at]
+    children = {r.parent for r in robots}
+    lonely = [r.name for r in robots if r.role == "relay" and r.name not in children]
+    if lonely and any(r.parent is not None for r in robots):
+        raise ValueError(
+            f"robots: {', '.join(lonely)} {'is a relay' if len(lonely) == 1 else 'are relays'}"
+            " but no robot names it as its parent; give a robot 'parent: NAME' or make it an"
+            " explorer"
+        )
 
 
 def _inherit(team: dict[str, Any], robot: dict[str, Any]) -> dict[str, Any]:

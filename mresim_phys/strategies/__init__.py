@@ -7,7 +7,13 @@ the ``mresim_phys.strategies`` entry-point group, or are named in a scenario as
 
 from __future__ import annotations
 
-from mresim_phys.strategies import assignment, frontier, random_walk, utility_return
+from mresim_phys.strategies import (
+    assignment,
+    frontier,
+    leader_follower,
+    random_walk,
+    utility_return,
+)
 from mresim_phys.strategies.base import (
     STRATEGIES,
     Decision,
@@ -17,13 +23,14 @@ from mresim_phys.strategies.base import (
     plan_context,
 )
 
-BUILT_IN = ("frontier", "random_walk", "hungarian", "min_pos", "utility_return")
+BUILT_IN = ("frontier", "random_walk", "hungarian", "min_pos", "utility_return", "leader_follower")
 assert {
     frontier.FrontierExploration.name,
     random_walk.RandomWalk.name,
     assignment.HungarianExploration.name,
     assignment.MinPosExploration.name,
     utility_return.UtilityReturn.name,
+    leader_follower.LeaderFollower.name,
 } == set(BUILT_IN)
 
 __all__ = [

@@ -76,6 +76,9 @@ class RobotView:
     terrain: FloatArray | None = None  # known terrain speed factors (1: open or unsensed); None
     prior: BeliefGrid | None = None  # the map it knew before the mission; None: none
     battery: float | None = None  # its battery level left, a fraction of capacity; None: none
+    parent: str | None = None  # its parent in the team's hierarchy: 'base', a robot, or None
+    children: tuple[str, ...] = ()  # the robots whose parent it is
+    hops: int = 0  # robots from the base down to it along its parents (0: not under the base)
 
     @property
     def planning_map(self) -> BeliefGrid:
