@@ -15,6 +15,7 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Any, Literal
 
+import yaml
 from tqdm import tqdm
 
 from mresim_phys.errors import MresimError
@@ -26,6 +27,8 @@ from mresim_phys.output.replay import replay_run
 from mresim_phys.output.session import INTERRUPTED, Outcome, run_session
 from mresim_phys.output.signals import StopRequest, stop_on_signals
 from mresim_phys.render.layers import GLOBAL_LAYERS, ROBOT_LAYERS
+from mresim_phys.scenario.load import validate_scenario
+from mresim_phys.scenario.team_file import read_team_file
 from mresim_phys.sim import Simulation
 from mresim_phys.strategies import STRATEGIES
 
@@ -106,6 +109,13 @@ def make_parser() -> argparse.ArgumentParser:
         action="store_true",
         help="also run the scenario without its faults as a baseline; write robustness.json",
     )
+    team = commands.add_parser(
+        "import-team", help="turn the original MRESim's team file into a scenario YAML"
+    )
+    team.add_argument("team_file", type=Path, help="the original's team file (11 columns)")
+    team.add_argument("--map", required=True, help="the map image the scenario uses")
+    team.add_argument("--strategy", default="frontier", help="the team's strategy (frontier)")
+    team.add_argument("--out", type=Path, help="where to write the YAML (default: stdout)")
     validate = commands.add_parser("validate", help="check a scenario without running it")
     validate.add_argument("scenario", type=Path, help="scenario YAML file")
     replay = commands.add_parser("replay", help="re-render a run (and its metrics) from its log")
@@ -354,6 +364,19 @@ def validate_command(args: argparse.Namespace) -> int:
     return 0
 
 
+def import_team_command(args: argparse.Namespace) -> int:
+    """``mresim import-team``: the original's team file as a scenario YAML, validated."""
+    data = read_team_file(args.team_file, args.map, args.strategy)
+    text = yaml.safe_dump(data, sort_keys=False, default_flow_style=None)
+    validate_scenario(data, source=str(args.team_file))
+    if args.out is None:
+        print(text, end="")
+    else:
+        args.out.write_text(text, encoding="utf-8")
+        print(f"{args.out}: {len(data['robots'])} robots from {args.team_file}")
+    return 0
+
+
 def replay_command(args: argparse.Namespace) -> int:
     """``mresim replay``: frames (and metrics) from a run's log, without re-simulating."""
     result = replay_run(args.run_dir, render_overrides(args), args.metrics)
@@ -373,6 +396,7 @@ def plot_command(args: argparse.Namespace) -> int:
 COMMANDS = {
     "run": run_command,
     "validate": validate_command,
+    "import-team": import_team_command,
     "replay": replay_command,
     "plot": plot_command,
     "bench": bench_command,

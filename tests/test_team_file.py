@@ -1,0 +1,73 @@
+"""``mresim import-team``: the original MRESim's team files become scenario YAML."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+import yaml
+from conftest import rooms_grid, write_png
+
+from mresim_phys.cli import main
+from mresim_phys.sim import Simulation
+
+ROLE_BASED = """1 BaseStation 8 30 0 0 20 1000 BaseStation 1 1
+2 Explorer1 30 20 3.14159 30 20 1000 Explorer 3 1
+3 Relay1 12 20 0 30 20 1000 Relay 1 2
+
+4 Explorer2 30 45 -1.5708 30 20 1000 Explorer 5 1
+5 Relay2 12 45 0 30 20 1000 Relay 1 4
+"""
+GREEDY = """1 BaseStation 8 30 0 0 20 1000 BaseStation 1 1
+2 A 12 20 0 30 20 1000 Explorer 1 1
+3 B 12 45 0 30 20 1000 Explorer 1 1
+"""
+
+
+def import_team(tmp_path: Path, text: str) -> tuple[int, Path]:
+    (tmp_path / "team.txt").write_text(text)
+    write_png(tmp_path / "rooms.png", rooms_grid())
+    out = tmp_path / "scenario.yaml"
+    code = main(
+        ["import-team", str(tmp_path / "team.txt"), "--map", "rooms.png", "--out", str(out)]
+    )
+    return code, out
+
+
+def test_a_role_based_team_file_keeps_its_roles_parents_and_poses(tmp_path: Path) -> None:
+    code, out = import_team(tmp_path, ROLE_BASED)
+    assert code == 0
+    sim = Simulation.from_yaml(out)
+    robots = {r.name: r for r in sim.robots}
+    assert list(robots) == ["Explorer1", "Relay1", "Explorer2", "Relay2"]
+    assert (robots["Explorer1"].role, robots["Explorer1"].parent) == ("explorer", "Relay1")
+    assert (robots["Relay1"].role, robots["Relay1"].parent) == ("relay", "base")
+    assert robots["Relay1"].children == ("Explorer1",)
+    assert robots["Explorer1"].position == (30.0, 20.0)
+    assert robots["Explorer1"].heading == pytest.approx(3.14159, abs=1e-5)
+    assert sim.base.position == (8.0, 30.0) and sim.base.comm_range == 20
+    data = yaml.safe_load(out.read_text())
+    assert data["team"]["speed"] == 10 and data["robots"][0]["sensor"]["range"] == 30
+
+
+def test_a_greedy_team_file_has_no_hierarchy(tmp_path: Path) -> None:
+    code, out = import_team(tmp_path, GREEDY)
+    assert code == 0
+    assert all(r.parent is None for r in Simulation.from_yaml(out).robots)
+
+
+@pytest.mark.parametrize(
+    ("text", "message"),
+    [
+        ("1 BaseStation 8 30 0 0 20 1000 BaseStation 1\n", "line 1: 10 columns"),
+        (GREEDY.replace("Explorer 1 1\n3", "Scout 1 1\n3"), "line 2: role 'Scout'"),
+        (GREEDY.replace(" 12 20 ", " twelve 20 "), "line 2"),
+        (GREEDY.splitlines()[1] + "\n", "must be the base station"),
+    ],
+)
+def test_a_bad_team_file_exits_2_naming_the_line(
+    tmp_path: Path, text: str, message: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    code, _ = import_team(tmp_path, text)
+    err = capsys.readouterr().err
+    assert code == 2 and message in err and "Traceback" not in err
