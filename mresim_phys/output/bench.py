@@ -241,14 +241,14 @@ def time_team(
 def report(results: Sequence[BenchResult], map_path: Path, preset: Preset = OFFICE) -> str:
     """The results as a text table."""
     names = [*PHASES, "motion"]
-    head = f"{'strategy':>10} {'robots':>6} {'threads':>7} {'median':>8} {'p90':>8} "
+    head = f"{'strategy':>14} {'robots':>6} {'threads':>7} {'median':>8} {'p90':>8} "
     head += f"{'per robot':>9} " + " ".join(f"{n:>13}" for n in names)
     lines = [f"mresim bench --preset {preset.name}: teams on {map_path.name}, ms per step", head]
     for r in results:
         split = " ".join(f"{r.phase_ms[n]:13.2f}" for n in names)
         per_robot = r.median_ms / r.robots
         times = f"{r.median_ms:8.2f} {r.p90_ms:8.2f} {per_robot:9.2f}"
-        lines.append(f"{r.strategy:>10} {r.robots:>6} {r.threads!s:>7} {times} {split}")
+        lines.append(f"{r.strategy:>14} {r.robots:>6} {r.threads!s:>7} {times} {split}")
     lines.append("(phase columns are per-step medians; they need not add up to the median;")
     lines.append(" with threads they add up the time spent on every thread)")
     return "\n".join(lines)
