@@ -93,10 +93,8 @@ def min_pos_choice(mine: FloatArray, others: FloatArray, ahead: IntArray) -> int
 
 
 def assignment_team(strategy: FrontierExploration, view: RobotView) -> list[TeammateInfo]:
-    """The teammates that take part (as in the auction, less the presumed lost), in the
-    team's tie-break order."""
-    mates = [t for t in strategy._teammates(view) if t.name not in view.lost]
-    return sorted(mates, key=lambda t: (view.tie_rank(t.name), t.name))
+    """The teammates that take part (as in the auction), in the team's tie-break order."""
+    return sorted(strategy.teammates(view), key=lambda t: (view.tie_rank(t.name), t.name))
 
 
 def team_costs(

@@ -280,14 +280,16 @@ class FrontierExploration(Plugin):
         rank = view.tie_rank
         me = Bidder(view.name, mine, np.ones(len(mine), dtype=bool), view.position, rank(view.name))
         bidders = [me] + [
-            Bidder.estimated(t.name, t.position, goals, rank(t.name)) for t in self._teammates(view)
+            Bidder.estimated(t.name, t.position, goals, rank(t.name)) for t in self.teammates(view)
         ]
         won = greedy_auction(
             bidders, sizes, lambda b, k, limit: exact_costs(context, b.position, goals, k, limit)
         )
         return int(candidates[won])
 
-    def _teammates(self, view: RobotView) -> list[TeammateInfo]:
+    def teammates(self, view: RobotView) -> list[TeammateInfo]:
+        """The teammates that take part in the auction, by name: exploring, heard from
+        within ``teammate_memory`` steps, not presumed lost, drive and sensor working."""
         memory = self.params.teammate_memory
         return sorted(
             (
