@@ -14,6 +14,7 @@ import json
 from pathlib import Path
 
 import pytest
+import yaml
 
 from mresim_phys.cli import main
 
@@ -37,5 +38,10 @@ def test_shipped_scenario_reproduces_its_golden_results(path: Path, tmp_path: Pa
     assert golden.compare(path, run_dir) == []
     assert main(["replay", str(run_dir), "--metrics"]) == 0
     summary = json.loads((run_dir / "summary.json").read_text())
+    assert summary["stop_reason"] in ("explored", "known_at_base"), (
+        f"{path.name}: stopped by {summary['stop_reason']}, not at its goal within its cap"
+    )
+    goal = (yaml.safe_load(path.read_text()).get("stop") or {}).get("explored") or 0.9
     reached = summary["steps_to_explored"]["0.9"]
-    assert reached is not None, f"{path.name}: never reached 90 % explored"
+    if goal >= 0.9:  # a leader-follower chain's reach bounds what it can explore
+        assert reached is not None, f"{path.name}: never reached 90 % explored"

@@ -147,6 +147,29 @@ def test_auction_lets_a_teammate_nearer_by_path_win() -> None:
     assert won == 1 and mate.exact.all()
 
 
+def test_robots_that_outnumber_the_frontiers_bid_again_over_all_of_them() -> None:
+    """The original's keepAssigningRobotsToFrontiers: once every frontier is taken, the
+    robots not yet assigned bid again over all of them, so they spread instead of all
+    following their own best."""
+    sizes = np.array([10.0, 10.0])
+    exact = np.ones(2, dtype=bool)
+    me = Bidder("A", np.array([10.0, 20.0]), exact, (0.0, 0.0), rank=3)
+    first = Bidder("B", np.array([1.0, 100.0]), exact.copy(), (0.0, 0.0), rank=0)
+    second = Bidder("C", np.array([100.0, 1.0]), exact.copy(), (0.0, 0.0), rank=1)
+    again = Bidder("D", np.array([5.0, 30.0]), exact.copy(), (0.0, 0.0), rank=2)
+    won = greedy_auction([me, first, second, again], sizes, lambda b, limit: None)
+    assert won == 1  # D wins frontier 0 in the second round; A's own best was 0
+
+
+def test_frontiers_beyond_the_first_horizon_still_enter_the_auction() -> None:
+    """The search horizon only saves work: a robot with one frontier near and one far,
+    whose teammate is nearer the near one, takes the far one."""
+    teammate = TeammateInfo("B", (22.5, 10.5), None, "active", "explorer", step=9)
+    view = corridor_view({"B": teammate}, (28.5, 10.5))  # right frontier ~47 > range 30
+    decision = FrontierExploration(FrontierParams()).decide(view)
+    assert decision.goal is not None and decision.goal[0] > 50
+
+
 def test_robots_finish_and_return_to_base(scenario_file: Callable[..., Path]) -> None:
     sim = Simulation.from_yaml(scenario_file(steps=400, stop={"all_done": True}))
     sim.run()

@@ -190,19 +190,20 @@ class PlanContext:
             self.passable, position, limit=limit, slowness=self.slowness, box=self.passable_box
         )
 
-    def fields_growing(self, first_limit: float) -> Iterator[DistanceField]:
-        """Distance fields bounded by a cost horizon that doubles, ending unbounded.
+    def fields_growing(self, first_limit: float) -> Iterator[tuple[float, DistanceField]]:
+        """(horizon, field): distance fields bounded by a cost horizon that doubles,
+        ending unbounded (horizon inf).
 
         A strategy that wants the nearest of something stops at the first field
-        that holds one; the late-exploration cost of a whole-map search is then
-        paid only when nothing is near.
+        that holds what it needs; the late-exploration cost of a whole-map search is
+        then paid only when nothing is near.
         """
         limit = max(first_limit, 1.0)
         extent = sum(self.view.belief.shape)
         while limit < extent:
-            yield self.field_from(self.view.position, limit)
+            yield limit, self.field_from(self.view.position, limit)
             limit *= 2
-        yield self.field
+        yield np.inf, self.field
 
     def plan_to(self, row: int, col: int) -> FloatArray:
         """The path the robot follows to cell (row, col): from its planner, if it has one.

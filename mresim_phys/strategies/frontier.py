@@ -76,7 +76,10 @@ class FrontierParams(StrategyParams):
     horizon: float = Field(
         1.0,
         gt=0,
-        description="First search horizon, in sensor ranges; doubles until a frontier is found.",
+        description=(
+            "First search horizon, in sensor ranges; doubles until no frontier beyond it"
+            " could enter the best max_frontiers."
+        ),
     )
     init_cycles: int = Field(
         3,
@@ -186,10 +189,10 @@ class FrontierExploration(Plugin):
         reach = self.params.reach or view.clearance + 2.0
         fields = context.fields_growing(self.params.horizon * view.sensor_range)
         searching = len(frontiers) > 0 and not self._goal_met(view)
-        for field in fields if searching else ():
+        for limit, field in fields if searching else ():
             targets, costs = frontier_targets(frontiers, field, context.passable, reach)
             candidates = self._candidates(frontiers, costs)
-            if len(candidates):
+            if len(candidates) and self._settled(frontiers, costs, candidates, limit):
                 break
         else:
             self._chasing = None
@@ -264,6 +267,21 @@ class FrontierExploration(Plugin):
         order = np.argsort(-u, kind="stable")
         keep = order[np.isfinite(u[order])]
         return keep[: self.params.max_frontiers]
+
+    def _settled(
+        self, frontiers: Frontiers, costs: FloatArray, candidates: IntArray, limit: float
+    ) -> bool:
+        """Whether no frontier beyond the search horizon ``limit`` could enter the best
+        ``max_frontiers`` (a frontier there costs at least ``limit``): the horizon
+        only saves work, the candidates are those of a whole-map search."""
+        beyond = ~np.isfinite(costs)
+        if limit == np.inf or not beyond.any():
+            return True
+        if len(candidates) < self.params.max_frontiers:
+            return False
+        sizes = frontiers.sizes.astype(float)
+        best_beyond = utility(sizes[beyond].max(keepdims=True), np.array([limit]))[0]
+        return bool(utility(sizes[candidates[-1:]], costs[candidates[-1:]])[0] > best_beyond)
 
     def _auction(
         self,
@@ -362,12 +380,18 @@ def greedy_auction(bidders: list[Bidder], sizes: FloatArray, search: PathSearch)
     on the exact costs (lower bounds never win: they are refined first, and a bound's
     utility is never below its exact one), so how far a search went never changes it.
     Utilities are one (bidders x frontiers) matrix; a refinement recomputes its row.
+    When every frontier is taken before bidder 0 wins one, the auction starts again
+    over all the frontiers among the bidders not yet assigned (the original's
+    ``keepAssigningRobotsToFrontiers``), so robots that outnumber the frontiers
+    spread over them instead of all following the best one.
     """
     u = utility(sizes[None, :], np.array([b.costs for b in bidders]))
     ranks = np.array([b.rank for b in bidders])
     active = np.ones(len(bidders), dtype=bool)
     taken = np.zeros(len(sizes), dtype=bool)
-    while active.any() and not taken.all():
+    while active.any():
+        if taken.all():  # more robots than frontiers: a new round for the unassigned
+            taken[:] = False
         who, which = best_pair(u, ranks, active, taken)
         if who < 0:
             break
