@@ -31,7 +31,7 @@ from numba import njit
 from mresim_phys.agents import Robot
 from mresim_phys.knowledge.mapping import mark_bump
 from mresim_phys.planning.fields import clearance_kernel
-from mresim_phys.strategies.base import ReplansOnContact
+from mresim_phys.strategies.base import ReplansOnContact, ReplansWhen
 from mresim_phys.types import OCCUPIED, FloatArray, IntArray
 from mresim_phys.world.space import World
 from mresim_phys.world.terrain import TerrainGrid, factor_at
@@ -49,11 +49,16 @@ class MoveRules:
 
 
 def wants_plan(robot: Robot, step: int, interval: int) -> bool:
-    """Replan after an error, after reaching the goal, when the interval has passed, or
+    """Replan after an error, after reaching the goal, when the interval has passed, when
+    its strategy asks for it now (:class:`~mresim_phys.strategies.base.ReplansWhen`), or
     when the robot was linked at the last exchange and its strategy asks for it."""
     due = robot.status == "error" or robot.reached_goal or step - robot.last_plan_step >= interval
-    strategy: object = robot.strategy  # the protocol is optional, not part of Strategy
-    return due or (
+    strategy: object = robot.strategy  # the protocols are optional, not part of Strategy
+    if due or (
+        isinstance(strategy, ReplansWhen) and strategy.replan_now(step, robot.position, robot.links)
+    ):
+        return True
+    return (
         len(robot.links) > 0
         and isinstance(strategy, ReplansOnContact)
         and strategy.replan_on_contact(robot.belief)

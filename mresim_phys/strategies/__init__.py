@@ -12,6 +12,7 @@ from mresim_phys.strategies import (
     frontier,
     leader_follower,
     random_walk,
+    role_based,
     utility_return,
 )
 from mresim_phys.strategies.base import (
@@ -23,7 +24,15 @@ from mresim_phys.strategies.base import (
     plan_context,
 )
 
-BUILT_IN = ("frontier", "random_walk", "hungarian", "min_pos", "utility_return", "leader_follower")
+BUILT_IN = (
+    "frontier",
+    "random_walk",
+    "hungarian",
+    "min_pos",
+    "utility_return",
+    "leader_follower",
+    "role_based",
+)
 assert {
     frontier.FrontierExploration.name,
     random_walk.RandomWalk.name,
@@ -31,6 +40,7 @@ assert {
     assignment.MinPosExploration.name,
     utility_return.UtilityReturn.name,
     leader_follower.LeaderFollower.name,
+    role_based.RoleBased.name,
 } == set(BUILT_IN)
 
 __all__ = [

@@ -139,6 +139,16 @@ class ReplansOnContact(Protocol):
         ...
 
 
+@runtime_checkable
+class ReplansWhen(Protocol):
+    """A strategy that may ask for a replan at any step (a rendezvous deadline, a link that
+    came or went), besides its ``replan_interval``."""
+
+    def replan_now(self, step: int, position: tuple[float, float], links: tuple[str, ...]) -> bool:
+        """Whether the robot, at ``position`` and linked with ``links``, should replan now."""
+        ...
+
+
 class PlanContext:
     """Configuration space and distance field of one robot, computed lazily once.
 

@@ -1,0 +1,213 @@
+"""``role_based`` (phase 4, decide): explorer / relay pairs that meet at agreed rendezvous points.
+
+The original's ``RoleBasedExploration`` (J. de Hoog, S. Cameron, A. Visser, "Role-based
+autonomous multi-robot exploration", 2009; "Dynamic team hierarchies in communication-
+limited multi-robot exploration", 2010) with its *basic* single-point rendezvous. The
+team's hierarchy pairs robots: an explorer's ``parent`` is its relay (``role: relay``),
+the relay's parent the base.
+
+* The **explorer** explores greedily (as ``frontier``). Whenever it is linked with its
+  relay it fixes their next meeting (:class:`Rendezvous`, sent with its record): the
+  point is its frontier target if that lies more than :data:`MIN_RV_DISTANCE` cells away,
+  else where it stands; the time is ``now + max(60, the relay's trip to the base and on
+  to the point, its own trip to the frontier and on to the point + 75)`` (straight lines
+  at its own speed; the original uses path lengths). Every ``check_interval`` steps it
+  checks whether it must head back to be there in time; at the point it waits for the
+  relay until ``wait`` steps after the agreed time; a relay that has not come (late,
+  failed) leaves it to report in person: it returns to the base, then explores on.
+* The **relay** takes the agreement whenever it is linked with its explorer, carries
+  what it got to the base (until its data has reached the base), goes to the point and
+  waits until ``wait + backup_wait`` steps after the agreed time. An explorer that never
+  comes is given up: the relay explores greedily until it meets its explorer again.
+
+A robot outside such a pair explores as ``frontier`` does. The state each is in shows in
+its decision's ``info`` (``rv_state``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, replace
+from typing import ClassVar
+
+from pydantic import Field
+
+from mresim_phys.knowledge.teammates import Payload, TeammateInfo
+from mresim_phys.strategies.base import (
+    STRATEGIES,
+    Decision,
+    RobotView,
+    StrategyParams,
+    plan_context,
+)
+from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams
+
+MIN_RV_DISTANCE = 25.0  # cells: a nearer frontier is no meeting point (the original's 25 px)
+MIN_MEETING_DELAY = 60  # steps: the earliest meeting after an agreement (the original)
+EXPLORE_TIME = 75  # steps the explorer gets at its frontier (FRONTIER_MIN_EXPLORE_TIME)
+
+
+class RoleBasedParams(FrontierParams):
+    """Greedy frontier exploration's parameters and the rendezvous rules (original values)."""
+
+    wait: int = Field(60, ge=0, description="Steps to wait at the point after the agreed time.")
+    backup_wait: int = Field(
+        60, ge=0, description="Relay: further steps it waits before it gives its explorer up."
+    )
+    check_interval: int = Field(
+        2, ge=1, description="Steps between checks whether to head for the meeting."
+    )
+
+
+@dataclass(frozen=True)
+class Rendezvous(Payload):
+    """An explorer's agreement with its relay: where and when they meet next."""
+
+    point: tuple[float, float]
+    step: int
+
+
+@STRATEGIES.register
+class RoleBased(FrontierExploration):
+    """Explorers explore and meet their relays; relays shuttle between them and the base."""
+
+    name = "role_based"
+    Params: ClassVar[type[StrategyParams]] = RoleBasedParams
+    params: RoleBasedParams
+
+    def __init__(self, params: RoleBasedParams) -> None:
+        super().__init__(params)
+        self.meeting: Rendezvous | None = None
+        self.state = "explore"
+        self.partner: str | None = None  # its relay (explorer) or explorer (relay)
+        self.speed = 1.0
+        self._is_relay = False
+        self._linked = False  # its partner was linked at the last check
+
+    def replan_now(self, step: int, position: tuple[float, float], links: tuple[str, ...]) -> bool:
+        """When its state would change: its partner comes into reach, it arrives at the
+        meeting point, its wait runs out, the base comes into reach while it heads there,
+        or (checked every ``check_interval`` steps) it must head for the meeting now."""
+        if self.partner is None:
+            return False
+        met = self.partner in links and not self._linked
+        self._linked = self.partner in links
+        meeting = self.meeting
+        if met or (meeting is None and self.state == "explore"):
+            return met
+        if self.state in ("carry", "home"):
+            return "base" in links
+        assert meeting is not None
+        if self.state == "to_rv":
+            return math.dist(position, meeting.point) <= self.speed
+        if self.state == "wait":
+            patience = self.params.wait + (self.params.backup_wait if self._is_relay else 0)
+            return step > meeting.step + patience
+        due = step % self.params.check_interval == 0 and not self._is_relay
+        return due and self._late(step, position, meeting)
+
+    def decide(self, view: RobotView) -> Decision:
+        """The explorer's or the relay's rule, by the robot's place in the hierarchy."""
+        self.speed = view.speed
+        if view.role == "relay" and view.children:
+            self.partner, self._is_relay = view.children[0], True
+            decision = self._relay(view)
+        elif view.parent not in (None, "base"):
+            self.partner = view.parent
+            decision = self._explorer(view)
+        else:
+            decision = super().decide(view)
+        return replace(decision, info={**decision.info, "rv_state": self.state})
+
+    def _late(self, step: int, position: tuple[float, float], meeting: Rendezvous) -> bool:
+        """Whether the trip to the meeting point would end at or after the agreed time."""
+        return step + math.dist(position, meeting.point) / self.speed >= meeting.step
+
+    # ---------------------------------------------------------------- explorer
+
+    def _explorer(self, view: RobotView) -> Decision:
+        relay = view.parent or ""
+        explored: Decision | None = None
+        if relay in view.links:  # together: fix the next meeting, explore on
+            explored = super().decide(view)
+            self.state, self.meeting = "explore", self._agree(view, relay, explored)
+        meeting = self.meeting
+        if meeting is not None:
+            self._advance_explorer(view, meeting)
+        if self.meeting is not None and self.state in ("to_rv", "wait"):
+            return self._go(view, self.meeting.point, self.meeting)
+        if self.state == "home":
+            return self._go(view, view.base_position, None)
+        explored = explored or super().decide(view)
+        return replace(explored, payload=self.meeting)
+
+    def _advance_explorer(self, view: RobotView, meeting: Rendezvous) -> None:
+        """explore -> to_rv -> wait -> (relay met: explore) or (relay late: home -> explore)."""
+        if self.state == "explore" and self._late(view.step, view.position, meeting):
+            self.state = "to_rv"
+        if self.state == "to_rv" and math.dist(view.position, meeting.point) <= view.speed:
+            self.state = "wait"
+        if self.state == "wait" and view.step > meeting.step + self.params.wait:
+            self.state = "home"
+        if self.state == "home" and view.base_contact >= view.step - 1:
+            self.state, self.meeting = "explore", None
+
+    def _agree(self, view: RobotView, relay: str, explored: Decision) -> Rendezvous:
+        """The next meeting: its frontier target (else here), at the original's time."""
+        frontier = view.position if explored.done or explored.goal is None else explored.goal
+        near = math.dist(frontier, view.position) <= MIN_RV_DISTANCE
+        point = view.position if near else frontier
+        record = view.teammates.get(relay)
+        relay_at = record.position if record is not None else view.position
+        base = view.base_position
+        relay_trip = math.dist(relay_at, base) + math.dist(base, point)
+        own_trip = math.dist(view.position, frontier) + math.dist(frontier, point)
+        delay = max(
+            MIN_MEETING_DELAY, relay_trip / view.speed, own_trip / view.speed + EXPLORE_TIME
+        )
+        return Rendezvous((float(point[0]), float(point[1])), view.step + math.ceil(delay))
+
+    # ---------------------------------------------------------------- relay
+
+    def _relay(self, view: RobotView) -> Decision:
+        """carry -> to_rv -> wait -> (explorer met: carry) or (given up: explore)."""
+        mate = self._explorer_record(view)
+        if mate is not None and mate.name in view.links:
+            if isinstance(mate.payload, Rendezvous):
+                self.meeting = mate.payload
+            self.state = "carry"
+        meeting = self.meeting
+        if self.state == "carry" and view.base_contact >= view.step - 1:
+            self.state = "to_rv" if meeting is not None else "explore"
+        if meeting is not None:
+            self._advance_relay(view, meeting)
+        if self.state == "carry":
+            return self._go(view, view.base_position, None)
+        if meeting is not None and self.state in ("to_rv", "wait"):
+            return self._go(view, meeting.point, None)
+        return super().decide(view)
+
+    def _advance_relay(self, view: RobotView, meeting: Rendezvous) -> None:
+        if self.state == "to_rv" and math.dist(view.position, meeting.point) <= view.speed:
+            self.state = "wait"
+        patience = meeting.step + self.params.wait + self.params.backup_wait
+        if self.state == "wait" and view.step > patience:
+            self.state, self.meeting = "explore", None  # its explorer never came
+
+    def _explorer_record(self, view: RobotView) -> TeammateInfo | None:
+        records = [view.teammates[name] for name in view.children if name in view.teammates]
+        return records[0] if records else None
+
+    # ---------------------------------------------------------------- moving
+
+    def _go(self, view: RobotView, point: tuple[float, float], payload: Payload | None) -> Decision:
+        """A path to ``point`` (as near as the robot's map lets it get); none when it is
+        there already (waiting costs no search)."""
+        if math.dist(view.position, point) <= view.speed:
+            return Decision(goal=view.position, payload=payload)
+        context = plan_context(view)
+        path = context.plan_to(math.floor(point[1]), math.floor(point[0]))
+        if len(path) == 0:  # not a cell it can stand on: as near as it can get
+            path = context.path_towards(*point)
+        goal = (float(path[-1, 0]), float(path[-1, 1])) if len(path) else view.position
+        return Decision(path=path, goal=goal, payload=payload, info=context.planner_info())

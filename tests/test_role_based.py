@@ -1,0 +1,74 @@
+"""``role_based``: explorer / relay pairs meet at agreed rendezvous points; the relay carries
+the explorer's news to the base; a relay gives a failed explorer up and explores; an
+explorer whose relay is gone reports in person."""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from mresim_phys.sim import Simulation
+from mresim_phys.strategies.role_based import Rendezvous
+
+MakeScenario = Callable[..., Path]
+PAIR = [
+    {"name": "R", "start": [10, 30], "role": "relay", "parent": "base"},
+    {"name": "E", "start": [12, 34], "parent": "R"},
+]
+
+
+def pair_scenario(
+    scenario_file: MakeScenario, strategy: str = "role_based", **changes: Any
+) -> Path:
+    """A relay and its explorer with short radios: the base hears only what is carried."""
+    data: dict[str, Any] = {
+        "steps": 400,
+        "stop": {"known_at_base": 0.95},
+        "base_station": {"position": [6, 30], "comm_range": 4},
+        "team": {"speed": 2, "radius": 1.0, "sensor": {"range": 15}, "comm_range": 4,
+                 "strategy": strategy},
+        "robots": PAIR,
+    }  # fmt: skip
+    return scenario_file(**(data | changes))
+
+
+def run(path: Path) -> tuple[Simulation, list[tuple[int, str, str]], float]:
+    """The run to its end: (simulation, states (step, relay's, explorer's), mean at-base)."""
+    sim = Simulation.from_yaml(path)
+    states, at_base = [], 0.0
+    while not sim.finished():
+        record = sim.step()
+        at_base += record.known_at_base
+        relay, explorer = (getattr(r.strategy, "state", "") for r in sim.robots)
+        states.append((record.step, relay, explorer))
+    return sim, states, at_base / sim.t
+
+
+def test_the_relay_carries_the_explorers_news_to_the_base(scenario_file: MakeScenario) -> None:
+    sim, states, at_base = run(pair_scenario(scenario_file))
+    relay_states = [s for _, s, _ in states]
+    assert "carry" in relay_states and "wait" in relay_states  # shuttles and waits
+    explorer = sim.robot("E")
+    assert isinstance(explorer.payload, Rendezvous)  # the agreement travels with its record
+    assert sim.record.known_at_base >= 0.95  # the goal is reached within the cap
+    _, _, greedy = run(pair_scenario(scenario_file, "frontier"))
+    assert at_base > greedy  # the base learns earlier than with greedy exploration
+
+
+def test_a_relay_gives_up_an_explorer_that_never_comes(scenario_file: MakeScenario) -> None:
+    path = pair_scenario(scenario_file, events=[{"step": 40, "fail": "E"}])
+    sim, states, _ = run(path)
+    waited = [step for step, relay, _ in states if relay == "wait"]
+    gave_up = [step for step, relay, _ in states if relay == "explore" and step > 40]
+    assert waited and gave_up and gave_up[0] > waited[0]  # waited, then explored
+    assert sim.stop_reason() in ("known_at_base", None) and sim.t < 400  # no endless wait
+    assert sim.record.known_at_base >= 0.95
+
+
+def test_an_explorer_whose_relay_is_gone_reports_in_person(scenario_file: MakeScenario) -> None:
+    path = pair_scenario(scenario_file, events=[{"step": 40, "fail": "R"}])
+    sim, states, _ = run(path)
+    assert any(explorer == "wait" for step, _, explorer in states if step > 40)
+    assert sim.robot("E").last_base_contact > 100  # it brought its map home itself
+    assert sim.record.known_at_base >= 0.95
