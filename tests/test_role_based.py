@@ -8,6 +8,9 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import pytest
+
+from mresim_phys.errors import ScenarioError
 from mresim_phys.sim import Simulation
 from mresim_phys.strategies.role_based import Rendezvous
 
@@ -72,3 +75,11 @@ def test_an_explorer_whose_relay_is_gone_reports_in_person(scenario_file: MakeSc
     assert any(explorer == "wait" for step, _, explorer in states if step > 40)
     assert sim.robot("E").last_base_contact > 100  # it brought its map home itself
     assert sim.record.known_at_base >= 0.95
+
+
+def test_role_based_without_relays_is_an_error_naming_the_robots(
+    scenario_file: MakeScenario,
+) -> None:
+    loners = [{"name": "A", "start": [10, 30]}, {"name": "B", "start": [12, 34]}]
+    with pytest.raises(ScenarioError, match="A, B use the strategy role_based"):
+        Simulation.from_yaml(pair_scenario(scenario_file, robots=loners))

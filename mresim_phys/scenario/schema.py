@@ -464,6 +464,16 @@ def check_hierarchy(robots: list[RobotSpec]) -> None:
                 )
             seen.append(at)
             at = parents[at]
+    needs = {"role_based": "explorer / relay pairs", "leader_follower": "a hierarchy"}
+    for strategy, what in needs.items():
+        users = [r.name for r in robots if r.strategy.name == strategy]
+        pairs = any(r.role == "relay" for r in robots) if strategy == "role_based" else True
+        if users and (not pairs or all(r.parent is None for r in robots)):
+            raise ValueError(
+                f"robots: {', '.join(users)} use{'s' if len(users) == 1 else ''} the strategy"
+                f" {strategy}, which needs {what}: give each relay 'role: relay' and"
+                " 'parent: base', and each explorer 'parent: <its relay>'"
+            )
     children = {r.parent for r in robots}
     lonely = [r.name for r in robots if r.role == "relay" and r.name not in children]
     if lonely and any(r.parent is not None for r in robots):
