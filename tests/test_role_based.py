@@ -5,14 +5,18 @@ explorer whose relay is gone reports in person."""
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pytest
 
 from mresim_phys.errors import ScenarioError
 from mresim_phys.sim import Simulation
-from mresim_phys.strategies.role_based import Rendezvous
+from mresim_phys.strategies import RobotView
+from mresim_phys.strategies.role_based import Rendezvous, improved_point
+from mresim_phys.types import FREE, OCCUPIED
 
 MakeScenario = Callable[..., Path]
 PAIR = [
@@ -83,3 +87,28 @@ def test_role_based_without_relays_is_an_error_naming_the_robots(
     loners = [{"name": "A", "start": [10, 30]}, {"name": "B", "start": [12, 34]}]
     with pytest.raises(ScenarioError, match="A, B use the strategy role_based"):
         Simulation.from_yaml(pair_scenario(scenario_file, robots=loners))
+
+
+def test_the_improved_rendezvous_is_the_junction_near_the_frontier() -> None:
+    belief = np.full((60, 60), OCCUPIED, dtype=np.uint8)
+    belief[27:34, 4:56] = FREE  # a corridor west-east
+    belief[4:56, 27:34] = FREE  # and one north-south: they cross at (30, 30)
+    view = RobotView(
+        step=0, name="E", position=(8.5, 30.5), heading=0.0, belief=belief, radius=0.5,
+        clearance=1.0, speed=2.0, sensor_range=20.0, role="explorer",
+        base_position=(8.5, 30.5), teammates={}, rng=np.random.default_rng(0),
+    )  # fmt: skip
+    point = improved_point(view, (52.5, 30.5))
+    assert point is not None and np.hypot(point[0] - 30.5, point[1] - 30.5) <= 3
+    dead_end = belief.copy()
+    dead_end[4:56, 27:34] = OCCUPIED
+    dead_end[27:34, 27:34] = FREE  # a corridor without a junction
+    assert improved_point(replace(view, belief=dead_end), (52.5, 30.5)) is None
+
+
+def test_an_improved_pair_still_reaches_its_goal(scenario_file: MakeScenario) -> None:
+    team = {"speed": 2, "radius": 1.0, "sensor": {"range": 15}, "comm_range": 4}
+    improved = {**team, "strategy": {"name": "role_based", "params": {"rendezvous": "improved"}}}
+    sim, states, _ = run(pair_scenario(scenario_file, team=improved))
+    assert "carry" in [relay for _, relay, _ in states]
+    assert sim.record.known_at_base >= 0.95

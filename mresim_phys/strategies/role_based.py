@@ -9,7 +9,8 @@ the relay's parent the base.
 * The **explorer** explores greedily (as ``frontier``). Whenever it is linked with its
   relay it fixes their next meeting (:class:`Rendezvous`, sent with its record): the
   point is its frontier target if that lies more than :data:`MIN_RV_DISTANCE` cells away,
-  else where it stands; the time is ``now + max(60, the relay's trip to the base and on
+  else where it stands (``rendezvous: improved``: the best skeleton junction near that
+  frontier, :func:`improved_point`); the time is ``now + max(60, the relay's trip to the base and on
   to the point, its own trip to the frontier and on to the point + 75)`` (straight lines
   at its own speed; the original uses path lengths). Every ``check_interval`` steps it
   checks whether it must head back to be there in time; at the point it waits for the
@@ -28,8 +29,9 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, replace
-from typing import ClassVar
+from typing import ClassVar, Literal
 
+import numpy as np
 from pydantic import Field
 
 from mresim_phys.knowledge.teammates import Payload, TeammateInfo
@@ -43,6 +45,8 @@ from mresim_phys.strategies.base import (
 from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams
 
 MIN_RV_DISTANCE = 25.0  # cells: a nearer frontier is no meeting point (the original's 25 px)
+IMPROVED_REACH = 600.0  # cells: junctions farther from the frontier are no candidates
+IMPROVED_CANDIDATES = 4  # the nearest junctions scored (the original's 4)
 MIN_MEETING_DELAY = 60  # steps: the earliest meeting after an agreement (the original)
 EXPLORE_TIME = 75  # steps the explorer gets at its frontier (FRONTIER_MIN_EXPLORE_TIME)
 
@@ -56,6 +60,14 @@ class RoleBasedParams(FrontierParams):
     )
     check_interval: int = Field(
         2, ge=1, description="Steps between checks whether to head for the meeting."
+    )
+    rendezvous: Literal["basic", "improved"] = Field(
+        "basic",
+        description=(
+            "Meeting points: 'basic' (the frontier target, else where the explorer stands) or"
+            " 'improved' (the best skeleton junction near the frontier, as the original's"
+            " useImprovedRendezvous)."
+        ),
     )
 
 
@@ -157,6 +169,8 @@ class RoleBased(FrontierExploration):
         frontier = view.position if explored.done or explored.goal is None else explored.goal
         near = math.dist(frontier, view.position) <= MIN_RV_DISTANCE
         point = view.position if near else frontier
+        if self.params.rendezvous == "improved" and not near:
+            point = improved_point(view, frontier) or point
         record = view.teammates.get(relay)
         relay_at = record.position if record is not None else view.position
         base = view.base_position
@@ -211,3 +225,28 @@ class RoleBased(FrontierExploration):
             path = context.path_towards(*point)
         goal = (float(path[-1, 0]), float(path[-1, 1])) if len(path) else view.position
         return Decision(path=path, goal=goal, payload=payload, info=context.planner_info())
+
+
+def improved_point(view: RobotView, frontier: tuple[float, float]) -> tuple[float, float] | None:
+    """The original's improved rendezvous: of the skeleton junctions of the robot's known
+    space within :data:`IMPROVED_REACH` cells of the frontier, the
+    :data:`IMPROVED_CANDIDATES` nearest, scored by ``degree**2 * 1e4 / distance`` to the
+    frontier (straight lines; the original: path length); None without a junction."""
+    topology = plan_context(view).topology()
+    junctions = topology.junctions
+    if len(junctions) == 0:
+        return None
+    centres = junctions[:, ::-1] + 0.5  # (x, y)
+    distance = np.hypot(*(centres - np.asarray(frontier)).T)
+    near = np.flatnonzero(distance <= IMPROVED_REACH)
+    if len(near) == 0:
+        return None
+    near = near[np.argsort(distance[near], kind="stable")[:IMPROVED_CANDIDATES]]
+    skeleton = topology.skeleton
+    degree = np.array([
+        int(skeleton[max(r - 1, 0) : r + 2, max(c - 1, 0) : c + 2].sum()) - 1
+        for r, c in junctions[near]
+    ])  # fmt: skip
+    score = degree.astype(float) ** 2 * 1e4 / np.maximum(distance[near], 1.0)
+    best = near[int(np.argmax(score))]
+    return float(centres[best, 0]), float(centres[best, 1])
