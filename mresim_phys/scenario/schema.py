@@ -389,21 +389,13 @@ class Scenario(Strict):
         return self
 
     @model_validator(mode="after")
-    def _prior_robots_exist(self) -> Scenario:
-        if self.prior is not None and self.prior.robots != "all":
-            names = [r.name for r in self.robots]
-            unknown = [n for n in self.prior.robots if n not in names]
-            if unknown:
-                raise ValueError(
-                    f"prior.robots: no robot called {', '.join(map(repr, unknown))}"
-                    f" (robots: {', '.join(names)}); list robot names or give 'all'"
-                )
-        return self
-
-    @model_validator(mode="after")
-    def _fault_robots_exist(self) -> Scenario:
+    def _listed_robots_exist(self) -> Scenario:
+        """Robot lists of the prior map and of the fault models name robots of the team."""
         names = [r.name for r in self.robots]
-        for where, robots in self.faults.robot_lists() if self.faults is not None else []:
+        lists = list(self.faults.robot_lists()) if self.faults is not None else []
+        if self.prior is not None:
+            lists.insert(0, ("prior.robots", self.prior.robots))
+        for where, robots in lists:
             unknown = [n for n in robots if n not in names] if robots != "all" else []
             if unknown:
                 raise ValueError(

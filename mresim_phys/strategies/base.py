@@ -261,6 +261,15 @@ def plan_context(view: RobotView) -> PlanContext:
     return PlanContext(view)
 
 
+def heading_for(context: PlanContext, point: tuple[float, float], **fields: Any) -> Decision:
+    """A decision to follow the path towards ``point`` (as near as the robot's map lets it
+    get), its goal the path's end (where the robot stands if there is no path);
+    ``fields`` are the decision's other fields (``done``, ``info``, ``payload``)."""
+    path = context.path_towards(*point)
+    goal = (float(path[-1, 0]), float(path[-1, 1])) if len(path) else context.view.position
+    return Decision(path=path, goal=goal, **fields)
+
+
 HOME_TOLERANCE = 1.5  # cells: a done robot this close to its home point stays put
 
 
@@ -274,6 +283,4 @@ def return_to_base(
     """
     if home is not None and np.hypot(*np.subtract(view.position, home)) <= HOME_TOLERANCE:
         return Decision(goal=home, done=True)
-    path = context.path_towards(*view.base_position)
-    goal = (float(path[-1, 0]), float(path[-1, 1])) if len(path) else view.position
-    return Decision(path=path, goal=goal, done=True, info=context.planner_info())
+    return heading_for(context, view.base_position, done=True, info=context.planner_info())

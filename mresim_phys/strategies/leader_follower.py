@@ -38,6 +38,7 @@ from mresim_phys.strategies.base import (
     PlanContext,
     RobotView,
     StrategyParams,
+    heading_for,
     plan_context,
 )
 from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams
@@ -116,17 +117,13 @@ class LeaderFollower(FrontierExploration):
         if not records:
             return Decision(goal=view.position)
         child = min(records, key=lambda r: (math.dist(r.position, view.position), r.name))
-        path = context.path_towards(*child.position)
-        goal = (float(path[-1, 0]), float(path[-1, 1])) if len(path) else view.position
-        return Decision(path=path, goal=goal, info={"following": child.name})
+        return heading_for(context, child.position, info={"following": child.name})
 
     def _step_back(self, view: RobotView, context: PlanContext) -> Decision:
         """Out of the parent's reach: back to where the link last held (else towards the
         parent's last known position)."""
         target = self._linked_at or self._parent_position(view)
-        path = context.path_towards(*target)
-        goal = (float(path[-1, 0]), float(path[-1, 1])) if len(path) else view.position
-        return Decision(path=path, goal=goal, info={"stepping_back": True})
+        return heading_for(context, target, info={"stepping_back": True})
 
     def _parent_position(self, view: RobotView) -> tuple[float, float]:
         """The parent's last known position: the base's, or its record's (else here)."""

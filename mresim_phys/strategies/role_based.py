@@ -40,6 +40,7 @@ from mresim_phys.strategies.base import (
     Decision,
     RobotView,
     StrategyParams,
+    heading_for,
     plan_context,
 )
 from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams
@@ -220,11 +221,12 @@ class RoleBased(FrontierExploration):
         if math.dist(view.position, point) <= view.speed:
             return Decision(goal=view.position, payload=payload)
         context = plan_context(view)
+        info = context.planner_info()
         path = context.plan_to(math.floor(point[1]), math.floor(point[0]))
         if len(path) == 0:  # not a cell it can stand on: as near as it can get
-            path = context.path_towards(*point)
-        goal = (float(path[-1, 0]), float(path[-1, 1])) if len(path) else view.position
-        return Decision(path=path, goal=goal, payload=payload, info=context.planner_info())
+            return heading_for(context, point, payload=payload, info=info)
+        goal = (float(path[-1, 0]), float(path[-1, 1]))
+        return Decision(path=path, goal=goal, payload=payload, info=info)
 
 
 def improved_point(view: RobotView, frontier: tuple[float, float]) -> tuple[float, float] | None:

@@ -34,7 +34,13 @@ import numpy as np
 from pydantic import Field
 
 from mresim_phys.knowledge.teammates import Payload, TeammateInfo
-from mresim_phys.strategies.base import STRATEGIES, Decision, RobotView, StrategyParams
+from mresim_phys.strategies.base import (
+    STRATEGIES,
+    Decision,
+    RobotView,
+    StrategyParams,
+    heading_for,
+)
 from mresim_phys.strategies.base import plan_context as make_context
 from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams
 from mresim_phys.types import FREE
@@ -136,7 +142,5 @@ class UtilityReturn(FrontierExploration):
         """A path to the base (as near as its map lets it get), not done: it explores
         again once its data has reached the base."""
         context = make_context(view)
-        path = context.path_towards(*view.base_position)
-        goal = (float(path[-1, 0]), float(path[-1, 1])) if len(path) else view.position
         info = {"returning": True, **context.planner_info()}
-        return Decision(path=path, goal=goal, info=info, payload=payload)
+        return heading_for(context, view.base_position, info=info, payload=payload)
