@@ -65,9 +65,10 @@ class LatestCoverage(Coverage):
         if id(belief) not in self._held:
             self._held[id(belief)] = np.zeros(belief.shape, np.uint8)  # all UNKNOWN
         rows, cols = window
+        held = self._held[id(belief)]
         counted, stale = fold_window(
-            belief, self._held[id(belief)], self.free_holders, self.wall_holders, self.known,
-            self.reachable, self.truth, self.stale_mask,
+            belief, held, words(belief), words(held), self.free_holders, self.wall_holders,
+            self.known, self.reachable, self.truth, self.stale_mask,
             rows.start, rows.stop, cols.start, cols.stop,
         )  # fmt: skip
         self.count += counted
@@ -88,10 +89,24 @@ class LatestCoverage(Coverage):
         self.stale_mask[region] = stale
 
 
+WORD = 8  # cells compared at once (a uint64 of a uint8 map)
+
+
+def words(grid: BeliefGrid) -> np.ndarray:
+    """``grid`` (uint8, C-contiguous) seen as rows of uint64 words of 8 cells; an empty
+    (rows, 0) array when its rows are not a whole number of words (then cells are
+    compared one at a time)."""
+    if grid.shape[1] % WORD or not grid.flags.c_contiguous:
+        return np.zeros((grid.shape[0], 0), np.uint64)
+    return grid.view(np.uint64)
+
+
 @njit(cache=True, nogil=True)
 def fold_window(
     belief: BeliefGrid,
     held: BeliefGrid,
+    belief_words: np.ndarray,
+    held_words: np.ndarray,
     free_holders: np.ndarray,
     wall_holders: np.ndarray,
     known: BoolGrid,
@@ -107,22 +122,37 @@ def fold_window(
     held when last folded, ``held``, updated in place), recounting ``known`` and
     ``stale_mask`` on the cells whose value changed (elsewhere they are up to date:
     :meth:`LatestCoverage.retarget` follows the truth); returns the change of the
-    explored count and of the stale count."""
+    explored count and of the stale count.
+
+    With word views of both maps (:func:`words`), runs of 8 unchanged cells are skipped
+    with one comparison (most of a window is unchanged: ~5x faster on the library);
+    cells are still visited in raster order, so the result is the same."""
     counted = 0
     stale_change = 0
+    whole = belief_words.shape[1] > 0
     for r in range(row0, row1):
-        for c in range(col0, col1):
-            value, old = belief[r, c], held[r, c]
-            if value == old:
+        c = col0
+        while c < col1:
+            word = c // WORD
+            if (
+                whole
+                and c % WORD == 0
+                and c + WORD <= col1
+                and belief_words[r, word] == held_words[r, word]
+            ):
+                c += WORD
                 continue
-            held[r, c] = value
-            free_holders[r, c] += (value == FREE) - (old == FREE)
-            wall_holders[r, c] += (value == OCCUPIED) - (old == OCCUPIED)
-            now = free_holders[r, c] > 0
-            if reachable[r, c]:
-                counted += int(now) - int(known[r, c])
-            known[r, c] = now
-            stale = (now and truth[r, c]) or (wall_holders[r, c] > 0 and not truth[r, c])
-            stale_change += int(stale) - int(stale_mask[r, c])
-            stale_mask[r, c] = stale
+            value, old = belief[r, c], held[r, c]
+            if value != old:
+                held[r, c] = value
+                free_holders[r, c] += (value == FREE) - (old == FREE)
+                wall_holders[r, c] += (value == OCCUPIED) - (old == OCCUPIED)
+                now = free_holders[r, c] > 0
+                if reachable[r, c]:
+                    counted += int(now) - int(known[r, c])
+                known[r, c] = now
+                stale = (now and truth[r, c]) or (wall_holders[r, c] > 0 and not truth[r, c])
+                stale_change += int(stale) - int(stale_mask[r, c])
+                stale_mask[r, c] = stale
+            c += 1
     return counted, stale_change
