@@ -28,7 +28,7 @@ of ~40k cells; planning 8 vs 37 ms per step), 15 vs 75-83 ms for a fully known 8
 buckets (5.9 ms per search, 60-78 ms fully known), ``skimage.graph.MCP_Geometric`` takes
 110-150 ms and cuts corners. That factor of 5-7 is what numba (~210 MB with llvmlite) is
 installed for. The first search in a process compiles the kernel (~1.4 s), or loads it from
-the on-disk cache (~0.2 s). Transient memory is ~29 bytes per window cell. The kernel
+the on-disk cache (~0.2 s). Transient memory is ~25 bytes per window cell. The kernel
 releases the GIL; csgraph held it.
 """
 
@@ -174,9 +174,10 @@ def _dijkstra(
     Dial's bucket queue: band ``b`` holds the cells whose cost is in ``[b, b + 1)``. Every
     move costs >= 1, so expanding band ``b`` only reaches bands ``b + 1`` and ``b + 2``: its
     cells are final when it is expanded, in any order, and a ring of 3 buckets replaces the
-    heap (same costs, ~4x faster). ``queued`` keeps a cell from entering a band's bucket
-    twice, so no bucket outgrows the passable cell count. An entry whose cell has since moved
-    to an earlier band is skipped. Costs above ``limit`` are never stored.
+    heap (same costs, ~4x faster). A cell enters a band's bucket only when its cost moves
+    into that band (a cheaper cost within the same band finds it queued there already), so
+    no bucket outgrows the passable cell count; an entry whose cell has since moved to an
+    earlier band is skipped. Costs above ``limit`` are never stored.
 
     With a ``stop_at`` cell (>= 0) the search stops before expanding the first band ``b`` with
     ``dist[stop_at] < b + 1``: every cell costing less than ``b + 1`` then has its final
@@ -185,10 +186,9 @@ def _dijkstra(
     """
     dist = np.full(pad.size, np.inf)
     pred = np.full(pad.size, _NO_PRED, dtype=np.int32)
-    queued = np.full(pad.size, -1, dtype=np.int32)
     ring = np.empty((3, np.count_nonzero(pad)), dtype=np.int32)
     sizes = np.zeros(3, dtype=np.int64)
-    dist[source], queued[source] = 0.0, 0
+    dist[source] = 0.0
     ring[0, 0], sizes[0] = source, 1
     step, beside_row, beside_col = flat_moves(wp)
     band = 0
@@ -211,11 +211,11 @@ def _dijkstra(
                     cost = here + DIAGONAL
                 else:
                     cost = here + STRAIGHT
-                if cost <= limit and cost < dist[v]:
+                old = dist[v]
+                if cost <= limit and cost < old:
                     dist[v], pred[v] = cost, u
                     target = int(cost)
-                    if queued[v] != target:
-                        queued[v] = target
+                    if old == np.inf or int(old) != target:  # not yet in band target's bucket
                         ring[target % 3, sizes[target % 3]] = v
                         sizes[target % 3] += 1
         sizes[slot] = 0
