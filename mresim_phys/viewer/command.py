@@ -117,7 +117,7 @@ def view_run(args: argparse.Namespace) -> int:
     from mresim_phys import cli  # the run command's own helpers (cli imports this module)
 
     stop = ViewerStop(notice=not args.quiet)
-    with stop_on_signals(stop, linger=args.program):
+    with stop_on_signals(stop):  # no linger: the viewer may serve on after the run
         sim = Simulation.from_yaml(
             args.scenario,
             seed=args.seed,

@@ -100,7 +100,7 @@ def path_length(points: np.ndarray) -> float:
 def agent_rows(snapshot: Snapshot, renderer: Renderer) -> list[dict[str, Any]]:
     """What hovering each agent shows, and its place (``px``, ``r``) in frame pixels."""
     positions = np.array([a.position for a in snapshot.agents], dtype=float)
-    centres = renderer.px(positions) / 16.0
+    centres = renderer.px(positions) / 16.0 + 0.5  # pixel centres -> canvas coordinates
     per_cell = renderer.map_size[0] / renderer.cols
     return [
         agent_row(agent, (float(x), float(y)), agent.radius * per_cell)

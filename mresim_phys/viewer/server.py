@@ -75,7 +75,7 @@ class ViewerServer:
         self.source, self.host, self.port, self.allow_remote = source, host, port, allow_remote
         self.pages: dict[int, Page] = {}
         self._ids = itertools.count(1)
-        self._loop = asyncio.new_event_loop()
+        self._loop: asyncio.AbstractEventLoop | None = None
         self._runner: web.AppRunner | None = None
         self._thread: threading.Thread | None = None
 
@@ -96,14 +96,25 @@ class ViewerServer:
     def start(self) -> str:
         """Bind and start serving; return the URL. MresimError if the port is taken."""
         self._runner = web.AppRunner(self.app(), access_log=None)
+        self._loop = loop = asyncio.new_event_loop()
         try:
-            self._loop.run_until_complete(self._bind(self._runner))
+            loop.run_until_complete(self._bind(self._runner))
         except OSError as exc:
-            self._loop.run_until_complete(self._runner.cleanup())
+            loop.run_until_complete(self._runner.cleanup())
+            loop.close()
             raise MresimError(bind_error(self.host, self.port, exc)) from None
-        self._thread = threading.Thread(target=self._loop.run_forever, name="viewer", daemon=True)
+        self._thread = threading.Thread(
+            target=self._serve, args=(loop,), name="viewer", daemon=True
+        )
         self._thread.start()
         return self.url
+
+    @staticmethod
+    def _serve(loop: asyncio.AbstractEventLoop) -> None:
+        """The server thread: run the loop until close(), then close it."""
+        asyncio.set_event_loop(loop)
+        loop.run_forever()
+        loop.close()
 
     async def _bind(self, runner: web.AppRunner) -> None:
         await runner.setup()
@@ -112,17 +123,19 @@ class ViewerServer:
 
     def close(self) -> None:
         """Stop serving (idempotent)."""
-        if self._thread is None or self._runner is None:
+        loop = self._loop
+        if self._thread is None or self._runner is None or loop is None:
             return
         runner, self._runner = self._runner, None
         with contextlib.suppress(RuntimeError, TimeoutError):
-            asyncio.run_coroutine_threadsafe(runner.cleanup(), self._loop).result(5)
-        self._loop.call_soon_threadsafe(self._loop.stop)
+            asyncio.run_coroutine_threadsafe(runner.cleanup(), loop).result(5)
+        loop.call_soon_threadsafe(loop.stop)
         self._thread.join(5)
 
     def swap(self, source: Source) -> None:
         """Serve ``source`` from now on and tell every page to reload."""
         self.source = source
+        assert self._loop is not None, "swap() before start()"
         for page in list(self.pages.values()):
             self._loop.call_soon_threadsafe(page.out.put_nowait, ({"type": "reload"}, None))
 
