@@ -6,6 +6,8 @@ import asyncio
 import csv
 import json
 import socket
+import urllib.error
+import urllib.request
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -232,3 +234,32 @@ def test_the_info_message_lists_every_layer_and_agent(run_dir: Path) -> None:
     assert "walls" in info["global_layers"] and "free_space" in info["robot_layers"]
     assert info["steps"] == 41 and info["mode"] == "replay"
     assert set(info["layers"]["robots"]["A"]) == set(parse_layers("all").for_agent("A"))
+
+
+def outside_address() -> str | None:
+    """This machine's address on its network (not loopback), if it has one."""
+    with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as probe:
+        try:
+            probe.connect(("10.255.255.255", 1))  # no packet is sent
+            address = str(probe.getsockname()[0])
+        except OSError:
+            return None
+    return None if is_local(address) else address
+
+
+def test_a_client_on_another_address_is_refused(run_dir: Path) -> None:
+    address = outside_address()
+    if address is None:
+        pytest.skip("this machine has no address besides loopback")
+    server = ViewerServer(ReplaySource.open(run_dir), "0.0.0.0", 0)
+    server.start()
+    try:
+        port = server.port
+        with pytest.raises(urllib.error.HTTPError) as refused:
+            urllib.request.urlopen(f"http://{address}:{port}/", timeout=10)
+        assert refused.value.code == 403 and b"--allow-remote" in refused.value.read()
+        refused.value.close()
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}/", timeout=10) as page:
+            assert b"viewer.js" in page.read()
+    finally:
+        server.close()

@@ -184,7 +184,8 @@ function buildPanel() {
     for (const name of info.robot_layers) {
       const td = row.insertCell();
       const on = agent === "*" ? allHave(name) : layers.robots[agent].includes(name);
-      td.append(checkbox(`layer-${agent}-${name}`, on, (v) => setRobotLayer(agent, name, v), `${label}: ${name}`));
+      const id = agent === "*" ? `all-${name}` : `layer-${agent}-${name}`;
+      td.append(checkbox(id, on, (v) => setRobotLayer(agent, name, v), `${label}: ${name}`));
     }
   }
 }
@@ -204,7 +205,7 @@ function setRobotLayer(agent, name, on) {
 function syncPanel() {
   const info = state.info;
   for (const name of info.robot_layers) {
-    $(`layer-*-${name}`).checked = allHave(name);
+    $(`all-${name}`).checked = allHave(name);
     for (const a of info.names) $(`layer-${a}-${name}`).checked = state.layers.robots[a].includes(name);
   }
 }
@@ -284,7 +285,7 @@ function init() {
     state.speed = Number(ev.target.value);
     if (live()) send({ op: "speed", value: state.speed });
   });
-  $("scrub").addEventListener("input", (ev) => { setPlaying(false); seek(Number(ev.target.value)); });
+  $("scrub").addEventListener("input", (ev) => { const n = Number(ev.target.value); setPlaying(false); seek(n); });
   $("chart").addEventListener("click", (ev) => {
     const rect = ev.target.getBoundingClientRect();
     seek(Math.round(((ev.clientX - rect.left) / rect.width) * (state.info.steps - 1)));
