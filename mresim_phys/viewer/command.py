@@ -92,6 +92,7 @@ def serve_until_stopped(server: ViewerServer) -> None:
 def view_command(args: argparse.Namespace) -> int:
     """``mresim view RUN_DIR``: serve the run's log."""
     started = time.perf_counter()
+    print(f"viewer: reading the run log of {args.run_dir} ...", flush=True)
     source = ReplaySource.open(args.run_dir)
     source.warm_up()
     server = server_for(source, args)
