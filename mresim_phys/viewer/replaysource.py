@@ -36,7 +36,7 @@ from mresim_phys.viewer.frames import FrameMaker
 from mresim_phys.viewer.protocol import info_message
 from mresim_phys.viewer.timeline import Timeline
 
-KEYFRAME_EVERY = 25  # logged steps between keyframes: a seek replays fewer than this
+KEYFRAME_EVERY = 50  # logged steps between keyframes: a seek replays fewer than this
 CHUNKS_KEPT = 3  # delta chunks kept decoded
 DECODE_ERRORS = (AttributeError, KeyError, IndexError, TypeError, ValueError)
 
