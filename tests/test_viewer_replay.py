@@ -5,18 +5,24 @@ from __future__ import annotations
 import asyncio
 import csv
 import json
+import re
+import signal
 import socket
+import subprocess
+import sys
 import urllib.error
 import urllib.request
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
+import aiohttp
 import cv2
 import numpy as np
 import pytest
 from aiohttp.test_utils import make_mocked_request
 
+import mresim_phys.viewer
 from mresim_phys.cli import main
 from mresim_phys.output.runlog import RunLog
 from mresim_phys.render import LayerSpec, parse_layers
@@ -261,5 +267,55 @@ def test_a_client_on_another_address_is_refused(run_dir: Path) -> None:
         refused.value.close()
         with urllib.request.urlopen(f"http://127.0.0.1:{port}/", timeout=10) as page:
             assert b"viewer.js" in page.read()
+    finally:
+        server.close()
+
+
+def test_the_page_needs_nothing_from_the_network() -> None:
+    static = Path(mresim_phys.viewer.__file__).parent / "static"
+    page = (static / "index.html").read_text(encoding="utf-8")
+    links = re.findall(r'(?:src|href)="([^"]+)"', page)
+    assert links and all(not re.match(r"\w+://", link) for link in links)
+    for link in links:
+        if link.startswith("/static/"):
+            assert (static / link.removeprefix("/static/")).is_file(), link
+    for asset in static.iterdir():
+        assert "http://" not in asset.read_text(encoding="utf-8").replace("http://127", "")
+
+
+def test_mresim_view_serves_until_sigterm(run_dir: Path) -> None:
+    command = [sys.executable, "-m", "mresim_phys.cli", "view", str(run_dir), "--port", "0"]
+    child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        assert child.stdout is not None
+        lines = [child.stdout.readline(), child.stdout.readline()]
+        found = re.search(r"(http://127\.0\.0\.1:\d+/)", lines[1])
+        assert found, lines
+        with urllib.request.urlopen(found.group(1), timeout=10) as page:
+            assert b'<canvas id="frame"' in page.read()
+        with urllib.request.urlopen(found.group(1) + "static/viewer.js", timeout=10) as script:
+            assert b"WebSocket" in script.read()
+    finally:
+        child.send_signal(signal.SIGTERM)
+        _, err = child.communicate(timeout=30)
+    assert child.returncode == 0 and err == ""
+
+
+def test_a_websocket_from_another_site_is_refused(run_dir: Path) -> None:
+    server = ViewerServer(ReplaySource.open(run_dir), "127.0.0.1", 0)
+    server.start()
+
+    async def connect(origin: str) -> int:
+        async with aiohttp.ClientSession() as session:
+            try:
+                headers = {"Origin": origin}
+                async with session.ws_connect(f"ws://127.0.0.1:{server.port}/ws", headers=headers):
+                    return 101
+            except aiohttp.WSServerHandshakeError as exc:
+                return exc.status
+
+    try:
+        assert asyncio.run(connect("http://evil.example")) == 403
+        assert asyncio.run(connect(f"http://127.0.0.1:{server.port}")) == 101
     finally:
         server.close()
