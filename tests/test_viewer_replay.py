@@ -24,12 +24,14 @@ from aiohttp.test_utils import make_mocked_request
 
 import mresim_phys.viewer
 from mresim_phys.cli import main
+from mresim_phys.metrics import RobotRecord, StepRecord
 from mresim_phys.output.runlog import RunLog
 from mresim_phys.render import LayerSpec, parse_layers
 from mresim_phys.snapshot import Snapshot
 from mresim_phys.viewer.protocol import ProtocolError, layer_spec, parse_message
 from mresim_phys.viewer.replaysource import ReplaySource
 from mresim_phys.viewer.server import ViewerServer, is_local
+from mresim_phys.viewer.timeline import Timeline
 
 MakeScenario = Callable[..., Path]
 FAILS = [{"step": 12, "fail": "B"}]
@@ -319,3 +321,19 @@ def test_a_websocket_from_another_site_is_refused(run_dir: Path) -> None:
         assert asyncio.run(connect(f"http://127.0.0.1:{server.port}")) == 101
     finally:
         server.close()
+
+
+def test_a_silent_failure_is_marked_once() -> None:
+    timeline = Timeline()
+
+    def add(step: int, states: tuple[str, str], events: tuple[str, ...] = ()) -> None:
+        robots = tuple(RobotRecord(n, 0.0, s) for n, s in zip("AB", states, strict=True))
+        record = StepRecord(step, 0.1 * step, 0.05 * step, 0.0, 2, 0, robots)
+        timeline.add(record, events, states)
+
+    add(0, ("active", "active"))
+    add(1, ("active", "failed"))  # a random fault: no event of its own
+    add(2, ("failed", "failed"), ("fail A",))  # told by its event
+    add(3, ("failed", "failed"))
+    assert timeline.events == [(1, "B failed"), (2, "fail A")]
+    assert timeline.to_json(2)["steps"] == [2, 3] and timeline.to_json(2)["explored"] == [0.2, 0.3]
