@@ -79,12 +79,14 @@ def announce(server: ViewerServer, what: str, args: argparse.Namespace) -> None:
         webbrowser.open(server.url)
 
 
-def serve_until_stopped(server: ViewerServer) -> None:
-    """Serve until SIGINT or SIGTERM, then close the server."""
+def serve_until_stopped(server: ViewerServer, stop: StopRequest | None = None) -> None:
+    """Serve until SIGINT or SIGTERM (recorded in ``stop`` if given), then close the server."""
+    if stop is None:
+        with stop_on_signals(StopRequest(notice=False)) as own:
+            return serve_until_stopped(server, own)
     try:
-        with stop_on_signals(StopRequest(notice=False)) as stop:
-            while not stop.requested:
-                time.sleep(0.1)
+        while not stop.requested:
+            time.sleep(0.1)
     finally:
         server.close()
 
@@ -118,43 +120,66 @@ def view_run(args: argparse.Namespace) -> int:
     from mresim_phys import cli  # the run command's own helpers (cli imports this module)
 
     stop = ViewerStop(notice=not args.quiet)
-    with stop_on_signals(stop):  # no linger: the viewer may serve on after the run
-        sim = Simulation.from_yaml(
-            args.scenario,
-            seed=args.seed,
-            steps=args.steps,
-            render=cli.render_overrides(args),
-            **cli.simulation_overrides(args),
-        )
-        out_dir = args.out or default_run_dir(sim.scenario)
-        probe = region_probe(sim.scenario, sim.world)
-        frames = FrameMaker(sim.world.shape, sim.scenario.render.scale, lambda _: probe)
-        live = LiveSource(sim, stop, frames)
-        server = server_for(live, args)
-        server.start()
-        announce(server, f"{sim.scenario.name} (the run starts when a page connects)", args)
-        try:
-            outcome, plotted = live_session(sim, out_dir, args, live, stop)
-        except BaseException:
-            server.close()
-            raise
-    if not args.quiet:
-        print(cli.summary_line(sim, outcome, plotted), flush=True)
-    if stop.signum is None and (outcome.out_dir / "log").is_dir():
-        server.swap(ReplaySource.open(outcome.out_dir))
-        print(f"viewer: the run ended; replaying {outcome.out_dir} at {server.url}", flush=True)
-        serve_until_stopped(server)
-    else:
-        server.close()
+    # Signals after the run (while its log is indexed, then while it is served) go to
+    # ``later``; during the run, to ``stop``.
+    with stop_on_signals(StopRequest(notice=False)) as later:
+        with stop_on_signals(stop):
+            sim = Simulation.from_yaml(
+                args.scenario,
+                seed=args.seed,
+                steps=args.steps,
+                render=cli.render_overrides(args),
+                **cli.simulation_overrides(args),
+            )
+            server, live = live_server(sim, stop, args)
+            try:
+                outcome, plotted = live_session(sim, args, live, stop)
+            except BaseException:
+                server.close()
+                raise
+        if not args.quiet:
+            print(cli.summary_line(sim, outcome, plotted), flush=True)
+        replay_after(server, outcome, stop, later)
     return outcome.exit_status
 
 
+def live_server(
+    sim: Simulation, stop: ViewerStop, args: argparse.Namespace
+) -> tuple[ViewerServer, LiveSource]:
+    """The started server of a live run, its URL printed."""
+    probe = region_probe(sim.scenario, sim.world)
+    frames = FrameMaker(sim.world.shape, sim.scenario.render.scale, lambda _: probe)
+    live = LiveSource(sim, stop, frames)
+    server = server_for(live, args)
+    server.start()
+    announce(server, f"{sim.scenario.name} (the run starts when a page connects)", args)
+    return server, live
+
+
+def replay_after(
+    server: ViewerServer, outcome: Outcome, stop: ViewerStop, later: StopRequest
+) -> None:
+    """Serve the finished run's log until a signal; at once close if a signal stopped the
+    run or it has no log."""
+    if stop.signum is not None or not (outcome.out_dir / "log").is_dir():
+        server.close()
+        return
+    try:
+        server.swap(ReplaySource.open(outcome.out_dir))
+    except BaseException:
+        server.close()
+        raise
+    print(f"viewer: the run ended; replaying {outcome.out_dir} at {server.url}", flush=True)
+    serve_until_stopped(server, later)
+
+
 def live_session(
-    sim: Simulation, out_dir: Path, args: argparse.Namespace, live: LiveSource, stop: ViewerStop
+    sim: Simulation, args: argparse.Namespace, live: LiveSource, stop: ViewerStop
 ) -> tuple[Outcome, bool]:
     """Run the session with the page's hook; whether plots were drawn."""
     from mresim_phys import cli
 
+    out_dir = args.out or default_run_dir(sim.scenario)
     plotted: list[bool] = []
 
     def plots(folder: Path) -> None:
