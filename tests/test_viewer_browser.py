@@ -229,4 +229,8 @@ def test_a_live_run_pauses_steps_and_stops_from_the_page(
         assert page.errors == []
     finally:
         child.send_signal(signal.SIGTERM)
-        child.communicate(timeout=30)
+        try:
+            child.communicate(timeout=30)
+        except subprocess.TimeoutExpired:  # never leave a server behind
+            child.kill()
+            child.communicate()

@@ -40,7 +40,11 @@ def viewed_run(
     finally:
         if child.poll() is None:
             child.send_signal(signal.SIGTERM)
-        child.communicate(timeout=30)
+        try:
+            child.communicate(timeout=30)
+        except subprocess.TimeoutExpired:  # never leave a server behind
+            child.kill()
+            child.communicate()
 
 
 async def frames(ws: aiohttp.ClientWebSocketResponse, count: int) -> list[dict[str, Any]]:

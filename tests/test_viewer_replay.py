@@ -299,7 +299,11 @@ def test_mresim_view_serves_until_sigterm(run_dir: Path) -> None:
             assert b"WebSocket" in script.read()
     finally:
         child.send_signal(signal.SIGTERM)
-        _, err = child.communicate(timeout=30)
+        try:
+            _, err = child.communicate(timeout=30)
+        except subprocess.TimeoutExpired:  # never leave a server behind
+            child.kill()
+            _, err = child.communicate()
     assert child.returncode == 0 and err == ""
 
 
