@@ -1,4 +1,4 @@
-"""Command line (output edge): ``mresim run | validate | replay | plot | bench``.
+"""Command line (output edge): ``mresim run | validate | replay | view | plot | bench``.
 
 Argument parsing only; the work is delegated to ``load``, ``sim`` and
 ``recorders``. Every user mistake ends in a one-paragraph message on stderr and
@@ -31,6 +31,7 @@ from mresim_phys.scenario.load import validate_scenario
 from mresim_phys.scenario.team_file import read_team_file
 from mresim_phys.sim import Simulation
 from mresim_phys.strategies import STRATEGIES
+from mresim_phys.viewer import command as viewer
 
 EXIT_USER_ERROR = 2
 EXIT_INTERRUPTED = 130  # Ctrl-C outside a run's own handling (128 + SIGINT)
@@ -102,6 +103,7 @@ def make_parser() -> argparse.ArgumentParser:
     )
     run.add_argument("--quiet", action="store_true", help="no progress bar or summary line")
     add_render_flags(run)
+    viewer.add_run_view_flags(run)
     run.add_argument("--no-log", action="store_true", help="do not write the run log")
     run.add_argument("--no-plots", action="store_true", help="do not draw plots at the end")
     run.add_argument(
@@ -124,6 +126,7 @@ def make_parser() -> argparse.ArgumentParser:
     replay.add_argument(
         "--metrics", action="store_true", help="recompute metrics.csv from the log and compare"
     )
+    viewer.add_view_parser(commands)
     plot = commands.add_parser("plot", help="plot one or more runs' metrics")
     plot.add_argument("run_dirs", type=Path, nargs="+", help="run folders")
     plot.add_argument("--out", type=Path, help="folder for the PNGs (default: the run's plots/)")
@@ -281,6 +284,9 @@ def run_command(args: argparse.Namespace) -> int:
     SIGINT and SIGTERM are handled from the start (building the simulation included): the
     run stops after the current step and still writes everything (``output.session``).
     """
+    viewer.check_run_flags(args)
+    if args.view:
+        return viewer.view_run(args)
     linger = getattr(args, "program", False)  # see main()
     with stop_on_signals(StopRequest(notice=not args.quiet), linger=linger) as stop:
         sim = Simulation.from_yaml(
@@ -400,6 +406,7 @@ COMMANDS = {
     "replay": replay_command,
     "plot": plot_command,
     "bench": bench_command,
+    "view": viewer.view_command,
 }
 
 

@@ -40,27 +40,33 @@ def rooms() -> np.ndarray:
     return rooms_grid()
 
 
+def write_scenario(folder: Path, **changes: Any) -> Path:
+    """Write a scenario over the rooms map into ``folder``; keyword arguments replace
+    top-level keys."""
+    write_png(folder / "rooms.png", rooms_grid())
+    data: dict[str, Any] = {
+        "name": "tiny",
+        "seed": 3,
+        "steps": 60,
+        "map": {"image": "rooms.png", "resolution": 0.1},
+        "base_station": {"position": [8, 30], "comm_range": 20},
+        "team": {"speed": 2, "radius": 1.0, "sensor": {"range": 30}, "comm_range": 20},
+        "robots": [
+            {"name": "A", "start": [8, 20], "heading_deg": 0},
+            {"name": "B", "start": [8, 40], "heading_deg": 0, "speed": 3},
+        ],
+    }
+    data.update(changes)
+    path = folder / "scenario.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False))
+    return path
+
+
 @pytest.fixture
 def scenario_file(tmp_path: Path) -> Callable[..., Path]:
     """Write a scenario over the rooms map; keyword arguments replace top-level keys."""
 
     def make(**changes: Any) -> Path:
-        write_png(tmp_path / "rooms.png", rooms_grid())
-        data: dict[str, Any] = {
-            "name": "tiny",
-            "seed": 3,
-            "steps": 60,
-            "map": {"image": "rooms.png", "resolution": 0.1},
-            "base_station": {"position": [8, 30], "comm_range": 20},
-            "team": {"speed": 2, "radius": 1.0, "sensor": {"range": 30}, "comm_range": 20},
-            "robots": [
-                {"name": "A", "start": [8, 20], "heading_deg": 0},
-                {"name": "B", "start": [8, 40], "heading_deg": 0, "speed": 3},
-            ],
-        }
-        data.update(changes)
-        path = tmp_path / "scenario.yaml"
-        path.write_text(yaml.safe_dump(data, sort_keys=False))
-        return path
+        return write_scenario(tmp_path, **changes)
 
     return make

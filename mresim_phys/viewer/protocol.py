@@ -1,0 +1,119 @@
+"""Viewer (output edge), protocol: the messages between the page and the server.
+
+The page sends JSON text messages over one WebSocket:
+
+* ``{"op": "frame", "n": 12, "layers": L, "known": 40}``: the frame of logged step ``n``
+  (a replay; live runs answer with their newest step) drawn with layers ``L``, and the
+  timeline entries from index ``known`` on;
+* ``{"op": "play"}``, ``"pause"``, ``"step"``, ``"stop"``, ``{"op": "speed", "value": 20}``:
+  the live simulation's controls (a replay plays in the page).
+
+``L`` is ``{"team": [global layers], "robots": {"A": [robot layers], ...}}``. The server
+answers ``{"type": "info", ...}`` on connection (names, layers, frame size, mode, a
+replay's step count and timeline), then for each frame a JSON header (``type: frame``, the
+step, the agents' hover rows, new timeline entries, play state) followed by one binary
+message: the PNG. ``{"type": "reload"}`` says the source changed (a live run ended and
+its log is now replayed); ``{"type": "error"}`` answers a malformed message.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from mresim_phys.render.layers import DEFAULT_ROBOT, GLOBAL_LAYERS, ROBOT_LAYERS, LayerSpec
+
+OPS = ("frame", "play", "pause", "step", "stop", "speed")
+MAX_SPEED = 10_000.0  # steps per second
+
+
+class ProtocolError(ValueError):
+    """A message the page should not have sent (answered with an error message)."""
+
+
+@dataclass(frozen=True)
+class Message:
+    """One checked message from the page."""
+
+    op: str
+    n: int = 0
+    layers: LayerSpec | None = None
+    known: int = 0
+    value: float = 0.0
+
+
+def layer_spec(data: Any, names: list[str]) -> LayerSpec:
+    """The layer set of a page's ``layers`` object; ProtocolError if malformed."""
+    if not isinstance(data, dict) or not isinstance(data.get("team", []), list):
+        raise ProtocolError("layers must be {'team': [...], 'robots': {name: [...]}}")
+    team = frozenset(str(v) for v in data.get("team", []))
+    robots = data.get("robots", {})
+    if not isinstance(robots, dict) or not all(isinstance(v, list) for v in robots.values()):
+        raise ProtocolError("layers.robots must map agent names to lists of layers")
+    unknown = sorted(set(robots) - set(names))
+    if unknown:
+        raise ProtocolError(f"layers.robots: no agent {unknown[0]!r} in this run")
+    per_robot = {str(k): frozenset(str(x) for x in v) for k, v in robots.items()}
+    try:
+        return LayerSpec(team, DEFAULT_ROBOT, per_robot)
+    except ValueError as exc:
+        raise ProtocolError(f"layers: {exc}") from None
+
+
+def whole(data: dict[str, Any], key: str) -> int:
+    """A non-negative integer field (0 if absent)."""
+    value = data.get(key, 0)
+    if isinstance(value, bool) or not isinstance(value, int) or value < 0:
+        raise ProtocolError(f"{key!r} must be a whole number >= 0, not {value!r}")
+    return value
+
+
+def parse_message(data: Any, names: list[str]) -> Message:
+    """Check one decoded JSON message from the page."""
+    if not isinstance(data, dict) or data.get("op") not in OPS:
+        raise ProtocolError(f"a message needs 'op', one of {', '.join(OPS)}")
+    op = str(data["op"])
+    if op == "frame":
+        return Message(
+            op, whole(data, "n"), layer_spec(data.get("layers"), names), whole(data, "known")
+        )
+    if op == "speed":
+        value = data.get("value")
+        if (
+            isinstance(value, bool)
+            or not isinstance(value, int | float)
+            or not 0 <= value <= MAX_SPEED
+        ):
+            raise ProtocolError(f"speed must be 0 (as fast as it goes) to {MAX_SPEED:g} steps/s")
+        return Message(op, value=float(value))
+    return Message(op)
+
+
+def layers_json(layers: LayerSpec, names: list[str]) -> dict[str, Any]:
+    """A layer set as the page holds it (every agent listed)."""
+    return {
+        "team": [name for name in GLOBAL_LAYERS if name in layers.global_layers],
+        "robots": {n: [x for x in ROBOT_LAYERS if x in layers.for_agent(n)] for n in names},
+    }
+
+
+def info_message(
+    mode: str,
+    names: list[str],
+    kinds: list[str],
+    layers: LayerSpec,
+    size: tuple[int, int],
+    extra: dict[str, Any],
+) -> dict[str, Any]:
+    """The first message a page receives."""
+    return {
+        "type": "info",
+        "mode": mode,
+        "names": names,
+        "kinds": kinds,
+        "global_layers": list(GLOBAL_LAYERS),
+        "robot_layers": list(ROBOT_LAYERS),
+        "layers": layers_json(layers, names),
+        "size": list(size),
+        **extra,
+    }

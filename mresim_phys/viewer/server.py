@@ -1,0 +1,234 @@
+"""Viewer (output edge), server: the page, its assets and its WebSocket, on this machine.
+
+An aiohttp application (why aiohttp: docs/viewer.md) running in a thread of its own with
+its own event loop, so the simulation keeps the main thread (and its signal handlers).
+``GET /`` gives the page, ``/static/`` its script and style (package data: no CDN, works
+offline), ``/ws`` the WebSocket of :mod:`~mresim_phys.viewer.protocol`. Each page has a
+writer task (frames go out in order) and a worker that serves only its newest frame
+request (a page scrubbing fast never waits for frames it no longer wants). Replay frames
+are rendered in a worker thread; live ones in the simulation's thread (``livesource``).
+
+Clients from other machines are refused (403) unless ``allow_remote``; a WebSocket
+opened by a page of another site (its ``Origin`` is not this server) is refused too.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import contextlib
+import errno
+import ipaddress
+import itertools
+import json
+import logging
+import threading
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+from urllib.parse import urlsplit
+
+from aiohttp import WSMsgType, web
+
+from mresim_phys.errors import MresimError
+from mresim_phys.viewer.livesource import LiveSource, Want
+from mresim_phys.viewer.protocol import Message, ProtocolError, parse_message
+from mresim_phys.viewer.replaysource import ReplaySource
+
+STATIC = Path(__file__).parent / "static"
+Source = LiveSource | ReplaySource
+log = logging.getLogger(__name__)
+
+
+def is_local(address: str | None) -> bool:
+    """Whether a peer address is this machine's loopback (127.0.0.0/8, ::1)."""
+    if not address:
+        return False
+    try:
+        ip = ipaddress.ip_address(address.split("%")[0])
+    except ValueError:
+        return False
+    if isinstance(ip, ipaddress.IPv6Address) and ip.ipv4_mapped is not None:
+        ip = ip.ipv4_mapped
+    return ip.is_loopback
+
+
+def same_origin(request: web.Request) -> bool:
+    """Whether a request has no Origin header or one naming this server's host and port."""
+    origin = request.headers.get("Origin")
+    return origin is None or urlsplit(origin).netloc == request.host
+
+
+@dataclass
+class Page:
+    """One connected page: its socket, outgoing queue and newest frame request."""
+
+    ws: web.WebSocketResponse
+    out: asyncio.Queue[tuple[dict[str, Any], bytes | None]] = field(default_factory=asyncio.Queue)
+    pending: Message | None = None
+    wake: asyncio.Event = field(default_factory=asyncio.Event)
+
+
+class ViewerServer:
+    """Serve ``source`` at ``host:port`` (0: any free port) from a background thread."""
+
+    def __init__(self, source: Source, host: str, port: int, allow_remote: bool = False) -> None:
+        self.source, self.host, self.port, self.allow_remote = source, host, port, allow_remote
+        self.pages: dict[int, Page] = {}
+        self._ids = itertools.count(1)
+        self._loop: asyncio.AbstractEventLoop | None = None
+        self._runner: web.AppRunner | None = None
+        self._thread: threading.Thread | None = None
+
+    @property
+    def url(self) -> str:
+        """The page's address."""
+        host = f"[{self.host}]" if ":" in self.host else self.host
+        return f"http://{host}:{self.port}/"
+
+    def app(self) -> web.Application:
+        """The aiohttp application."""
+        app = web.Application(middlewares=[self._local_only])
+        app.router.add_get("/", self._index)
+        app.router.add_get("/ws", self._websocket)
+        app.router.add_static("/static/", STATIC)
+        return app
+
+    def start(self) -> str:
+        """Bind and start serving; return the URL. MresimError if the port is taken."""
+        self._runner = web.AppRunner(self.app(), access_log=None)
+        self._loop = loop = asyncio.new_event_loop()
+        try:
+            loop.run_until_complete(self._bind(self._runner))
+        except OSError as exc:
+            loop.run_until_complete(self._runner.cleanup())
+            loop.close()
+            raise MresimError(bind_error(self.host, self.port, exc)) from None
+        self._thread = threading.Thread(
+            target=self._serve, args=(loop,), name="viewer", daemon=True
+        )
+        self._thread.start()
+        return self.url
+
+    @staticmethod
+    def _serve(loop: asyncio.AbstractEventLoop) -> None:
+        """The server thread: run the loop until close(), then close it."""
+        asyncio.set_event_loop(loop)
+        loop.run_forever()
+        loop.close()
+
+    async def _bind(self, runner: web.AppRunner) -> None:
+        await runner.setup()
+        await web.TCPSite(runner, self.host, self.port, reuse_address=False).start()
+        self.port = int(runner.addresses[0][1])
+
+    def close(self) -> None:
+        """Stop serving (idempotent)."""
+        loop = self._loop
+        if self._thread is None or self._runner is None or loop is None:
+            return
+        runner, self._runner = self._runner, None
+        with contextlib.suppress(RuntimeError, TimeoutError):
+            asyncio.run_coroutine_threadsafe(runner.cleanup(), loop).result(5)
+        loop.call_soon_threadsafe(loop.stop)
+        self._thread.join(5)
+
+    def swap(self, source: Source) -> None:
+        """Serve ``source`` from now on and tell every page to reload."""
+        self.source = source
+        assert self._loop is not None, "swap() before start()"
+        for page in list(self.pages.values()):
+            self._loop.call_soon_threadsafe(page.out.put_nowait, ({"type": "reload"}, None))
+
+    @web.middleware
+    async def _local_only(self, request: web.Request, handler: Any) -> web.StreamResponse:
+        if not self.allow_remote and not is_local(request.remote):
+            text = "mresim viewer: only this machine may connect (start it with --allow-remote)."
+            return web.Response(status=403, text=text)
+        response: web.StreamResponse = await handler(request)
+        return response
+
+    async def _index(self, request: web.Request) -> web.StreamResponse:
+        return web.FileResponse(STATIC / "index.html", headers={"Cache-Control": "no-store"})
+
+    async def _websocket(self, request: web.Request) -> web.StreamResponse:
+        if not same_origin(request):
+            return web.Response(status=403, text="mresim viewer: a page of another site.")
+        ws = web.WebSocketResponse(heartbeat=30.0, max_msg_size=1 << 20)
+        await ws.prepare(request)
+        number, page = next(self._ids), Page(ws)
+        self.pages[number] = page
+        tasks = [
+            asyncio.create_task(self._writer(page)),
+            asyncio.create_task(self._worker(number, page)),
+        ]
+        try:
+            await page.out.put((self.source.info(), None))
+            if isinstance(self.source, LiveSource):
+                self.source.connect()
+            await self._read(page)
+        finally:
+            self.pages.pop(number, None)
+            if isinstance(self.source, LiveSource):
+                self.source.forget(number)
+            for task in tasks:
+                task.cancel()
+        return ws
+
+    async def _read(self, page: Page) -> None:
+        """Read the page's messages: controls at once, frame requests through the worker."""
+        async for msg in page.ws:
+            if msg.type != WSMsgType.TEXT:
+                continue
+            try:
+                message = parse_message(json.loads(msg.data), self.source.names)
+            except (ValueError, ProtocolError) as exc:
+                await page.out.put(({"type": "error", "message": str(exc)}, None))
+                continue
+            if message.op == "frame":
+                page.pending = message
+                page.wake.set()
+            elif isinstance(self.source, LiveSource):
+                self.source.command(message.op, message.value)
+
+    async def _writer(self, page: Page) -> None:
+        """Send the page's queued messages in order (a header, then its PNG)."""
+        while True:
+            header, png = await page.out.get()
+            await page.ws.send_json(header)
+            if png is not None:
+                await page.ws.send_bytes(png)
+
+    async def _worker(self, number: int, page: Page) -> None:
+        """Serve the page's newest frame request."""
+        loop = asyncio.get_running_loop()
+        while True:
+            await page.wake.wait()
+            page.wake.clear()
+            message, page.pending = page.pending, None
+            if message is None or message.layers is None:
+                continue
+            source = self.source
+            if isinstance(source, ReplaySource):
+                header, png = await loop.run_in_executor(
+                    None, source.frame, message.n, message.layers, message.known
+                )
+                await page.out.put((header, png))
+            else:
+
+                def deliver(header: dict[str, Any], png: bytes, page: Page = page) -> None:
+                    loop.call_soon_threadsafe(page.out.put_nowait, (header, png))
+
+                source.request(number, Want(message.layers, deliver, message.known))
+
+
+def bind_error(host: str, port: int, exc: OSError) -> str:
+    """The one-paragraph message for a server that could not start."""
+    if exc.errno == errno.EADDRINUSE:
+        return (
+            f"viewer: port {port} on {host} is already in use (another viewer or server?)."
+            " Choose another with --port N, or --port 0 for any free port."
+        )
+    return (
+        f"viewer: cannot serve on {host}:{port}: {exc.strerror or exc}."
+        " Check --host (an address of this machine, e.g. 127.0.0.1) and --port."
+    )

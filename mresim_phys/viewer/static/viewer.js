@@ -1,0 +1,300 @@
+// mresim viewer page: talks to the server over one WebSocket (mresim_phys/viewer/protocol.py).
+// Frames arrive as a JSON header followed by one binary PNG, drawn unscaled on #frame.
+"use strict";
+
+const $ = (id) => document.getElementById(id);
+const state = {
+  info: null, layers: null, n: 0, target: 0, step: 0, playing: false, finished: false,
+  speed: 10, inflight: false, dirty: false, header: null, agents: [], frames: 0,
+  timeline: { steps: [], explored: [], known_at_base: [], events: [] },
+  lastAdvance: 0, timer: null, socket: null,
+};
+window.viewer = state; // for tests and the curious
+
+function connect() {
+  const proto = location.protocol === "https:" ? "wss:" : "ws:";
+  const ws = new WebSocket(`${proto}//${location.host}/ws`);
+  ws.binaryType = "blob";
+  ws.onmessage = (ev) => (typeof ev.data === "string" ? onJson(JSON.parse(ev.data)) : onPng(ev.data));
+  ws.onclose = () => { $("status").textContent = "disconnected"; };
+  state.socket = ws;
+}
+
+function send(msg) {
+  if (state.socket && state.socket.readyState === WebSocket.OPEN) state.socket.send(JSON.stringify(msg));
+}
+
+function live() { return state.info && state.info.mode === "live" && !state.finished; }
+
+function onJson(msg) {
+  if (msg.type === "info") return onInfo(msg);
+  if (msg.type === "frame") { state.header = msg; return; }
+  if (msg.type === "reload") { state.socket.onclose = null; state.socket.close(); state.finished = false; connect(); return; }
+  if (msg.type === "error") { console.warn("viewer server:", msg.message); $("status").textContent = msg.message; }
+}
+
+function onInfo(info) {
+  const same = state.info && JSON.stringify(state.info.names) === JSON.stringify(info.names);
+  state.info = info;
+  if (!same) state.layers = info.layers;
+  state.timeline = { steps: [], explored: [], known_at_base: [], events: [] };
+  mergeTimeline(info.timeline);
+  const canvas = $("frame");
+  canvas.width = info.size[0]; canvas.height = info.size[1];
+  $("title").textContent = `${info.name} seed ${info.seed}`;
+  $("mode").textContent = info.mode;
+  $("stop").hidden = info.mode !== "live";
+  state.playing = false; state.inflight = false;
+  if (info.mode === "live") { $("speed").value = "0"; state.speed = 0; }
+  if (info.mode === "replay") { state.target = Math.min(state.n, info.steps - 1); }
+  buildPanel();
+  updateControls();
+  requestFrame();
+}
+
+function mergeTimeline(t) {
+  const tl = state.timeline;
+  if (!t || t.start !== tl.steps.length) return;
+  tl.steps.push(...t.steps); tl.explored.push(...t.explored); tl.known_at_base.push(...t.known_at_base);
+  tl.events.push(...t.events);
+  if (t.events.length || t.steps.length) drawMarks();
+}
+
+async function onPng(blob) {
+  const header = state.header;
+  const bitmap = await createImageBitmap(blob, { colorSpaceConversion: "none", premultiplyAlpha: "none" });
+  const ctx = $("frame").getContext("2d");
+  ctx.drawImage(bitmap, 0, 0);
+  bitmap.close();
+  state.frames += 1;
+  state.n = header.n; state.step = header.step; state.agents = header.agents;
+  mergeTimeline(header.timeline);
+  if (state.info.mode === "live") { state.playing = header.playing; state.finished = header.finished; }
+  $("step").textContent = header.step;
+  $("status").textContent = header.events.length ? header.events.join(", ") : "";
+  state.inflight = false;
+  updateControls();
+  drawChart();
+  if (state.dirty) { state.dirty = false; requestFrame(); return; }
+  if (live() && state.playing) { schedule(50); return; }
+  if (!live() && state.playing) playOn();
+}
+
+function schedule(ms) {
+  clearTimeout(state.timer);
+  state.timer = setTimeout(requestFrame, ms);
+}
+
+function requestFrame() {
+  if (!state.info) return;
+  if (state.inflight) { state.dirty = true; return; }
+  state.inflight = true;
+  send({ op: "frame", n: state.target, layers: state.layers, known: state.timeline.steps.length });
+}
+
+function seek(n) {
+  if (!state.info || live()) return;
+  state.target = Math.max(0, Math.min(n, state.info.steps - 1));
+  requestFrame();
+}
+
+function playOn() {
+  const last = state.info.steps - 1;
+  if (state.n >= last) { setPlaying(false); return; }
+  const speed = state.speed > 0 ? state.speed : 1000;
+  const interval = 1000 / Math.min(speed, 25);
+  const wait = Math.max(0, state.lastAdvance + interval - performance.now());
+  clearTimeout(state.timer);
+  state.timer = setTimeout(() => {
+    if (!state.playing) return;
+    const now = performance.now();
+    const gone = state.lastAdvance ? (now - state.lastAdvance) / 1000 : 1 / speed;
+    state.lastAdvance = now;
+    seek(state.n + Math.max(1, Math.round(speed * gone)));
+  }, wait);
+}
+
+function setPlaying(on) {
+  if (live()) { send({ op: on ? "play" : "pause" }); state.playing = on; if (on) schedule(0); updateControls(); return; }
+  state.playing = on && state.info && state.n < state.info.steps - 1;
+  state.lastAdvance = 0;
+  updateControls();
+  if (state.playing) playOn();
+}
+
+function stepBy(delta) {
+  if (!state.info) return;
+  if (live()) {
+    if (delta > 0) { send({ op: "step" }); state.playing = false; setTimeout(requestFrame, 30); }
+    return;
+  }
+  setPlaying(false);
+  seek(state.n + delta);
+}
+
+function updateControls() {
+  const info = state.info;
+  if (!info) return;
+  $("play").innerHTML = state.playing ? "&#x23F8;" : "&#x25B6;";
+  $("play").title = state.playing ? "pause (space)" : "play (space)";
+  const scrub = $("scrub");
+  const total = live() ? info.steps : info.steps;
+  scrub.max = String(Math.max(total - 1, 0));
+  scrub.value = String(state.n);
+  scrub.disabled = live();
+  $("back").disabled = live();
+  $("stop").disabled = !live();
+}
+
+function toggle(list, name, on) {
+  const i = list.indexOf(name);
+  if (on && i < 0) list.push(name);
+  if (!on && i >= 0) list.splice(i, 1);
+}
+
+function checkbox(id, checked, onChange, title) {
+  const box = document.createElement("input");
+  box.type = "checkbox"; box.id = id; box.checked = checked; box.title = title;
+  box.addEventListener("change", () => { onChange(box.checked); requestFrame(); syncPanel(); });
+  return box;
+}
+
+function buildPanel() {
+  const info = state.info, layers = state.layers;
+  const team = $("team");
+  team.replaceChildren();
+  for (const name of info.global_layers) {
+    const label = document.createElement("label");
+    label.append(checkbox(`team-${name}`, layers.team.includes(name), (on) => toggle(layers.team, name, on), name), " " + name);
+    team.append(label);
+  }
+  const table = $("robots");
+  table.replaceChildren();
+  const head = table.insertRow();
+  head.insertCell().textContent = "";
+  info.robot_layers.forEach((name, k) => {
+    const th = document.createElement("th");
+    th.textContent = k < 10 ? `${(k + 1) % 10} ${name}` : name;
+    head.append(th);
+  });
+  const rows = [["*", "all robots"], ...info.names.map((n) => [n, n])];
+  for (const [agent, label] of rows) {
+    const row = table.insertRow();
+    const cell = row.insertCell(); cell.className = "name"; cell.textContent = label;
+    for (const name of info.robot_layers) {
+      const td = row.insertCell();
+      const on = agent === "*" ? allHave(name) : layers.robots[agent].includes(name);
+      const id = agent === "*" ? `all-${name}` : `layer-${agent}-${name}`;
+      td.append(checkbox(id, on, (v) => setRobotLayer(agent, name, v), `${label}: ${name}`));
+    }
+  }
+}
+
+function allHave(name) {
+  const robots = robotNames();
+  return robots.length > 0 && robots.every((n) => state.layers.robots[n].includes(name));
+}
+
+function robotNames() { return state.info.names.filter((n, i) => state.info.kinds[i] === "robot"); }
+
+function setRobotLayer(agent, name, on) {
+  const agents = agent === "*" ? robotNames() : [agent];
+  for (const a of agents) toggle(state.layers.robots[a], name, on);
+}
+
+function syncPanel() {
+  const info = state.info;
+  for (const name of info.robot_layers) {
+    $(`all-${name}`).checked = allHave(name);
+    for (const a of info.names) $(`layer-${a}-${name}`).checked = state.layers.robots[a].includes(name);
+  }
+}
+
+function toggleColumn(k) {
+  const name = state.info.robot_layers[k];
+  if (!name) return;
+  setRobotLayer("*", name, !allHave(name));
+  syncPanel();
+  requestFrame();
+}
+
+function drawMarks() {
+  const marks = $("marks");
+  marks.replaceChildren();
+  const total = Math.max(state.info.steps - 1, 1);
+  for (const [n, text] of state.timeline.events) {
+    const b = document.createElement("button");
+    b.style.left = `${(100 * n) / total}%`;
+    b.title = `step ${state.timeline.steps[n] ?? n}: ${text}`;
+    b.className = "mark";
+    b.addEventListener("click", () => { setPlaying(false); seek(n); });
+    marks.append(b);
+  }
+}
+
+function drawChart() {
+  const canvas = $("chart"), ctx = canvas.getContext("2d");
+  const w = canvas.width, h = canvas.height, tl = state.timeline;
+  const total = Math.max((state.info ? state.info.steps : 1) - 1, 1);
+  ctx.clearRect(0, 0, w, h);
+  ctx.strokeStyle = "#ccc"; ctx.strokeRect(0.5, 0.5, w - 1, h - 1);
+  const line = (values, colour) => {
+    ctx.strokeStyle = colour; ctx.beginPath();
+    values.forEach((v, i) => { const x = (i / total) * w, y = h - v * (h - 4) - 2; i ? ctx.lineTo(x, y) : ctx.moveTo(x, y); });
+    ctx.stroke();
+  };
+  line(tl.explored, "#1f5fbf");
+  line(tl.known_at_base, "#d9780b");
+  const x = Math.round((state.n / total) * w) + 0.5;
+  ctx.strokeStyle = "#000"; ctx.beginPath(); ctx.moveTo(x, 0); ctx.lineTo(x, h); ctx.stroke();
+}
+
+function onHover(ev) {
+  const canvas = $("frame"), tip = $("hover");
+  const rect = canvas.getBoundingClientRect();
+  const fx = ((ev.clientX - rect.left) * canvas.width) / rect.width;
+  const fy = ((ev.clientY - rect.top) * canvas.height) / rect.height;
+  const hit = state.agents.find((a) => Math.hypot(a.px[0] - fx, a.px[1] - fy) <= a.r + 4);
+  if (!hit) { tip.hidden = true; return; }
+  const battery = hit.battery === null ? "none" : `${(100 * hit.battery).toFixed(1)} %`;
+  const contact = hit.base_contact < 0 ? "never" : `step ${hit.base_contact}`;
+  tip.textContent = [
+    `${hit.name} (${hit.kind})`, `state      ${hit.state}${hit.broken.length ? " (" + hit.broken.join(", ") + " broken)" : ""}`,
+    `role       ${hit.role}`, `travelled  ${hit.distance} cells`, `path left  ${hit.path_left} cells`,
+    `battery    ${battery}`, `base heard ${contact}`,
+  ].join("\n");
+  tip.style.left = `${ev.clientX - rect.left + 12}px`;
+  tip.style.top = `${ev.clientY - rect.top + 12}px`;
+  tip.hidden = false;
+}
+
+function onKey(ev) {
+  if (ev.target.tagName === "SELECT") return;
+  if (ev.key === " ") { ev.preventDefault(); setPlaying(!state.playing); }
+  else if (ev.key === "ArrowRight") { ev.preventDefault(); stepBy(1); }
+  else if (ev.key === "ArrowLeft") { ev.preventDefault(); stepBy(-1); }
+  else if (/^[0-9]$/.test(ev.key)) { toggleColumn((Number(ev.key) + 9) % 10); }
+}
+
+function init() {
+  $("play").addEventListener("click", () => setPlaying(!state.playing));
+  $("back").addEventListener("click", () => stepBy(-1));
+  $("fwd").addEventListener("click", () => stepBy(1));
+  $("stop").addEventListener("click", () => send({ op: "stop" }));
+  $("speed").addEventListener("change", (ev) => {
+    state.speed = Number(ev.target.value);
+    if (live()) send({ op: "speed", value: state.speed });
+  });
+  $("scrub").addEventListener("input", (ev) => { const n = Number(ev.target.value); setPlaying(false); seek(n); });
+  $("chart").addEventListener("click", (ev) => {
+    const rect = ev.target.getBoundingClientRect();
+    seek(Math.round(((ev.clientX - rect.left) / rect.width) * (state.info.steps - 1)));
+  });
+  $("frame").addEventListener("mousemove", onHover);
+  $("frame").addEventListener("mouseleave", () => { $("hover").hidden = true; });
+  document.addEventListener("keydown", onKey);
+  state.speed = Number($("speed").value);
+  connect();
+}
+
+init();
