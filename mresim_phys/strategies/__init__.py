@@ -13,6 +13,7 @@ from mresim_phys.strategies import (
     leader_follower,
     random_walk,
     role_based,
+    role_switch,
     utility_return,
 )
 from mresim_phys.strategies.base import (
@@ -32,6 +33,7 @@ BUILT_IN = (
     "utility_return",
     "leader_follower",
     "role_based",
+    "role_switch",
 )
 assert {
     frontier.FrontierExploration.name,
@@ -41,6 +43,7 @@ assert {
     utility_return.UtilityReturn.name,
     leader_follower.LeaderFollower.name,
     role_based.RoleBased.name,
+    role_switch.RoleSwitch.name,
 } == set(BUILT_IN)
 
 __all__ = [

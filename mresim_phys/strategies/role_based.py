@@ -259,8 +259,9 @@ class RoleBased(FrontierExploration):
         """carry -> to_rv -> wait -> (explorer met: carry) or (given up: explore)."""
         mate = self._explorer_record(view)
         if mate is not None and mate.name in view.links:
-            if isinstance(mate.payload, Rendezvous):
-                self.meeting = mate.payload
+            agreement = self.agreement_of(mate)
+            if agreement is not None:
+                self.meeting = agreement
             self.state = "carry"
         meeting = self.meeting
         if self.state == "carry" and view.base_contact >= view.step - 1:
@@ -281,6 +282,10 @@ class RoleBased(FrontierExploration):
                 self.state, self.meeting = "to_rv", meeting.backup
             else:
                 self.state, self.meeting = "explore", None  # its explorer never came
+
+    def agreement_of(self, record: TeammateInfo) -> Rendezvous | None:
+        """The meeting agreement a teammate's record carries (None: none)."""
+        return record.payload if isinstance(record.payload, Rendezvous) else None
 
     def _explorer_record(self, view: RobotView) -> TeammateInfo | None:
         records = [view.teammates[name] for name in view.children if name in view.teammates]
