@@ -14,6 +14,7 @@ from mresim_phys.strategies import (
     random_walk,
     role_based,
     role_switch,
+    sector,
     utility_return,
 )
 from mresim_phys.strategies.base import (
@@ -34,6 +35,7 @@ BUILT_IN = (
     "leader_follower",
     "role_based",
     "role_switch",
+    "sector_rendezvous",
 )
 assert {
     frontier.FrontierExploration.name,
@@ -44,6 +46,7 @@ assert {
     leader_follower.LeaderFollower.name,
     role_based.RoleBased.name,
     role_switch.RoleSwitch.name,
+    sector.SectorRendezvous.name,
 } == set(BUILT_IN)
 
 __all__ = [
