@@ -13,6 +13,8 @@ import pytest
 
 from mresim_phys.build import load_scenario
 from mresim_phys.errors import ScenarioError
+from mresim_phys.output.bench import PRESETS, team_scenario
+from mresim_phys.scenario.load import validate_scenario
 from mresim_phys.sim import Simulation
 from mresim_phys.strategies import RobotView
 from mresim_phys.strategies.role_switch import RoleSwitch, RoleSwitchParams, SwitchPayload
@@ -112,3 +114,13 @@ def test_role_switch_without_relays_is_an_error(scenario_file: MakeScenario) -> 
     loners = [{"name": "A", "start": [10, 30]}, {"name": "B", "start": [12, 34]}]
     with pytest.raises(ScenarioError, match="A, B use the strategy role_switch"):
         Simulation.from_yaml(pair(scenario_file, robots=loners))
+
+
+def test_the_benchmark_pairs_its_team_for_relay_strategies() -> None:
+    preset = PRESETS["original"]
+    data = team_scenario(4, preset.map_path, 5, preset, 1, "role_based:multi_point")
+    scenario = validate_scenario(data)
+    assert [(r.role, r.parent) for r in scenario.robots] == [
+        ("relay", "base"), ("explorer", "R0"), ("relay", "base"), ("explorer", "R2"),
+    ]  # fmt: skip
+    assert scenario.robots[1].strategy.params == {"rendezvous": "multi_point"}
