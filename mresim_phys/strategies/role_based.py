@@ -121,8 +121,10 @@ class RoleBased(FrontierExploration):
         self._multi: tuple[int, MultiPoint] | None = None  # (step, last multi-point choice)
 
     def replan_now(self, step: int, position: tuple[float, float], links: tuple[str, ...]) -> bool:
-        """When its state would change: its partner comes into reach, it arrives at the
-        meeting point, its wait runs out, the base comes into reach while it heads there,
+        """When its state would change: its partner comes into reach (for a relay waiting at
+        a multi-point meeting: is in reach, as through walls it may be all along), it
+        arrives at the meeting point,
+        its wait runs out, the base comes into reach while it heads there,
         or (checked every ``check_interval`` steps) it must head for the meeting now."""
         if self.partner is None:
             return False
@@ -137,7 +139,10 @@ class RoleBased(FrontierExploration):
         if self.state == "to_rv":
             return math.dist(position, self._my_point(meeting)) <= self.speed
         if self.state == "wait":
-            return step > meeting.step + self._patience(meeting)
+            # multi-point: linked from its own point, through walls, perhaps all along
+            apart = self._is_relay and self.params.rendezvous == "multi_point"
+            together = apart and self.partner in links
+            return together or step > meeting.step + self._patience(meeting)
         due = step % self.params.check_interval == 0 and not self._is_relay
         return due and self._late(step, position, meeting)
 
