@@ -121,9 +121,8 @@ class RoleBased(FrontierExploration):
         self._multi: tuple[int, MultiPoint] | None = None  # (step, last multi-point choice)
 
     def replan_now(self, step: int, position: tuple[float, float], links: tuple[str, ...]) -> bool:
-        """When its state would change: its partner comes into reach (for a relay waiting at
-        a multi-point meeting: is in reach, as through walls it may be all along), it
-        arrives at the meeting point,
+        """When its state would change: its partner comes into reach (multi-point: is in
+        reach, as through walls it may be all along), it arrives at the meeting point,
         its wait runs out, the base comes into reach while it heads there,
         or (checked every ``check_interval`` steps) it must head for the meeting now."""
         if self.partner is None:
@@ -136,13 +135,15 @@ class RoleBased(FrontierExploration):
         if self.state in ("carry", "home"):
             return "base" in links
         assert meeting is not None
+        # multi-point: the partners may be linked from their own points (through walls)
+        # all along, so being linked, not the link's appearance, ends a wait (and an
+        # explorer's trip to its point)
+        linked = self.params.rendezvous == "multi_point" and self.partner in links
         if self.state == "to_rv":
-            return math.dist(position, self._my_point(meeting)) <= self.speed
+            arrived = math.dist(position, self._my_point(meeting)) <= self.speed
+            return arrived or (linked and not self._is_relay)
         if self.state == "wait":
-            # multi-point: linked from its own point, through walls, perhaps all along
-            apart = self._is_relay and self.params.rendezvous == "multi_point"
-            together = apart and self.partner in links
-            return together or step > meeting.step + self._patience(meeting)
+            return linked or step > meeting.step + self._patience(meeting)
         due = step % self.params.check_interval == 0 and not self._is_relay
         return due and self._late(step, position, meeting)
 
