@@ -9,8 +9,10 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
+import pytest
 
 from mresim_phys.cli import main
+from mresim_phys.errors import ScenarioError
 from mresim_phys.output.runlog import RunLog
 from mresim_phys.planning.grid import bbox
 from mresim_phys.sim import Simulation
@@ -110,3 +112,9 @@ def test_the_rendezvous_layers_are_logged_and_replayed(
     assert any(r.rv_candidates is not None and len(r.rv_candidates) for r in explorer)
     assert any(r.rendezvous is not None and len(r.rendezvous) == 3 for r in explorer)
     assert any(r.rv_through_walls is not None for r in explorer)
+
+
+def test_multi_point_without_relays_is_an_error(scenario_file: MakeScenario) -> None:
+    loners = [{"name": "A", "start": [10, 30]}, {"name": "B", "start": [12, 34]}]
+    with pytest.raises(ScenarioError, match="A, B use the strategy role_based"):
+        Simulation.from_yaml(pair(scenario_file, robots=loners))
