@@ -124,3 +124,19 @@ def test_the_benchmark_pairs_its_team_for_relay_strategies() -> None:
         ("relay", "base"), ("explorer", "R0"), ("relay", "base"), ("explorer", "R2"),
     ]  # fmt: skip
     assert scenario.robots[1].strategy.params["rendezvous"] == "multi_point"
+
+
+def test_the_hierarchy_layer_follows_the_swaps() -> None:
+    sim = Simulation(load_scenario(SCENARIO, steps=120))
+    while not sim.finished():
+        sim.step()
+    drawn = {a.name: a.parent for a in sim.snapshot().robots}
+    players = {r.strategy.acting: r.name for r in sim.robots}  # type: ignore[attr-defined]
+    assert set(drawn.values()) <= {*players.values(), "base", None}
+    assert any(drawn[r.name] != r.parent for r in sim.robots)  # the drawn hierarchy moved
+    matches = [
+        drawn[r.name] == players[r.strategy.position[1]]  # type: ignore[attr-defined]
+        for r in sim.robots
+        if r.strategy.position[1] not in (None, "base")  # type: ignore[attr-defined]
+    ]
+    assert matches and sum(matches) >= len(matches) - 1  # who plays its parent's position

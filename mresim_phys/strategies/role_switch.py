@@ -295,5 +295,6 @@ class RoleSwitch(RoleBased):
             self.acting, role, parent, children, self.state, self.meeting, offer, self.accepted
         )
         info = {**decision.info, "acting": self.acting, "swaps": self.swaps}
+        info["parent"] = self._acting_view(view).parent  # the hierarchy layer draws it
         new_role = role if role != view.role else None
         return replace(decision, payload=payload, role=new_role, info=info)
