@@ -13,6 +13,20 @@ Java MRESim (``docs/differences-from-original.md`` quotes this table).
     python benchmarks/fidelity.py --maps ../shared/maps  # the original's own images
     python benchmarks/fidelity.py --teams library8 --set team.radius=2 --set team.wall_margin=1
 
+``--strategies`` runs each team with other strategies too (the comparison of the
+strategies table in ``docs/differences-from-original.md``): ``frontier`` (the scenario as
+shipped), ``utility_return``, and the relay strategies ``role_based``,
+``role_based:improved``, ``role_based:multi_point``, ``role_switch`` and
+``role_switch:improved``, for which the team's robots pair up in their order (the first of
+each two a relay under the base, the second its explorer), as the original's ``*_relay``
+team files do. ``--until-base`` stops each run when the base knows 95 % (the original's
+stop rule) instead of running it to its end. Every row also reports ``gap``: the team's
+explored fraction minus the base's, averaged over the run's steps (how far the base's
+knowledge trails the team's).
+
+    python benchmarks/fidelity.py --teams rooms4,library8 --models path_loss --seeds 10 \
+        --strategies frontier,role_based:improved,role_switch --until-base -j 1
+
 ``--set PATH=VALUE`` changes any scenario field of every run (a dotted path; the value
 is read as YAML), to measure what one setting costs. ``--maps DIR`` swaps the shipped
 redrawn maps for ``DIR/library.png`` and ``DIR/rooms.png`` (the original's images, when
@@ -51,6 +65,7 @@ class Team:
     cap: int  # steps: long enough for every robot to finish
     original: dict[str, str]  # the original's figures (reference measurements)
     target: dict[str, float]  # what the fidelity issue asks of us (medians)
+    relay_original: dict[str, str] | None = None  # the original's role-based figures
 
 
 TEAMS = {
@@ -61,6 +76,7 @@ TEAMS = {
         600,
         {"e50": "88", "e90": "214", "e95": "239", "b95": "249", "final": "0.990"},
         {"e90": 214, "b95": 249},
+        {"e50": "115", "e90": "299", "e95": "378", "b95": "389", "final": "0.957"},
     ),
     "library16": Team(
         "library16",
@@ -85,7 +101,8 @@ TEAMS = {
         {"e90": 247},
     ),
 }
-COLUMNS = ("e50", "e90", "e95", "b90", "b95", "final", "base")
+COLUMNS = ("e50", "e90", "e95", "b90", "b95", "final", "base", "gap")
+RELAY_STRATEGIES = ("role_based", "role_switch")
 
 
 @dataclass(frozen=True)
@@ -94,6 +111,7 @@ class Result:
 
     team: str
     model: str
+    strategy: str
     seed: int
     e50: int | None
     e90: int | None
@@ -102,32 +120,59 @@ class Result:
     b95: int | None
     final: float
     base: float
+    gap: float  # explored minus known at base, averaged over the steps
     steps: int
 
 
-Job = tuple[str, str, int, "str | None", "tuple[tuple[str, Any], ...]"]
+Job = tuple[str, str, str, int, "str | None", "tuple[tuple[str, Any], ...]", bool]
+
+
+def strategy_overrides(spec: str, scenario: Path) -> dict[str, Any]:
+    """Scenario changes that run the team with strategy ``spec`` (``name[:rendezvous]``);
+    relay strategies pair the robots up in their order (relay, explorer, relay, ...)."""
+    name, _, rendezvous = spec.partition(":")
+    if name == "frontier":
+        return {}
+    strategy: dict[str, Any] = {"name": name}
+    if rendezvous:
+        strategy["params"] = {"rendezvous": rendezvous}
+    robots = yaml.safe_load(scenario.read_text(encoding="utf-8"))["robots"]
+    if name in RELAY_STRATEGIES:
+        for i, robot in enumerate(robots):
+            relay = robots[i - 1]["name"] if i % 2 else None
+            pair = {"role": "relay", "parent": "base"} if relay is None else {"parent": relay}
+            robot.update(pair)
+    return {"robots": [{**r, "strategy": strategy} for r in robots]}
 
 
 def run_one(job: Job) -> Result:
-    """Run one team with one comm model and seed to its end (``changes``: ``--set``)."""
-    key, model, seed, maps, changes = job
+    """Run one team with one comm model, strategy and seed to its end (``changes``:
+    ``--set``; ``until_base``: stop when the base knows 95 %)."""
+    key, model, spec, seed, maps, changes, until_base = job
     team = TEAMS[key]
+    stop = {"known_at_base": 0.95} if until_base else {"known_at_base": 1.0, "all_done": True}
     overrides: dict[str, Any] = {
         "seed": seed,
         "steps": team.cap,
-        "stop": {"known_at_base": 1.0, "all_done": True},  # None would keep the 0.95
+        "stop": stop,  # None would keep the 0.95
         "communication": {"model": model},
         "render": {"video": False, "final_png": False, "log": False, "plots": False},
     }
     if maps:
         overrides["map"] = {"image": str(Path(maps).resolve() / team.map_file)}
+    overrides.update(strategy_overrides(spec, ROOT / "scenarios" / team.scenario))
     overrides.update(dict(changes))
     sim = Simulation(load_scenario(ROOT / "scenarios" / team.scenario, **overrides))
-    last = sim.run()
+    gap, last = 0.0, None
+    while not sim.finished():
+        last = sim.step()
+        gap += last.explored - last.known_at_base
+    assert last is not None
     explored, base = sim.milestones.explored, sim.milestones.known_at_base
     return Result(
-        key, model, seed, explored["0.5"], explored["0.9"], explored["0.95"],
-        base["0.9"], base["0.95"], last.explored, last.known_at_base, last.step,
+        key, model, spec, seed, explored["0.5"], explored["0.9"], explored["0.95"],
+        base["0.9"], base["0.95"], last.explored, last.known_at_base, gap / max(sim.t, 1),
+        last.step,
     )  # fmt: skip
 
 
@@ -152,23 +197,26 @@ def median_or_none(values: list[Any]) -> float | None:
 def report(results: list[Result]) -> list[str]:
     """The fidelity table, one line per team and model, then ours-vs-target checks."""
     lines = [
-        "| team | comm | seeds | explored 50 % | 90 % | 95 % | known at base 95 % | final explored"
-        " | original (50 / 90 / 95 / base 95 / final) |",
-        "|---|---|---|---|---|---|---|---|---|",
+        "| team | comm | strategy | seeds | explored 50 % | 90 % | 95 % | known at base 95 %"
+        " | final explored | gap | original (50 / 90 / 95 / base 95 / final) |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
     checks = []
+    combos = sorted({(r.model, r.strategy) for r in results})
     for key, team in TEAMS.items():
-        for model in sorted({r.model for r in results}):
-            runs = [r for r in results if r.team == key and r.model == model]
+        for model, spec in combos:
+            runs = [r for r in results if (r.team, r.model, r.strategy) == (key, model, spec)]
             if not runs:
                 continue
             col = {c: [getattr(r, c) for r in runs] for c in COLUMNS}
-            o = team.original
+            o = original(team, spec)
             lines.append(
-                f"| {key} | {model} | {len(runs)} | {spread(col['e50'])} | {spread(col['e90'])}"
-                f" | {spread(col['e95'])} | {spread(col['b95'])} | {spread(col['final'], 3)}"
-                f" | {o['e50']} / {o['e90']} / {o['e95']} / {o['b95']} / {o['final']} |"
+                f"| {key} | {model} | {spec} | {len(runs)} | {spread(col['e50'])}"
+                f" | {spread(col['e90'])} | {spread(col['e95'])} | {spread(col['b95'])}"
+                f" | {spread(col['final'], 3)} | {spread(col['gap'], 3)} | {o} |"
             )
+            if spec != "frontier":
+                continue
             for column, limit in team.target.items():
                 got = median_or_none(col[column])
                 verdict = "met" if got is not None and got <= limit else "NOT met"
@@ -177,6 +225,14 @@ def report(results: list[Result]) -> list[str]:
             checks.append(f"{key} {model}: lowest final explored {low:.3f} > 0.97: "
                           + ("met" if low > 0.97 else "NOT met"))  # fmt: skip
     return [*lines, "", *checks]
+
+
+def original(team: Team, spec: str) -> str:
+    """The original's figures for ``team`` run with strategy ``spec`` ('-': none measured)."""
+    figures = {"frontier": team.original, "role_based:improved": team.relay_original}.get(spec)
+    if figures is None:
+        return "-"
+    return " / ".join(figures[k] for k in ("e50", "e90", "e95", "b95", "final"))
 
 
 def setting(text: str) -> tuple[str, Any]:
@@ -193,7 +249,13 @@ def main() -> None:
     parser.add_argument("--models", default="disk,path_loss", help="comm models, comma separated")
     parser.add_argument("--teams", default=",".join(TEAMS), help="teams, comma separated")
     parser.add_argument("--maps", help="folder with the original's library.png and rooms.png")
-    parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1, help="processes")
+    parser.add_argument(
+        "--strategies", default="frontier", help="strategies (name[:rendezvous]), comma separated"
+    )
+    parser.add_argument(
+        "--until-base", action="store_true", help="stop each run when the base knows 95 %%"
+    )
+    parser.add_argument("-j", "--jobs", type=int, default=os.cpu_count() or 1, help="processes")
     parser.add_argument("--csv", type=Path, help="write one row per run to this file")
     parser.add_argument(
         "--set",
@@ -208,9 +270,10 @@ def main() -> None:
     if unknown:
         parser.error(f"unknown team(s) {unknown}; choose from {sorted(TEAMS)}")
     jobs = [
-        (team, model, seed, args.maps, tuple(args.set))
+        (team, model, spec, seed, args.maps, tuple(args.set), args.until_base)
         for team in args.teams.split(",")
         for model in args.models.split(",")
+        for spec in args.strategies.split(",")
         for seed in range(1, args.seeds + 1)
     ]
     with ProcessPoolExecutor(max(args.jobs, 1)) as pool:

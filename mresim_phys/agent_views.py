@@ -67,8 +67,11 @@ def agent_snapshot(agent: Agent, lost: frozenset[str] = frozenset()) -> AgentSna
     presumes lost.
 
     A strategy exposes extra views through its decision's ``info``: ``skeleton``
-    (a bool grid, read-only) and ``rendezvous`` ((k, 2) float points) are passed on to
-    renderers and the run log.
+    (a bool grid, read-only), ``rendezvous`` (the agreed meeting points), ``rv_candidates``
+    (potential ones) and ``rv_through_walls`` (those linked through walls), each (k, 2)
+    float points, are passed on to renderers and the run log; ``parent`` (a robot's name,
+    'base' or None) replaces the scenario's parent in the snapshot (the ``hierarchy``
+    layer) when a strategy such as ``role_switch`` changes the hierarchy.
     """
     robot = agent if isinstance(agent, Robot) else None
     info = robot.decision.info if robot is not None and robot.decision is not None else {}
@@ -88,9 +91,11 @@ def agent_snapshot(agent: Agent, lost: frozenset[str] = frozenset()) -> AgentSna
         distance=robot.distance if robot else 0.0,
         skeleton=bool_view(info.get("skeleton")),
         rendezvous=points_or_none(info.get("rendezvous")),
+        rv_candidates=points_or_none(info.get("rv_candidates")),
+        rv_through_walls=points_or_none(info.get("rv_through_walls")),
         base_contact=agent.last_base_contact,
         broken=tuple(sorted(robot.broken)) if robot else (),
         presumed_lost=tuple(sorted(lost)) if agent.alive else (),
         battery=robot.battery if robot else None,
-        parent=agent.parent,
+        parent=info.get("parent", agent.parent),  # a strategy that changes the hierarchy
     )

@@ -165,8 +165,8 @@ def make_parser() -> argparse.ArgumentParser:
         type=strategy_names,
         default=("frontier",),
         metavar="NAME,NAME",
-        help="strategies to compare, e.g. frontier,hungarian,min_pos (default frontier):"
-        " one run per strategy, stepped in turn",
+        help="strategies to compare, e.g. frontier,hungarian,role_based:multi_point (default"
+        " frontier): one run per strategy, stepped in turn; relay strategies pair the team",
     )
     return parser
 
@@ -248,9 +248,10 @@ def thread_settings(text: str) -> tuple[int | Literal["auto"], ...]:
 
 
 def strategy_names(text: str) -> tuple[str, ...]:
-    """argparse type: comma-separated registered strategy names (at least one)."""
+    """argparse type: comma-separated registered strategy names (at least one), each
+    optionally ``:rendezvous`` (``role_based:multi_point``)."""
     names = tuple(part.strip() for part in text.split(",") if part.strip())
-    unknown = [n for n in names if n not in STRATEGIES.names()]
+    unknown = [n for n in names if n.partition(":")[0] not in STRATEGIES.names()]
     if not names or unknown:
         known = ", ".join(sorted(STRATEGIES.names()))
         raise argparse.ArgumentTypeError(f"expected strategy names ({known}), got {text!r}")

@@ -327,3 +327,18 @@ def test_style_palette_limits() -> None:
     with pytest.raises(ValueError, match="palette"):
         Renderer((4, 4), LayerSpec(), style=Style(palette=()))
     assert Style().robot_colour(len(STYLE.palette)) == STYLE.robot_colour(0)
+
+
+def test_potential_and_through_wall_rendezvous_points_drawn_by_their_layers() -> None:
+    snap = snapshot()
+    a = replace(
+        snap.robots[0], rv_candidates=np.array([[30, 8]]), rv_through_walls=np.array([[10, 8]])
+    )
+    rich = replace(snap, agents=(snap.base, a, snap.robots[1]))
+    plain = render(rich, MAP_ONLY)
+    candidates = render(rich, MAP_ONLY + ",rv_candidates")
+    walls = render(rich, MAP_ONLY + ",rv_through_walls")
+    assert near(candidates, (8, 30), STYLE.robot_colour(0), tol=10)
+    assert near(walls, (8, 10), STYLE.robot_colour(0), tol=10)
+    assert (candidates != plain).any() and (walls != plain).any()
+    assert not (candidates != plain)[:, : plain.shape[1] // 2].any()  # each layer its own

@@ -151,6 +151,9 @@ def team_starts(
     return chosen[:robots]
 
 
+RELAY_STRATEGIES = ("role_based", "role_switch")  # teams paired into explorer / relay
+
+
 def team_scenario(
     robots: int,
     map_path: Path,
@@ -159,9 +162,20 @@ def team_scenario(
     threads: int | Literal["auto"] = 1,
     strategy: str = "frontier",
 ) -> dict[str, Any]:
-    """A team of ``robots`` (``strategy``: the preset's, frontier) starting beside the base
-    (:func:`team_starts`)."""
+    """A team of ``robots`` (``strategy``: the preset's, frontier; ``name:rendezvous`` for a
+    relay strategy's rendezvous) starting beside the base (:func:`team_starts`); for the
+    relay strategies (``role_based``, ``role_switch``) the robots pair up in order, the first
+    of each two a relay under the base, the second its explorer."""
     starts = team_starts(robots, load_image_map(map_path).occupied, preset)
+    name, _, rendezvous = strategy.partition(":")
+    spec: str | dict[str, Any] = name
+    if rendezvous:
+        spec = {"name": name, "params": {"rendezvous": rendezvous}}
+    team = [{"name": f"R{i}", "start": list(s)} for i, s in enumerate(starts)]
+    if name in RELAY_STRATEGIES:
+        for i, robot in enumerate(team):
+            pair = {"parent": f"R{i - 1}"} if i % 2 else {"role": "relay", "parent": "base"}
+            robot.update(pair)
     return {
         "name": f"bench-{robots}",
         "seed": 1,
@@ -169,8 +183,8 @@ def team_scenario(
         "stop": {"all_done": False, "stalled_for": None},
         "map": {"image": str(map_path)},
         "base_station": {"position": list(preset.base), "comm_range": preset.team["comm_range"]},
-        "team": {**preset.team, "strategy": strategy},
-        "robots": [{"name": f"R{i}", "start": list(s)} for i, s in enumerate(starts)],
+        "team": {**preset.team, "strategy": spec},
+        "robots": team,
         "simulation": {"threads": threads},
     }
 

@@ -11,7 +11,8 @@ Each field of :class:`~mresim_phys.snapshot.Snapshot` and of its
   ``base_contact``, ``broken``, ``presumed_lost``, ``battery`` (:data:`AGENT_LINE`);
 * delta chunks, as changes since the previous logged step: grids (:class:`GridField`:
   ``belief``, ``safe``, ``skeleton``, the ``truth`` when the world changed, ``rubble``
-  and ``gave_way``) and point arrays (:class:`PointsField`: ``path``, ``rendezvous``);
+  and ``gave_way``) and point arrays (:class:`PointsField`: ``path``, ``rendezvous``,
+  ``rv_candidates``, ``rv_through_walls``);
 * ``movables``: what never changes in ``meta.json``, moves in the steps' lines
   (``output.logworld``);
 * not at all, recomputed on replay: ``explored``, ``known_at_base``, ``alive``,
@@ -35,8 +36,8 @@ import numpy as np
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
 from mresim_phys.types import FloatArray, IntArray
 
-FORMAT, VERSION = "mresim-runlog", 3
-READABLE = (1, 2, 3)  # versions the reader reads (how 1 differs: docs/run-log-format.md)
+FORMAT, VERSION = "mresim-runlog", 4
+READABLE = (1, 2, 3, 4)  # versions the reader reads (how 1 differs: docs/run-log-format.md)
 NEW, NONE = -1, -2  # PointsField codes: the points are stored; the field is None
 Parts = dict[str, list[np.ndarray]]
 Chunk = dict[str, np.ndarray]
@@ -302,7 +303,12 @@ AGENT_GRIDS = (
     GridField("safe", values=False),
     GridField("skeleton", values=False, optional=True),
 )
-AGENT_POINTS = (PointsField("path"), PointsField("rendezvous", optional=True))
+AGENT_POINTS = (
+    PointsField("path"),
+    PointsField("rendezvous", optional=True),
+    PointsField("rv_candidates", optional=True),  # absent from logs of version 3 or older
+    PointsField("rv_through_walls", optional=True),
+)
 TRUTH = GridField("truth", values=False)  # one entry per logged step, not per agent
 WORLD_GRIDS = (  # one entry per logged step; absent from logs of version 2 or older
     GridField("rubble", values=False, optional=True),

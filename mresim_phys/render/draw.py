@@ -168,10 +168,15 @@ class Overlay:
             cv2.polylines(image, [path], False, colour, 1, AA, SHIFT)
         if goal is not None:
             draw_cross(image, goal, 4, colour)
-        points = robot.rendezvous
-        if "rendezvous" in mine and points is not None and len(points):
-            for p in self.px(np.reshape(points, (-1, 2))) >> SHIFT:
-                cv2.drawMarker(image, p, colour, cv2.MARKER_DIAMOND, 8, 2)
+        marks = (
+            ("rv_candidates", robot.rv_candidates, cv2.MARKER_SQUARE, 3, 1),
+            ("rv_through_walls", robot.rv_through_walls, cv2.MARKER_TILTED_CROSS, 6, 1),
+            ("rendezvous", robot.rendezvous, cv2.MARKER_DIAMOND, 8, 2),
+        )
+        for layer, points, marker, size, thickness in marks:
+            if layer in mine and points is not None and len(points):
+                for p in self.px(np.reshape(points, (-1, 2))) >> SHIFT:
+                    cv2.drawMarker(image, p, colour, marker, size, thickness)
 
     def _draw_world(self, image: np.ndarray, snap: Snapshot) -> None:
         """Open doors as dashed lines along their segment (closed ones are cells of the

@@ -3,7 +3,8 @@
 Global layers (map classes; moving obstacles, doors and debris of a changing world;
 links, hierarchy, legend, header, terrain shading, a prior map's walls, the knowledge lost
 at failures, hazard zones) and per-robot layers (location, path, goal, free and safe
-space, frontiers, comm range, skeleton, rendezvous, the teammates it presumes lost);
+space, frontiers, comm range, skeleton, rendezvous: the agreed points, the potential ones
+and those linked through walls, the teammates it presumes lost);
 a :class:`LayerSpec` says which are on, for all robots and for named ones;
 :func:`parse_layers` reads the ``--layers`` / ``render.layers`` text.
 
@@ -25,9 +26,10 @@ GLOBAL_LAYERS += ("lost_knowledge",)  # cells only a robot that fell silent knew
 GLOBAL_LAYERS += ("hazards",)  # hazard zones of a faults: block
 ROBOT_LAYERS: tuple[str, ...] = ("location", "path", "free_space", "safe_space", "frontiers")
 ROBOT_LAYERS += ("comm_range", "goal", "skeleton", "rendezvous", "presumed_lost")
+ROBOT_LAYERS += ("rv_candidates", "rv_through_walls")  # multi-point rendezvous
 LAYERS = GLOBAL_LAYERS + ROBOT_LAYERS
 DEFAULT_GLOBAL = frozenset(GLOBAL_LAYERS)
-DEFAULT_ROBOT = frozenset(ROBOT_LAYERS) - {"free_space", "safe_space"}
+DEFAULT_ROBOT = frozenset(ROBOT_LAYERS) - {"free_space", "safe_space", "rv_candidates"}
 DEFAULTS = DEFAULT_GLOBAL | DEFAULT_ROBOT
 _KINDS = f"global layers: {', '.join(GLOBAL_LAYERS)}; robot layers: {', '.join(ROBOT_LAYERS)}"
 

@@ -456,10 +456,12 @@ def check_hierarchy(robots: list[RobotSpec]) -> None:
                 )
             seen.append(at)
             at = parents[at]
-    needs = {"role_based": "explorer / relay pairs", "leader_follower": "a hierarchy"}
+    pairs_needed = "explorer / relay pairs"
+    needs = {"role_based": pairs_needed, "role_switch": pairs_needed}
+    needs["leader_follower"] = "a hierarchy"
     for strategy, what in needs.items():
         users = [r.name for r in robots if r.strategy.name == strategy]
-        pairs = any(r.role == "relay" for r in robots) if strategy == "role_based" else True
+        pairs = any(r.role == "relay" for r in robots) if what == pairs_needed else True
         if users and (not pairs or all(r.parent is None for r in robots)):
             raise ValueError(
                 f"robots: {', '.join(users)} use{'s' if len(users) == 1 else ''} the strategy"

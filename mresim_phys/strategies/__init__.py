@@ -13,6 +13,8 @@ from mresim_phys.strategies import (
     leader_follower,
     random_walk,
     role_based,
+    role_switch,
+    sector,
     utility_return,
 )
 from mresim_phys.strategies.base import (
@@ -32,6 +34,8 @@ BUILT_IN = (
     "utility_return",
     "leader_follower",
     "role_based",
+    "role_switch",
+    "sector_rendezvous",
 )
 assert {
     frontier.FrontierExploration.name,
@@ -41,6 +45,8 @@ assert {
     utility_return.UtilityReturn.name,
     leader_follower.LeaderFollower.name,
     role_based.RoleBased.name,
+    role_switch.RoleSwitch.name,
+    sector.SectorRendezvous.name,
 } == set(BUILT_IN)
 
 __all__ = [

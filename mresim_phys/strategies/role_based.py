@@ -44,12 +44,15 @@ from mresim_phys.strategies.base import (
     plan_context,
 )
 from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams
+from mresim_phys.strategies.rendezvous import MultiPoint, relay_point
+from mresim_phys.types import FloatArray
 
 MIN_RV_DISTANCE = 25.0  # cells: a nearer frontier is no meeting point (the original's 25 px)
 IMPROVED_REACH = 600.0  # cells: junctions farther from the frontier are no candidates
 IMPROVED_CANDIDATES = 4  # the nearest junctions scored (the original's 4)
 MIN_MEETING_DELAY = 60  # steps: the earliest meeting after an agreement (the original)
 EXPLORE_TIME = 75  # steps the explorer gets at its frontier (FRONTIER_MIN_EXPLORE_TIME)
+RV_REPLAN_INTERVAL = 15  # steps: multi-point points are recomputed at most this often
 
 
 class RoleBasedParams(FrontierParams):
@@ -62,22 +65,41 @@ class RoleBasedParams(FrontierParams):
     check_interval: int = Field(
         2, ge=1, description="Steps between checks whether to head for the meeting."
     )
-    rendezvous: Literal["basic", "improved"] = Field(
+    rendezvous: Literal["basic", "improved", "multi_point"] = Field(
         "basic",
         description=(
-            "Meeting points: 'basic' (the frontier target, else where the explorer stands) or"
+            "Meeting points: 'basic' (the frontier target, else where the explorer stands),"
             " 'improved' (the best skeleton junction near the frontier, as the original's"
-            " useImprovedRendezvous)."
+            " useImprovedRendezvous) or 'multi_point' (the improved point for the explorer"
+            " and, for the relay, the point linked with it through walls that is nearest the"
+            " base's range, with a backup meeting where they agreed: the original's"
+            " RVThroughWalls, SSRR 2014)."
         ),
     )
 
 
 @dataclass(frozen=True)
 class Rendezvous(Payload):
-    """An explorer's agreement with its relay: where and when they meet next."""
+    """An explorer's agreement with its relay: where and when they meet next.
+
+    ``point`` is the explorer's; ``relay_point`` the relay's when they differ (multi-point:
+    linked through walls); ``backup`` the meeting both fall back to when the other has
+    not come by the end of the wait (multi-point). Unset fields cost no bytes."""
 
     point: tuple[float, float]
     step: int
+    relay_point: tuple[float, float] | None = None
+    backup: Rendezvous | None = None
+
+    @property
+    def relay_at(self) -> tuple[float, float]:
+        """Where the relay waits."""
+        return self.point if self.relay_point is None else self.relay_point
+
+    def points(self) -> FloatArray:
+        """The agreed points (explorer's, relay's, backup's) as (k, 2), for the layers."""
+        pts = [self.point, self.relay_at] + ([self.backup.point] if self.backup else [])
+        return np.array(pts, dtype=float)
 
 
 @STRATEGIES.register
@@ -96,10 +118,12 @@ class RoleBased(FrontierExploration):
         self.speed = 1.0
         self._is_relay = False
         self._linked = False  # its partner was linked at the last check
+        self._multi: tuple[int, MultiPoint] | None = None  # (step, last multi-point choice)
 
     def replan_now(self, step: int, position: tuple[float, float], links: tuple[str, ...]) -> bool:
-        """When its state would change: its partner comes into reach, it arrives at the
-        meeting point, its wait runs out, the base comes into reach while it heads there,
+        """When its state would change: its partner comes into reach (multi-point: is in
+        reach, as through walls it may be all along), it arrives at the meeting point,
+        its wait runs out, the base comes into reach while it heads there,
         or (checked every ``check_interval`` steps) it must head for the meeting now."""
         if self.partner is None:
             return False
@@ -111,11 +135,15 @@ class RoleBased(FrontierExploration):
         if self.state in ("carry", "home"):
             return "base" in links
         assert meeting is not None
+        # multi-point: the partners may be linked from their own points (through walls)
+        # all along, so being linked, not the link's appearance, ends a wait (and an
+        # explorer's trip to its point)
+        linked = self.params.rendezvous == "multi_point" and self.partner in links
         if self.state == "to_rv":
-            return math.dist(position, meeting.point) <= self.speed
+            arrived = math.dist(position, self._my_point(meeting)) <= self.speed
+            return arrived or (linked and not self._is_relay)
         if self.state == "wait":
-            patience = self.params.wait + (self.params.backup_wait if self._is_relay else 0)
-            return step > meeting.step + patience
+            return linked or step > meeting.step + self._patience(meeting)
         due = step % self.params.check_interval == 0 and not self._is_relay
         return due and self._late(step, position, meeting)
 
@@ -130,7 +158,25 @@ class RoleBased(FrontierExploration):
             decision = self._explorer(view)
         else:
             decision = super().decide(view)
-        return replace(decision, info={**decision.info, "rv_state": self.state})
+        return replace(decision, info={**decision.info, "rv_state": self.state, **self._views()})
+
+    def _views(self) -> dict[str, FloatArray]:
+        """What the rendezvous layers draw: the agreed points, and (multi-point) the
+        potential points and those linked through walls."""
+        views = {} if self.meeting is None else {"rendezvous": self.meeting.points()}
+        if self._multi is not None:
+            views["rv_candidates"] = self._multi[1].candidates
+            views["rv_through_walls"] = self._multi[1].through_walls
+        return views
+
+    def _my_point(self, meeting: Rendezvous) -> tuple[float, float]:
+        return meeting.relay_at if self._is_relay else meeting.point
+
+    def _patience(self, meeting: Rendezvous) -> int:
+        """Steps past the agreed time it waits: ``wait``, and a relay without a backup
+        meeting ``backup_wait`` more before it gives its explorer up."""
+        extra = self.params.backup_wait if self._is_relay and meeting.backup is None else 0
+        return self.params.wait + extra
 
     def _late(self, step: int, position: tuple[float, float], meeting: Rendezvous) -> bool:
         """Whether the trip to the meeting point would end at or after the agreed time."""
@@ -161,7 +207,8 @@ class RoleBased(FrontierExploration):
         if self.state == "to_rv" and math.dist(view.position, meeting.point) <= view.speed:
             self.state = "wait"
         if self.state == "wait" and view.step > meeting.step + self.params.wait:
-            self.state = "home"
+            self.state = "home" if meeting.backup is None else "to_rv"
+            self.meeting = meeting.backup or meeting
         if self.state == "home" and view.base_contact >= view.step - 1:
             self.state, self.meeting = "explore", None
 
@@ -170,17 +217,47 @@ class RoleBased(FrontierExploration):
         frontier = view.position if explored.done or explored.goal is None else explored.goal
         near = math.dist(frontier, view.position) <= MIN_RV_DISTANCE
         point = view.position if near else frontier
-        if self.params.rendezvous == "improved" and not near:
+        if self.params.rendezvous in ("improved", "multi_point") and not near:
             point = improved_point(view, frontier) or point
+        point = (float(point[0]), float(point[1]))
+        multi = self.params.rendezvous == "multi_point"
+        theirs = self._relay_point(view, point) if multi else point
         record = view.teammates.get(relay)
         relay_at = record.position if record is not None else view.position
         base = view.base_position
-        relay_trip = math.dist(relay_at, base) + math.dist(base, point)
+        relay_trip = math.dist(relay_at, base) + math.dist(base, theirs)
         own_trip = math.dist(view.position, frontier) + math.dist(frontier, point)
         delay = max(
             MIN_MEETING_DELAY, relay_trip / view.speed, own_trip / view.speed + EXPLORE_TIME
         )
-        return Rendezvous((float(point[0]), float(point[1])), view.step + math.ceil(delay))
+        step = view.step + math.ceil(delay)
+        if not multi:
+            return Rendezvous(point, step)
+        return Rendezvous(point, step, theirs, self._backup(view, point, theirs, step))
+
+    def _relay_point(self, view: RobotView, point: tuple[float, float]) -> tuple[float, float]:
+        """Multi-point: the relay's point for the explorer's ``point`` (recomputed at most
+        every :data:`RV_REPLAN_INTERVAL` steps or when the explorer's point moved)."""
+        last = self._multi
+        fresh = last is not None and view.step - last[0] < RV_REPLAN_INTERVAL
+        if last is None or not fresh or math.dist(last[1].explorer, point) > MIN_RV_DISTANCE:
+            context = plan_context(view)
+            reach = view.comm_range
+            choice = relay_point(
+                view.belief, context.passable, context.passable_box, point,
+                view.base_position, reach,
+            )  # fmt: skip
+            self._multi = last = (view.step, choice)
+        return last[1].relay
+
+    def _backup(
+        self, view: RobotView, point: tuple[float, float], theirs: tuple[float, float], step: int
+    ) -> Rendezvous:
+        """The backup meeting: where the pair stands now (they are linked here), once the
+        wait is over and both could have walked there from their points."""
+        here = (float(view.position[0]), float(view.position[1]))
+        trip = max(math.dist(point, here), math.dist(theirs, here)) / view.speed
+        return Rendezvous(here, step + self.params.wait + math.ceil(trip))
 
     # ---------------------------------------------------------------- relay
 
@@ -188,8 +265,9 @@ class RoleBased(FrontierExploration):
         """carry -> to_rv -> wait -> (explorer met: carry) or (given up: explore)."""
         mate = self._explorer_record(view)
         if mate is not None and mate.name in view.links:
-            if isinstance(mate.payload, Rendezvous):
-                self.meeting = mate.payload
+            agreement = self.agreement_of(mate)
+            if agreement is not None:
+                self.meeting = agreement
             self.state = "carry"
         meeting = self.meeting
         if self.state == "carry" and view.base_contact >= view.step - 1:
@@ -198,16 +276,22 @@ class RoleBased(FrontierExploration):
             self._advance_relay(view, meeting)
         if self.state == "carry":
             return self._go(view, view.base_position, None)
-        if meeting is not None and self.state in ("to_rv", "wait"):
-            return self._go(view, meeting.point, None)
+        if self.meeting is not None and self.state in ("to_rv", "wait"):
+            return self._go(view, self.meeting.relay_at, None)
         return super().decide(view)
 
     def _advance_relay(self, view: RobotView, meeting: Rendezvous) -> None:
-        if self.state == "to_rv" and math.dist(view.position, meeting.point) <= view.speed:
+        if self.state == "to_rv" and math.dist(view.position, meeting.relay_at) <= view.speed:
             self.state = "wait"
-        patience = meeting.step + self.params.wait + self.params.backup_wait
-        if self.state == "wait" and view.step > patience:
-            self.state, self.meeting = "explore", None  # its explorer never came
+        if self.state == "wait" and view.step > meeting.step + self._patience(meeting):
+            if meeting.backup is not None:  # on to the backup meeting
+                self.state, self.meeting = "to_rv", meeting.backup
+            else:
+                self.state, self.meeting = "explore", None  # its explorer never came
+
+    def agreement_of(self, record: TeammateInfo) -> Rendezvous | None:
+        """The meeting agreement a teammate's record carries (None: none)."""
+        return record.payload if isinstance(record.payload, Rendezvous) else None
 
     def _explorer_record(self, view: RobotView) -> TeammateInfo | None:
         records = [view.teammates[name] for name in view.children if name in view.teammates]
