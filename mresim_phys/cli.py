@@ -1,4 +1,5 @@
-"""Command line (output edge): ``mresim run | validate | replay | plot | bench``.
+"""Command line (output edge): ``mresim run | validate | replay | plot | bench`` (and
+``sweep | compare | robustness``, from ``sweeps/cli.py``).
 
 Argument parsing only; the work is delegated to ``load``, ``sim`` and
 ``recorders``. Every user mistake ends in a one-paragraph message on stderr and
@@ -31,6 +32,7 @@ from mresim_phys.scenario.load import validate_scenario
 from mresim_phys.scenario.team_file import read_team_file
 from mresim_phys.sim import Simulation
 from mresim_phys.strategies import STRATEGIES
+from mresim_phys.sweeps.cli import SWEEP_COMMANDS, add_sweep_parsers
 
 EXIT_USER_ERROR = 2
 EXIT_INTERRUPTED = 130  # Ctrl-C outside a run's own handling (128 + SIGINT)
@@ -165,6 +167,7 @@ def make_parser() -> argparse.ArgumentParser:
         help="strategies to compare, e.g. frontier,hungarian,min_pos (default frontier):"
         " one run per strategy, stepped in turn",
     )
+    add_sweep_parsers(commands)
     return parser
 
 
@@ -400,6 +403,7 @@ COMMANDS = {
     "replay": replay_command,
     "plot": plot_command,
     "bench": bench_command,
+    **SWEEP_COMMANDS,
 }
 
 

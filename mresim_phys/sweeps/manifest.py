@@ -1,0 +1,158 @@
+"""Sweep folders (sweeps, output edge): what a sweep has done, so a re-run does the rest.
+
+A sweep folder holds ``sweep.json`` (the study's name and the fingerprint of its runs),
+``study.yaml`` (the study as given), ``manifest.jsonl`` (one line per finished run: done
+or failed, appended and flushed to disk as each run ends), ``runs/<run_id>/`` (normal run
+folders, each renamed into place when complete), ``errors/<run_id>.log`` and at the end
+``runs.parquet`` and ``steps.parquet``.
+
+Re-running the same command after a kill runs only what is missing: a run counts as done
+when the manifest says so AND its folder is in place; a folder in place that the manifest
+missed (killed between the rename and the line) is noted as done without running again;
+half-written temporary folders of killed runs are deleted. A folder holding another study
+(or the same study with other runs) is refused.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+from pathlib import Path
+from typing import Any
+
+from mresim_phys.output.files import write_json_atomic, write_text_atomic
+from mresim_phys.output.rundir import remove
+from mresim_phys.sweeps.expand import RunSpec
+from mresim_phys.sweeps.study import StudyError
+from mresim_phys.sweeps.worker import DONE, FAILED, RUNS, run_folder
+
+SWEEP_FILE = "sweep.json"
+MANIFEST = "manifest.jsonl"
+STUDY_COPY = "study.yaml"
+
+
+class Manifest:
+    """The finished runs of one sweep folder, and the file that records them."""
+
+    def __init__(self, folder: Path, records: dict[str, dict[str, Any]]) -> None:
+        self.folder = folder
+        self.records = records
+
+    def todo(self, runs: list[RunSpec]) -> list[RunSpec]:
+        """The runs not finished yet, in order."""
+        return [r for r in runs if r.run_id not in self.records]
+
+    def add(self, record: dict[str, Any]) -> None:
+        """Note a finished run: one line, flushed to disk before returning."""
+        self.records[record["run_id"]] = record
+        with (self.folder / MANIFEST).open("a", encoding="utf-8") as file:
+            file.write(json.dumps(record) + "\n")
+            file.flush()
+            os.fsync(file.fileno())
+
+    def failed(self) -> list[dict[str, Any]]:
+        """The records of failed runs."""
+        return [r for r in self.records.values() if r["status"] == FAILED]
+
+
+def open_sweep(
+    folder: Path, info: dict[str, Any], runs: list[RunSpec], study_text: str
+) -> Manifest:
+    """The sweep folder ``folder`` for the study ``info["study"]`` (with its
+    ``fingerprint``, ``axes`` and ``reference``), created or resumed; StudyError if it holds
+    something else."""
+    folder = Path(folder)
+    check_folder(folder, info["study"], info["fingerprint"])
+    folder.mkdir(parents=True, exist_ok=True)
+    (folder / RUNS).mkdir(exist_ok=True)
+    if not (folder / SWEEP_FILE).is_file():
+        write_text_atomic(folder / STUDY_COPY, study_text)
+        write_json_atomic(folder / SWEEP_FILE, {**info, "runs": len(runs)})
+    clean_leftovers(folder / RUNS)
+    return Manifest(folder, reconcile(folder, read_records(folder / MANIFEST), runs))
+
+
+def check_folder(folder: Path, name: str, print_: str) -> None:
+    """Refuse a folder that is not free, nor a sweep of the same study and runs."""
+    if not folder.exists():
+        return
+    if not folder.is_dir():
+        raise StudyError(f"{folder} is a file; give --out a folder for the sweep.")
+    info_path = folder / SWEEP_FILE
+    if not info_path.is_file():
+        if any(folder.iterdir()):
+            raise StudyError(
+                f"{folder} is not empty and holds no sweep ({SWEEP_FILE} is missing), so the"
+                f" sweep of {name!r} will not write there. Give another --out."
+            )
+        return
+    info = read_info(info_path)
+    if info.get("study") != name or info.get("fingerprint") != print_:
+        held = info.get("study")
+        what = "another study" if held != name else "the same study with other runs"
+        raise StudyError(
+            f"{folder} holds a sweep of {what} ({held!r}, fingerprint"
+            f" {info.get('fingerprint')}; this one is {name!r}, {print_}). A sweep resumes only"
+            " into its own folder: give another --out, or delete that folder to start over."
+        )
+
+
+def read_info(path: Path) -> dict[str, Any]:
+    """``sweep.json``; StudyError if it is damaged."""
+    try:
+        info = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise StudyError(f"{path}: cannot read the sweep record ({exc}).") from None
+    if not isinstance(info, dict):
+        raise StudyError(f"{path}: the sweep record is not a JSON object.")
+    return info
+
+
+def read_records(path: Path) -> dict[str, dict[str, Any]]:
+    """The manifest's records by run id (a line torn by a kill is skipped)."""
+    records: dict[str, dict[str, Any]] = {}
+    if not path.is_file():
+        return records
+    for line in path.read_text(encoding="utf-8").splitlines():
+        try:
+            record = json.loads(line)
+        except ValueError:
+            continue
+        if isinstance(record, dict) and isinstance(record.get("run_id"), str):
+            records[record["run_id"]] = record
+    return records
+
+
+def reconcile(
+    folder: Path, records: dict[str, dict[str, Any]], runs: list[RunSpec]
+) -> dict[str, dict[str, Any]]:
+    """Records of the runs that are really finished (done runs need their folder; a complete
+    folder the manifest missed is a done run)."""
+    known = {r.run_id for r in runs}
+    kept = {
+        k: r
+        for k, r in records.items()
+        if k in known and (r["status"] != DONE or complete(run_folder(folder, k)))
+    }
+    for run in runs:
+        if run.run_id not in kept and complete(run_folder(folder, run.run_id)):
+            kept[run.run_id] = {
+                "run_id": run.run_id,
+                "status": DONE,
+                "run_time_s": None,
+                "error": None,
+                "log": None,
+            }
+    return kept
+
+
+def complete(run_dir: Path) -> bool:
+    """Whether a run folder is in place (folders appear whole, by a rename)."""
+    return (run_dir / "summary.json").is_file()
+
+
+def clean_leftovers(runs_dir: Path) -> None:
+    """Delete the temporary folders of runs killed mid-way."""
+    for path in runs_dir.iterdir():
+        if ".tmp-" in path.name or ".old-" in path.name:
+            remove(path)
