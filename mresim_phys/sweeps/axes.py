@@ -20,9 +20,12 @@ from __future__ import annotations
 
 import copy
 from collections.abc import Mapping
-from typing import Any
+from typing import Any, get_args, get_origin
+
+from pydantic import BaseModel
 
 from mresim_phys.scenario.overrides import apply_overrides
+from mresim_phys.scenario.schema import Scenario
 from mresim_phys.sweeps.study import StudyError
 
 COUNT = "robots.count"
@@ -48,7 +51,7 @@ def first_list(data: Mapping[str, Any], parts: list[str], path: str, source: str
     for k, part in enumerate(parts[:-1]):
         node = node.get(part) if isinstance(node, Mapping) else None
         if node is None:
-            return None
+            return schema_list(parts)
         if isinstance(node, list) and not (k == 0 and part == "robots"):
             return k
         if isinstance(node, list):
@@ -62,6 +65,24 @@ def first_list(data: Mapping[str, Any], parts: list[str], path: str, source: str
     return None
 
 
+def schema_list(parts: list[str]) -> int | None:
+    """The index in ``parts`` of the first field the scenario schema declares a list
+    (robots excepted), or None."""
+    model: type[BaseModel] = Scenario
+    for k, part in enumerate(parts[:-1]):
+        field = model.model_fields.get(part)
+        if field is None:
+            return None
+        kinds = [field.annotation, *get_args(field.annotation)]
+        if any(get_origin(t) is list for t in kinds):
+            return None if k == 0 and part == "robots" else k
+        nested = [t for t in kinds if isinstance(t, type) and issubclass(t, BaseModel)]
+        if not nested:
+            return None
+        model = nested[0]
+    return None
+
+
 def set_in_list(
     data: dict[str, Any], parts: list[str], at: int, value: Any, source: str
 ) -> dict[str, Any]:
@@ -70,9 +91,11 @@ def set_in_list(
     result = copy.deepcopy(data)
     parent: dict[str, Any] = result
     for part in parts[:at]:
+        if not isinstance(parent.get(part), dict):
+            parent[part] = {}
         parent = parent[part]
     key, rest = parts[at], ".".join(parts[at + 1 :])
-    entries = parent[key]
+    entries = parent.get(key) or []
     if value is None:
         parent[key] = []
         return result

@@ -84,7 +84,8 @@ def resolve_column(name: str, columns: list[str], what: str) -> str:
     matches = [c for c in columns if c.rsplit(".", 1)[-1] == name]
     if len(matches) == 1:
         return matches[0]
-    close = difflib.get_close_matches(name, columns, n=1)
+    short = {c.rsplit(".", 1)[-1]: c for c in columns}
+    close = difflib.get_close_matches(name, [*columns, *short], n=1)
     hint = f" Did you mean {close[0]!r}?" if close else ""
     raise MresimError(f"{what} {name!r}: the sweep has no such column.{hint} It has: {columns}.")
 

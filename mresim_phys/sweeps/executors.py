@@ -28,7 +28,7 @@ from mresim_phys.errors import MresimError
 from mresim_phys.sweeps.expand import RunSpec
 from mresim_phys.sweeps.worker import run_task
 
-CONNECT_TIMEOUT = 5  # seconds to reach a Dask scheduler
+CONNECT_TIMEOUT = 3  # seconds to reach a Dask scheduler
 Result = dict[str, Any]
 
 
@@ -95,24 +95,30 @@ class LocalPool:
 class DaskPool:
     """A Dask distributed client: a LocalCluster it started, or a running scheduler."""
 
-    def __init__(self, address: str) -> None:
-        distributed: Any = importlib.import_module("distributed")  # untyped library
-        self.cluster: Any = None
-        self.client: Any
-        if address.startswith("local:"):
-            workers = local_workers(address)
-            self.cluster = distributed.LocalCluster(
-                n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None
-            )
-            self.client = distributed.Client(self.cluster)
-        else:
-            self.client = connect(distributed.Client, address)
-        self.slots = max(1, sum(self.client.nthreads().values()))
-        self.name = f"Dask at {self.client.scheduler.address} ({self.slots} worker threads)"
+    def __init__(self, client: Any, cluster: Any = None, own: bool = True) -> None:
+        """Use ``client`` (and close it, and ``cluster``, at the end if ``own``)."""
+        self.client, self.cluster, self.own = client, cluster, own
+        self.slots = max(1, sum(client.nthreads().values()))
+        self.name = f"Dask at {client.scheduler.address} ({self.slots} worker threads)"
+
+    @classmethod
+    def at(cls, address: str) -> DaskPool:
+        """A pool on ``local:N`` (a LocalCluster of N one-thread worker processes, started
+        here) or on the scheduler at ``address``."""
+        distributed: Any = importlib.import_module("distributed")  # an untyped library
+        if not address.startswith("local:"):
+            return cls(connect(distributed.Client, address))
+        cluster = distributed.LocalCluster(
+            n_workers=local_workers(address),
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+        )
+        return cls(distributed.Client(cluster), cluster)
 
     def submit(self, spec: RunSpec, sweep: str) -> Any:
         """Start ``spec`` on a Dask worker."""
-        return self.client.submit(run_task, spec, sweep, key=f"mresim-{spec.run_id}", pure=False)
+        return self.client.submit(run_task, spec, sweep, pure=False)
 
     def wait_any(self, futures: list[Any]) -> list[Any]:
         """The futures done once at least one is."""
@@ -121,6 +127,8 @@ class DaskPool:
 
     def close(self) -> None:
         """Leave the scheduler (and stop the LocalCluster this pool started)."""
+        if not self.own:
+            return
         self.client.close()
         if self.cluster is not None:
             self.cluster.close()
@@ -158,7 +166,7 @@ def connect(client_class: Any, address: str) -> Any:
 def make_backend(workers: int | None, dask: str | None) -> Backend:
     """The backend the command line asks for: Dask if ``dask``, else a local pool."""
     if dask is not None:
-        return DaskPool(dask)
+        return DaskPool.at(dask)
     return LocalPool(workers or default_workers())
 
 

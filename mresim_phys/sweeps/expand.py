@@ -26,7 +26,7 @@ from mresim_phys.scenario.schema import Scenario
 from mresim_phys.sweeps.axes import COUNT, apply_axis, shown
 from mresim_phys.sweeps.failures import with_failures
 from mresim_phys.sweeps.placement import resize_team
-from mresim_phys.sweeps.study import FAILURES, MAX_RUNS, Study, StudyError
+from mresim_phys.sweeps.study import FAILURES, MAX_RUNS, Study, StudyError, flatten_axes
 
 SWEEP_RENDER = {"plots": False, "video": False}  # a sweep's runs: metrics, summary, run log
 
@@ -78,13 +78,17 @@ def combinations(study: Study) -> list[dict[str, Any]]:
     return [dict(zip(paths, row, strict=True)) for row in rows]
 
 
-def base_data(study: Study, path: Path) -> dict[str, Any]:
+def base_data(study: Study, path: Path, study_path: Path) -> dict[str, Any]:
     """A base scenario's YAML data with the study's fixed overrides and step cap."""
-    data = read_yaml_mapping(path)
-    fixed = dict(study.overrides)
+    try:
+        data = read_yaml_mapping(path)
+    except MresimError as exc:
+        raise StudyError(f"{study_path}: scenarios: {exc}") from None
+    fixed = flatten_axes(study.overrides)
     if study.steps is not None:
         fixed["steps"] = study.steps
-    data = apply_overrides(data, fixed, str(path))
+    for key, value in fixed.items():
+        data = apply_axis(data, key, value, str(path))
     return apply_overrides(data, {"render": SWEEP_RENDER}, str(path))
 
 
@@ -109,7 +113,7 @@ def expand_arms(study: Study, study_path: Path) -> list[Arm]:
     arms: list[Arm] = []
     for file in study.scenarios:
         path = folder / file
-        base = base_data(study, path)
+        base = base_data(study, path, study_path)
         for values in combinations(study):
             try:
                 arms.append(make_arm(len(arms), path, base, values))

@@ -69,7 +69,14 @@ def open_sweep(
         write_text_atomic(folder / STUDY_COPY, study_text)
         write_json_atomic(folder / SWEEP_FILE, {**info, "runs": len(runs)})
     clean_leftovers(folder / RUNS)
-    return Manifest(folder, reconcile(folder, read_records(folder / MANIFEST), runs))
+    records = read_records(folder / MANIFEST)
+    manifest = Manifest(folder, {})
+    for record in reconcile(folder, records, runs).values():
+        if records.get(record["run_id"]) == record:
+            manifest.records[record["run_id"]] = record
+        else:
+            manifest.add(record)  # a run found complete that the manifest missed
+    return manifest
 
 
 def check_folder(folder: Path, name: str, print_: str) -> None:

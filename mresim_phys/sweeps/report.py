@@ -1,6 +1,7 @@
 """Sweep report (sweeps, compare): ``report.md`` and ``report.html`` (figures embedded).
 
-One table per metric: each arm's runs, mean, median, 95 % CI and thresholds not reached;
+One table per metric: each arm's done runs, mean, median, 95 % CI, thresholds not reached
+and failed runs (an arm whose runs all failed is there too);
 then the paired differences against the reference arm (pairs, mean and median
 difference, Wilcoxon W and p, rank-biserial effect size); then every failed run with its
 error and log. Numbers are shown with four significant digits.
@@ -20,7 +21,7 @@ from mresim_phys.output.files import write_text_atomic
 from mresim_phys.sweeps.stats import ArmFigures, Grouping, Paired
 from mresim_phys.sweeps.worker import FAILED
 
-ARM_HEAD = ["arm", "runs", "mean", "median", "95 % CI", "not reached"]
+ARM_HEAD = ["arm", "runs", "mean", "median", "95 % CI", "not reached", "failed"]
 PAIR_HEAD = ["arm", "pairs", "mean diff", "median diff", "Wilcoxon W", "p", "effect size r"]
 Table = list[list[str]]
 
@@ -53,6 +54,7 @@ def arm_table(section: Section) -> Table:
             num(a.median),
             f"[{num(a.ci_low)}, {num(a.ci_high)}]",
             str(a.not_reached),
+            str(a.failed),
         ]
         for a in section.arms
     ]

@@ -36,6 +36,7 @@ class SweepOptions:
     video_for: str | None = None
     verbose: bool = False
     quiet: bool = False
+    backend: Backend | None = None  # a backend made by the caller (it closes it itself)
 
 
 @dataclass
@@ -83,7 +84,7 @@ def run_sweep(
     runs = with_videos(expand_runs(study, study_path), options.video_for, options.out)
     print_ = fingerprint(runs)
     check_folder(options.out, study.name, print_)
-    backend = make_backend(options.workers, options.dask)
+    backend = options.backend or make_backend(options.workers, options.dask)
     try:
         info = {
             "study": study.name,
@@ -95,7 +96,8 @@ def run_sweep(
         todo = manifest.todo(runs)
         run_all(todo, runs, manifest, backend, options)
     finally:
-        backend.close()
+        if options.backend is None:
+            backend.close()
     write_runs(options.out, runs, manifest.records)
     write_steps(options.out, runs, manifest.records)
     return SweepResult(options.out, runs, manifest, len(todo), backend.name)

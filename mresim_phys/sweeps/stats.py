@@ -39,6 +39,7 @@ class ArmFigures:
     ci_low: float
     ci_high: float
     not_reached: int
+    failed: int = 0
 
 
 @dataclass(frozen=True)
@@ -77,13 +78,16 @@ def mean_ci(values: np.ndarray) -> tuple[float, float]:
     return mean - half, mean + half
 
 
-def arm_figures(label: str, runs: pd.DataFrame, metric: str) -> ArmFigures:
-    """An arm's n, mean, median, 95 % CI and not-reached count."""
+def arm_figures(label: str, all_runs: pd.DataFrame, metric: str) -> ArmFigures:
+    """An arm's n, mean, median, 95 % CI, not-reached and failed counts."""
+    runs = all_runs[all_runs["status"] == DONE]
+    failed = len(all_runs) - len(runs)
     values = metric_values(runs, metric).to_numpy()
     low, high = mean_ci(values)
     mean = float(np.mean(values)) if len(values) else math.nan
     median = float(np.median(values)) if len(values) else math.nan
-    return ArmFigures(label, len(values), mean, median, low, high, not_reached(runs, metric))
+    reached = not_reached(runs, metric)
+    return ArmFigures(label, len(values), mean, median, low, high, reached, failed)
 
 
 def rank_biserial(diffs: np.ndarray) -> float:
@@ -148,10 +152,12 @@ class Grouping:
         return ", ".join(f"{c.rsplit('.', 1)[-1]}={v}" for c, v in zip(self.by, key, strict=True))
 
 
-def arm_groups(runs: pd.DataFrame, grouping: Grouping) -> list[tuple[Key, pd.DataFrame]]:
-    """The done runs of each arm, arms in the order of the sweep."""
-    done = runs[runs["status"] == DONE]
-    groups = done.groupby(grouping.by, sort=False, dropna=False)
+def arm_groups(
+    runs: pd.DataFrame, grouping: Grouping, done: bool = True
+) -> list[tuple[Key, pd.DataFrame]]:
+    """The done runs (or all runs) of each arm, arms in the order of the sweep."""
+    chosen = runs[runs["status"] == DONE] if done else runs
+    groups = chosen.groupby(grouping.by, sort=False, dropna=False)
     return [(k if isinstance(k, tuple) else (k,), g) for k, g in groups]
 
 
@@ -159,8 +165,10 @@ def compare_metric(
     runs: pd.DataFrame, metric: str, grouping: Grouping
 ) -> tuple[list[ArmFigures], list[Paired]]:
     """Per-arm figures and paired differences against the reference arm for ``metric``."""
+    figures = [
+        arm_figures(grouping.label(k), g, metric) for k, g in arm_groups(runs, grouping, False)
+    ]
     groups = arm_groups(runs, grouping)
-    figures = [arm_figures(grouping.label(k), g, metric) for k, g in groups]
     reference = next((g for k, g in groups if same_key(k, grouping.reference)), None)
     pairs = []
     if reference is not None:

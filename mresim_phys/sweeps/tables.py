@@ -5,7 +5,8 @@
 ``seed``, ``status``, ``error`` and ``log`` (failed runs), ``run_time_s`` (the worker's
 wall time), then the run's summary figures (``summary.json`` flattened:
 ``steps_to_explored_90`` for ``steps_to_explored["0.9"]``, the ``communication`` block's
-fields, ``failures`` as a count, the robustness figures) and, for paired runs,
+fields, ``failed_robots`` (the
+summary's ``failures``, counted), the robustness figures) and, for paired runs,
 ``robustness.json``'s differences (``diff_<name>``). Wall-clock columns are
 :data:`WALL_COLUMNS`; everything else is the same on any machine and any backend.
 
@@ -53,7 +54,7 @@ def flatten_summary(summary: dict[str, Any]) -> dict[str, Any]:
         elif key == "communication" and isinstance(value, dict):
             row |= value
         elif key == "failures" and isinstance(value, list):
-            row[key] = len(value)
+            row["failed_robots"] = len(value)
         elif not isinstance(value, (dict, list)):
             row[key] = value
     return row
