@@ -183,3 +183,10 @@ def test_video_for_selects_runs_and_rejects_code(tmp_path: Path) -> None:
         with_videos(runs, "__import__('os')", tmp_path)
     with pytest.raises(MresimError, match="unknown name 'sed'"):
         with_videos(runs, "sed < 1", tmp_path)
+
+
+@pytest.mark.parametrize("study_file", sorted((REPO / "studies").glob("*.yaml")))
+def test_shipped_studies_are_valid(study_file: Path) -> None:
+    runs = expand_runs(load_study(study_file), study_file)
+    assert len(runs) >= 160 and len({r.run_id for r in runs}) == len(runs)
+    assert all(r.data["render"] == {"plots": False, "video": False} for r in runs[:3])

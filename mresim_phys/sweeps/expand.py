@@ -6,7 +6,8 @@ with the combinations). Every arm is applied to its scenario's YAML data and val
 the scenario schema before anything runs, so an unknown path (with a close match) or a
 value the schema rejects is reported with the arm that holds it. A run is an arm with a
 seed: its complete scenario data (seed, failures of that seed, the sweep's render
-settings), ready for any worker process or Dask worker.
+settings: no plots, no video unless asked; one thread per run, as the workers are the
+parallelism; threads never change results), ready for any worker process or Dask worker.
 """
 
 from __future__ import annotations
@@ -84,7 +85,7 @@ def base_data(study: Study, path: Path, study_path: Path) -> dict[str, Any]:
         data = read_yaml_mapping(path)
     except MresimError as exc:
         raise StudyError(f"{study_path}: scenarios: {exc}") from None
-    fixed = flatten_axes(study.overrides)
+    fixed = {"simulation.threads": 1, **flatten_axes(study.overrides)}  # one core per run
     if study.steps is not None:
         fixed["steps"] = study.steps
     for key, value in fixed.items():
