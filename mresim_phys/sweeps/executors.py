@@ -5,8 +5,10 @@ give the same runs; only the wall times differ. A backend keeps at most ``slots`
 flight (one per worker process or Dask worker thread), so "active" means running, and a
 killed sweep loses at most the runs that were running.
 
-* :class:`LocalPool`: ``concurrent.futures.ProcessPoolExecutor`` with *spawn* processes
-  (no forked copies of numba's or pymunk's state; every worker imports mresim afresh).
+* :class:`LocalPool`: ``concurrent.futures.ProcessPoolExecutor`` whose workers fork from
+  a *forkserver* that imported mresim once (never from the busy parent: no forked copies
+  of its threads, numba's thread pool or open files), or *spawn* where there is no
+  forkserver (Windows).
 * :class:`DaskPool`: ``--dask local:N`` starts a ``LocalCluster`` of N one-thread worker
   processes; ``--dask tcp://host:8786`` joins a running scheduler (its workers need
   mresim_phys installed and the scenario and map paths readable, and write to the same
@@ -56,6 +58,18 @@ def default_workers() -> int:
         return os.cpu_count() or 1
 
 
+def worker_context() -> multiprocessing.context.BaseContext:
+    """*forkserver* where the system has it (a clean server process imports mresim once,
+    with no threads running, and forks each worker from it: numba's compiled kernels and
+    pymunk come along without a second import and without forking a busy parent), else
+    *spawn*."""
+    if "forkserver" not in multiprocessing.get_all_start_methods():
+        return multiprocessing.get_context("spawn")
+    context = multiprocessing.get_context("forkserver")
+    context.set_forkserver_preload(["mresim_phys.sweeps.worker"])
+    return context
+
+
 def ignore_interrupts() -> None:
     """Worker processes ignore Ctrl-C (the sweep stops them), so a run cut short is never
     written as a finished one."""
@@ -67,7 +81,7 @@ class LocalPool:
 
     def __init__(self, workers: int) -> None:
         self.slots, self.name = workers, f"{workers} local process{'es' * (workers > 1)}"
-        context = multiprocessing.get_context("spawn")
+        context = worker_context()
         self.pool = ProcessPoolExecutor(
             max_workers=workers, mp_context=context, initializer=ignore_interrupts
         )
@@ -193,5 +207,20 @@ def execute(
     fill()
     while active:
         for future in backend.wait_any(list(active)):
-            on_result(active.pop(future), future.result())
+            spec = active.pop(future)
+            on_result(spec, outcome(future, spec))
         fill()
+
+
+def outcome(future: Any, spec: RunSpec) -> Result:
+    """A finished future's record; MresimError if its worker died (a run that raises is a
+    record, not an exception: ``worker.run_task``)."""
+    try:
+        record: Result = future.result()
+    except Exception as exc:
+        raise MresimError(
+            f"the worker running {spec.run_id} ({spec.label}, seed {spec.seed}) died"
+            f" ({type(exc).__name__}: {' '.join(str(exc).split())[:200]}), e.g. out of memory."
+            " The runs finished so far are kept: run the same command again to resume."
+        ) from None
+    return record

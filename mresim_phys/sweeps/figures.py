@@ -1,8 +1,8 @@
 """Sweep figures (sweeps, compare): matplotlib plots of a sweep's arms.
 
 * ``curves``: explored and known-at-base against the step, the mean of each arm with its
-  95 % confidence band (a run that stopped early keeps its last value to the longest run's
-  end, as a run stopped by a rule keeps what it knew);
+  95 % confidence band, clipped to [0, 1] (a run that stopped early keeps its last value to
+  the longest run's end, as a run stopped by a rule keeps what it knew);
 * ``distribution``: a box plot of a metric per arm (thresholds never reached count as the
   run's last step + 1, see ``sweeps/stats.py``);
 * ``degradation``: for a fault axis (``failures`` or a ``faults.*`` path), the metric's
@@ -69,6 +69,7 @@ def plot_curves(
         for ax, column in zip(axes, CURVES, strict=True):
             mean, low, high = band(run_matrix(steps, list(group["run_id"]), column, last))
             (line,) = ax.plot(x, mean, label=grouping.label(key), linewidth=1.4)
+            low, high = np.clip(low, 0, 1), np.clip(high, 0, 1)  # fractions: the band too
             ax.fill_between(x, low, high, color=line.get_color(), alpha=0.2, linewidth=0)
     for ax, column in zip(axes, CURVES, strict=True):
         ax.set_title(f"{column.replace('_', ' ')} (mean, 95 % CI)")
