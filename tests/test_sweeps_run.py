@@ -89,8 +89,23 @@ def test_a_failing_run_is_recorded_and_the_sweep_goes_on(
 ) -> None:
     study = write_study(tmp_path, axes={"robots.A.start": [[66, 52], [1, 1]]}, seeds=2)
     out = tmp_path / "out"
-    code = main(["sweep", str(study), "--out", str(out), "--workers", "2", "--quiet"])
+    video_for = "seed == 1 and start == [66, 52]"
+    code = main(
+        [
+            "sweep",
+            str(study),
+            "--out",
+            str(out),
+            "--workers",
+            "2",
+            "--quiet",
+            "--video-for",
+            video_for,
+        ]
+    )
     assert code == 1
+    assert [p.name for p in (out / "videos").iterdir()] == ["a000-s0001.mp4"]
+    assert (out / "videos" / "a000-s0001.mp4").stat().st_size > 1000
     runs = pd.read_parquet(out / "runs.parquet").set_index("run_id")
     assert list(runs["status"]) == ["done", "done", "failed", "failed"]
     failed = runs.loc["a001-s0000"]

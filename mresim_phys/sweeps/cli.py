@@ -12,6 +12,7 @@ import importlib.util
 from pathlib import Path
 
 from mresim_phys.errors import MresimError
+from mresim_phys.sweeps.study import Study  # no pandas, pyarrow or matplotlib behind it
 
 NEEDED = ("pandas", "pyarrow", "matplotlib", "scipy")
 
@@ -164,12 +165,10 @@ def sweep_command(args: argparse.Namespace) -> int:
     return sweep_and_report(study, args.study, text, args)
 
 
-def sweep_and_report(study: object, path: Path, text: str, args: argparse.Namespace) -> int:
+def sweep_and_report(study: Study, path: Path, text: str, args: argparse.Namespace) -> int:
     """Run the sweep, print its summary; 1 if some runs failed."""
     from mresim_phys.sweeps.runner import SweepOptions, run_sweep
-    from mresim_phys.sweeps.study import Study
 
-    assert isinstance(study, Study)
     out = args.out or Path("sweeps") / study.name
     options = SweepOptions(
         out, args.workers, args.dask, getattr(args, "video_for", None), args.verbose, args.quiet
