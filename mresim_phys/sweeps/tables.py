@@ -102,7 +102,7 @@ def write_table(frame: pd.DataFrame, path: Path) -> Path:
     for column in frame.columns:
         kinds = {type(v) for v in frame[column] if v is not None and v == v}
         if len(kinds - {int, float}) and len(kinds) > 1:
-            frame[column] = [None if v is None else str(v) for v in frame[column]]
+            frame[column] = [None if v is None or v != v else str(v) for v in frame[column]]
     table = pa.Table.from_pandas(frame, preserve_index=False)
     with atomic_path(path) as tmp:
         pq.write_table(table, tmp)
