@@ -106,7 +106,7 @@ def test_an_output_folder_holding_another_study_is_refused(
 ) -> None:
     out = tmp_path / "out"
     out.mkdir()
-    (out / "sweep.json").write_text('{"study": "other", "fingerprint": "x"}', encoding="utf-8")
+    (out / "sweep.json").write_text('{"study": "other", "runs": {}}', encoding="utf-8")
     code, err = sweep_cli(capsys, write_study(tmp_path), "--out", out, "--workers", "1")
     assert code == 2 and "holds a sweep of another study ('other'" in err
     (out / "sweep.json").unlink()

@@ -116,7 +116,7 @@ def test_a_failing_run_is_recorded_and_the_sweep_goes_on(
     assert sorted(p.name for p in (out / "runs").iterdir()) == ["a000-s0000", "a000-s0001"]
     assert main(["sweep", str(study), "--out", str(out), "--workers", "1"]) == 1
     summary = capsys.readouterr().out
-    assert "2 done, 2 failed (0 run now" in summary and str(log) in summary
+    assert "2 done, 2 failed (ran 0 now" in summary and str(log) in summary
     assert main(["compare", str(out), "--metric", "final_explored"]) == 0
     report = (out / "compare" / "report.md").read_text(encoding="utf-8")
     failed_part = report.split("## Failed runs", 1)[1]
@@ -175,3 +175,21 @@ def test_a_killed_sweep_resumes_without_losing_or_repeating_runs(tmp_path: Path)
     folders = sorted(p.name for p in (out / "runs").iterdir())
     assert folders == sorted(runs["run_id"])  # no temporary folder left
     assert stamps == {r: (out / "runs" / r / "summary.json").stat().st_mtime_ns for r in before}
+
+
+def test_more_seeds_carry_on_and_changed_runs_are_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    out = tmp_path / "out"
+    args = ["sweep", str(tmp_path / "study.yaml"), "--out", str(out), "--workers", "1"]
+    write_study(tmp_path, seeds=1, steps=5)
+    assert main(args) == 0
+    write_study(tmp_path, seeds=2, steps=5)
+    assert main(args) == 0
+    assert "2 runs, 2 done, 0 failed (ran 1 now" in capsys.readouterr().out
+    assert len(pd.read_parquet(out / "runs.parquet")) == 2
+    write_study(tmp_path, seeds=2, steps=6)
+    assert main(args) == 2
+    assert (
+        "whose runs ['a000-s0000', 'a000-s0001'] had other scenario data" in capsys.readouterr().err
+    )

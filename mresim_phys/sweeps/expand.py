@@ -162,7 +162,12 @@ def make_run(study: Study, arm: Arm, seed: int, study_path: Path) -> RunSpec:
     )
 
 
-def fingerprint(runs: list[RunSpec]) -> str:
-    """A hash of every run's id and scenario data: equal studies, equal fingerprints."""
-    text = json.dumps([[r.run_id, r.data] for r in runs], sort_keys=True, default=str)
+def fingerprints(runs: list[RunSpec]) -> dict[str, str]:
+    """Each run's id -> a hash of its scenario data (equal data, equal hash)."""
+    return {r.run_id: data_hash(r.data) for r in runs}
+
+
+def data_hash(data: dict[str, Any]) -> str:
+    """A short hash of scenario data."""
+    text = json.dumps(data, sort_keys=True, default=str)
     return hashlib.sha256(text.encode("utf-8")).hexdigest()[:16]

@@ -1,6 +1,7 @@
 """Sweep folders (sweeps, output edge): what a sweep has done, so a re-run does the rest.
 
-A sweep folder holds ``sweep.json`` (the study's name and the fingerprint of its runs),
+A sweep folder holds ``sweep.json`` (the study's name, axes and reference, and a hash of
+each run's scenario data by run id),
 ``study.yaml`` (the study as given), ``manifest.jsonl`` (one line per finished run: done
 or failed, appended and flushed to disk as each run ends), ``runs/<run_id>/`` (normal run
 folders, each renamed into place when complete), ``errors/<run_id>.log`` and at the end
@@ -9,8 +10,10 @@ folders, each renamed into place when complete), ``errors/<run_id>.log`` and at 
 Re-running the same command after a kill runs only what is missing: a run counts as done
 when the manifest says so AND its folder is in place; a folder in place that the manifest
 missed (killed between the rename and the line) is noted as done without running again;
-half-written temporary folders of killed runs are deleted. A folder holding another study
-(or the same study with other runs) is refused.
+half-written temporary folders of killed runs are deleted. The same study with more runs
+(more seeds, values added at the end of the first axis, base scenarios added at the end)
+carries on in its folder; a folder
+holding another study, or a run id whose scenario data changed, is refused.
 """
 
 from __future__ import annotations
@@ -58,16 +61,18 @@ class Manifest:
 def open_sweep(
     folder: Path, info: dict[str, Any], runs: list[RunSpec], study_text: str
 ) -> Manifest:
-    """The sweep folder ``folder`` for the study ``info["study"]`` (with its
-    ``fingerprint``, ``axes`` and ``reference``), created or resumed; StudyError if it holds
-    something else."""
+    """The sweep folder ``folder`` for the study ``info["study"]`` (with its ``axes``,
+    ``reference`` and the hashes of its ``runs``), created or resumed; StudyError if it
+    holds something else."""
     folder = Path(folder)
-    check_folder(folder, info["study"], info["fingerprint"])
+    check_folder(folder, info["study"], info["runs"])
     folder.mkdir(parents=True, exist_ok=True)
     (folder / RUNS).mkdir(exist_ok=True)
-    if not (folder / SWEEP_FILE).is_file():
-        write_text_atomic(folder / STUDY_COPY, study_text)
-        write_json_atomic(folder / SWEEP_FILE, {**info, "runs": len(runs)})
+    old = read_info(folder / SWEEP_FILE) if (folder / SWEEP_FILE).is_file() else {}
+    write_text_atomic(folder / STUDY_COPY, study_text)
+    write_json_atomic(
+        folder / SWEEP_FILE, {**info, "runs": {**old.get("runs", {}), **info["runs"]}}
+    )
     clean_leftovers(folder / RUNS)
     records = read_records(folder / MANIFEST)
     manifest = Manifest(folder, {})
@@ -79,8 +84,9 @@ def open_sweep(
     return manifest
 
 
-def check_folder(folder: Path, name: str, print_: str) -> None:
-    """Refuse a folder that is not free, nor a sweep of the same study and runs."""
+def check_folder(folder: Path, name: str, hashes: dict[str, str]) -> None:
+    """Refuse a folder that is not free, nor a sweep of the same study whose runs (by id)
+    hold the same scenario data."""
     if not folder.exists():
         return
     if not folder.is_dir():
@@ -94,13 +100,22 @@ def check_folder(folder: Path, name: str, print_: str) -> None:
             )
         return
     info = read_info(info_path)
-    if info.get("study") != name or info.get("fingerprint") != print_:
-        held = info.get("study")
-        what = "another study" if held != name else "the same study with other runs"
+    held, old = info.get("study"), info.get("runs")
+    if held != name or not isinstance(old, dict):
         raise StudyError(
-            f"{folder} holds a sweep of {what} ({held!r}, fingerprint"
-            f" {info.get('fingerprint')}; this one is {name!r}, {print_}). A sweep resumes only"
-            " into its own folder: give another --out, or delete that folder to start over."
+            f"{folder} holds a sweep of another study ({held!r}; this one is {name!r}). A"
+            " sweep resumes only into its own folder: give another --out, or delete that"
+            " folder to start over."
+        )
+    changed = sorted(r for r, h in hashes.items() if r in old and old[r] != h)
+    if changed:
+        raise StudyError(
+            f"{folder} holds a sweep of {name!r} whose runs {changed[:3]}"
+            f"{' and more' if len(changed) > 3 else ''} had other scenario data (a changed axis"
+            " value, base scenario, override or step cap; run ids are a<arm>-s<seed>, so"
+            " inserting an axis value renumbers the arms). Give another --out, or delete that"
+            " folder to start over; more seeds, values added at the end of the first axis or"
+            " scenarios added at the end carry on in the same folder."
         )
 
 

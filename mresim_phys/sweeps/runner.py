@@ -18,7 +18,7 @@ from typing import Any
 from tqdm import tqdm
 
 from mresim_phys.sweeps.executors import Backend, execute, make_backend
-from mresim_phys.sweeps.expand import RunSpec, expand_runs, fingerprint
+from mresim_phys.sweeps.expand import RunSpec, expand_runs, fingerprints
 from mresim_phys.sweeps.manifest import Manifest, check_folder, open_sweep
 from mresim_phys.sweeps.select import run_names, selector
 from mresim_phys.sweeps.study import Study
@@ -59,7 +59,7 @@ class SweepResult:
         done = len(self.manifest.records) - len(self.failed)
         lines = [
             f"sweep {self.folder}: {len(self.runs)} runs, {done} done, {len(self.failed)} failed"
-            f" ({self.ran} run now on {self.backend}) -> {self.folder / 'runs.parquet'},"
+            f" (ran {self.ran} now on {self.backend}) -> {self.folder / 'runs.parquet'},"
             f" {self.folder / 'steps.parquet'}"
         ]
         lines += [f"  failed {r['run_id']}: {r['error']} (log {r['log']})" for r in self.failed]
@@ -82,13 +82,13 @@ def run_sweep(
 ) -> SweepResult:
     """Run every missing run of ``study`` into ``options.out`` and write its tables."""
     runs = with_videos(expand_runs(study, study_path), options.video_for, options.out)
-    print_ = fingerprint(runs)
-    check_folder(options.out, study.name, print_)
+    hashes = fingerprints(runs)
+    check_folder(options.out, study.name, hashes)
     backend = options.backend or make_backend(options.workers, options.dask)
     try:
         info = {
             "study": study.name,
-            "fingerprint": print_,
+            "runs": hashes,
             "axes": list(study.axes),
             "reference": study.reference,
         }
