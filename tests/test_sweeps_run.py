@@ -8,7 +8,6 @@ import signal
 import subprocess
 import sys
 import time
-import warnings
 from pathlib import Path
 from typing import Any
 
@@ -54,23 +53,19 @@ def test_pool_and_dask_give_the_same_runs(tmp_path: Path) -> None:
         == 0
     )
     study, text = load_study(study_path), study_path.read_text(encoding="utf-8")
-    with warnings.catch_warnings():
-        # distributed may warn about its own ports and event loop when a cluster starts and
-        # stops inside a test process; none of that concerns the runs
-        warnings.simplefilter("ignore", DeprecationWarning)
-        warnings.simplefilter("ignore", ResourceWarning)
-        warnings.simplefilter("ignore", UserWarning)
-        from distributed import Client, LocalCluster
+    from distributed import Client, LocalCluster
 
-        with (
-            LocalCluster(
-                n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
-            ) as cluster,
-            Client(cluster) as client,
-        ):
-            backend = DaskPool(client, own=False)
-            options = SweepOptions(tmp_path / "dask", quiet=True, backend=backend)
-            result = run_sweep(study, study_path, text, options)
+    # an in-process cluster (one worker thread): the runs go through Dask's scheduler and
+    # serialisation while the test stays quick; it is closed at the end of the block
+    with (
+        LocalCluster(
+            n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+        ) as cluster,
+        Client(cluster) as client,
+    ):
+        backend = DaskPool(client, own=False)
+        options = SweepOptions(tmp_path / "dask", quiet=True, backend=backend)
+        result = run_sweep(study, study_path, text, options)
     assert result.ran == 12 and not result.failed and "Dask" in result.backend
     pool_runs, pool_steps = tables(tmp_path / "pool")
     dask_runs, dask_steps = tables(tmp_path / "dask")
