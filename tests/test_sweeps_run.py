@@ -188,3 +188,13 @@ def test_more_seeds_carry_on_and_changed_runs_are_refused(
     assert (
         "whose runs ['a000-s0000', 'a000-s0001'] had other scenario data" in capsys.readouterr().err
     )
+
+
+@pytest.mark.slow
+def test_dask_local_cluster_of_processes_from_the_command_line(tmp_path: Path) -> None:
+    """``--dask local:2`` starts (and stops) a LocalCluster of worker processes."""
+    study = write_study(tmp_path, axes={"team.strategy": ["frontier", "random_walk"]}, seeds=2)
+    for out, flag in (("dask", ["--dask", "local:2"]), ("pool", ["--workers", "2"])):
+        assert main(["sweep", str(study), "--out", str(tmp_path / out), "--quiet", *flag]) == 0
+    pd.testing.assert_frame_equal(tables(tmp_path / "dask")[0], tables(tmp_path / "pool")[0])
+    pd.testing.assert_frame_equal(tables(tmp_path / "dask")[1], tables(tmp_path / "pool")[1])
