@@ -99,6 +99,8 @@ def test_bad_study_fields_are_user_errors(
     study = write_study(tmp_path, seed=[1, 2])
     code, err = sweep_cli(capsys, study)
     assert code == 2 and "unknown key 'seed'; did you mean 'seeds'?" in err
+    code, err = sweep_cli(capsys, tmp_path / "missing.yaml")
+    assert code == 2 and "Study file" in err and "does not exist" in err
 
 
 def test_an_output_folder_holding_another_study_is_refused(

@@ -127,5 +127,8 @@ def parse_study(data: Mapping[str, Any], source: str) -> Study:
 
 def load_study(path: Path) -> Study:
     """The study file at ``path``, validated (scenario paths stay relative to its folder)."""
-    data = read_yaml_mapping(Path(path))
+    try:
+        data = read_yaml_mapping(Path(path))
+    except ScenarioError as exc:  # the reader's messages speak of a scenario file
+        raise StudyError(str(exc).replace("Scenario file", "Study file", 1)) from None
     return parse_study(data, str(path))
