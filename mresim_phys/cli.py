@@ -1,4 +1,5 @@
-"""Command line (output edge): ``mresim run | validate | replay | view | plot | bench``.
+"""Command line (output edge): ``mresim run | validate | replay | view | plot | bench`` (and
+``sweep | compare | robustness``, from ``sweeps/cli.py``).
 
 Argument parsing only; the work is delegated to ``load``, ``sim`` and
 ``recorders``. Every user mistake ends in a one-paragraph message on stderr and
@@ -31,6 +32,7 @@ from mresim_phys.scenario.load import validate_scenario
 from mresim_phys.scenario.team_file import read_team_file
 from mresim_phys.sim import Simulation
 from mresim_phys.strategies import STRATEGIES
+from mresim_phys.sweeps.cli import SWEEP_COMMANDS, add_sweep_parsers
 from mresim_phys.viewer import command as viewer
 
 EXIT_USER_ERROR = 2
@@ -168,6 +170,7 @@ def make_parser() -> argparse.ArgumentParser:
         help="strategies to compare, e.g. frontier,hungarian,role_based:multi_point (default"
         " frontier): one run per strategy, stepped in turn; relay strategies pair the team",
     )
+    add_sweep_parsers(commands)
     return parser
 
 
@@ -408,6 +411,7 @@ COMMANDS = {
     "plot": plot_command,
     "bench": bench_command,
     "view": viewer.view_command,
+    **SWEEP_COMMANDS,
 }
 
 

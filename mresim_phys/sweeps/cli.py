@@ -1,0 +1,217 @@
+"""Command line of sweeps (output edge): ``mresim sweep | compare | robustness``.
+
+Argument parsing only. The work is imported when a command runs, so other ``mresim``
+commands never load pandas, pyarrow, matplotlib or Dask (the optional ``sweep`` extra);
+without them these commands say what to install (exit 2).
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib.util
+from pathlib import Path
+
+from mresim_phys.errors import MresimError
+from mresim_phys.sweeps.study import Study  # no pandas, pyarrow or matplotlib behind it
+
+NEEDED = ("pandas", "pyarrow", "matplotlib", "scipy")
+
+
+def require_extra(dask: bool = False) -> None:
+    """MresimError naming what to install when an optional dependency is missing."""
+    missing = [m for m in (*NEEDED, *(["distributed"] if dask else [])) if not installed(m)]
+    if missing:
+        raise MresimError(
+            f"sweeps need {', '.join(missing)}, which are not installed;"
+            " pip install -e '.[sweep]' (or pip install 'mresim_phys[sweep]')."
+        )
+
+
+def installed(module: str) -> bool:
+    """Whether ``module`` can be imported."""
+    return importlib.util.find_spec(module) is not None
+
+
+def whole(text: str, minimum: int) -> int:
+    """argparse type helper: an integer >= ``minimum``."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < minimum:
+        raise argparse.ArgumentTypeError(f"expected a number >= {minimum}, got {value}")
+    return value
+
+
+def positive(text: str) -> int:
+    """argparse type: an integer >= 1."""
+    return whole(text, 1)
+
+
+def counts(text: str) -> list[int]:
+    """argparse type: comma-separated whole numbers >= 0 (at least one)."""
+    values = [whole(part, 0) for part in text.split(",") if part.strip()]
+    if not values:
+        raise argparse.ArgumentTypeError(f"expected numbers such as 0,1,2,3, got {text!r}")
+    return values
+
+
+def names(text: str) -> list[str]:
+    """argparse type: comma-separated names (at least one)."""
+    values = [part.strip() for part in text.split(",") if part.strip()]
+    if not values:
+        raise argparse.ArgumentTypeError(f"expected comma-separated names, got {text!r}")
+    return values
+
+
+def window(text: str) -> tuple[float, float]:
+    """argparse type: two fractions ``LOW,HIGH`` of the step cap."""
+    try:
+        low, high = (float(part) for part in text.split(","))
+    except ValueError:
+        message = f"expected LOW,HIGH such as 0.05,0.35, got {text!r}"
+        raise argparse.ArgumentTypeError(message) from None
+    return low, high
+
+
+def add_backend_flags(parser: argparse.ArgumentParser) -> None:
+    """--workers / --dask, --out, --verbose, --quiet."""
+    where = parser.add_mutually_exclusive_group()
+    where.add_argument(
+        "--workers", type=positive, metavar="N", help="local worker processes (default: the cores)"
+    )
+    where.add_argument(
+        "--dask",
+        metavar="ADDRESS",
+        help="run on Dask: local:N starts a LocalCluster of N workers;"
+        " tcp://host:8786 joins a running scheduler",
+    )
+    parser.add_argument("--out", type=Path, help="sweep folder (default sweeps/<study name>)")
+    parser.add_argument("--verbose", action="store_true", help="print each run as it starts/ends")
+    parser.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+
+
+def add_compare_flags(parser: argparse.ArgumentParser) -> None:
+    """--metric, --reference, --svg."""
+    parser.add_argument(
+        "--metric",
+        type=names,
+        metavar="NAME,NAME",
+        help="metrics of the report (default steps_to_explored_90,"
+        " steps_to_known_at_base_90, auc_explored, auc_known_at_base,"
+        " final_explored); the first is plotted",
+    )
+    parser.add_argument("--reference", help="the reference arm: its label or one of its values")
+    parser.add_argument("--svg", action="store_true", help="SVG figures too")
+
+
+def add_sweep_parsers(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """The sweep, compare and robustness sub-commands."""
+    sweep = commands.add_parser("sweep", help="run a study: scenarios x axes x seeds")
+    sweep.add_argument("study", type=Path, help="study YAML file (docs/sweeps.md)")
+    add_backend_flags(sweep)
+    sweep.add_argument(
+        "--video-for", metavar="EXPR", help="write videos of the runs it selects, e.g. 'seed < 2'"
+    )
+    compare = commands.add_parser("compare", help="figures and report of a sweep")
+    compare.add_argument("sweep_dir", type=Path, help="a folder written by 'mresim sweep'")
+    compare.add_argument(
+        "--by",
+        type=names,
+        metavar="AXIS,AXIS",
+        help="the arms: these axes (default every axis), e.g. strategy",
+    )
+    compare.add_argument(
+        "--out", type=Path, help="folder for figures and report (default SWEEP_DIR/compare)"
+    )
+    add_compare_flags(compare)
+    robust = commands.add_parser(
+        "robustness", help="strategies x k random robot failures x seeds, swept and compared"
+    )
+    robust.add_argument("scenario", type=Path, help="scenario YAML file")
+    robust.add_argument(
+        "--failures",
+        type=counts,
+        default=[0, 1, 2],
+        metavar="K,K",
+        help="robots that fail per run (default 0,1,2)",
+    )
+    robust.add_argument(
+        "--strategies",
+        type=names,
+        default=["frontier"],
+        metavar="A,B",
+        help="strategies to compare (default frontier)",
+    )
+    robust.add_argument("--seeds", type=positive, default=20, help="seeds 0..N-1 (default 20)")
+    robust.add_argument("--steps", type=positive, help="step cap (default the scenario's)")
+    robust.add_argument(
+        "--fail-between",
+        type=window,
+        metavar="LOW,HIGH",
+        help="failures happen between these fractions of the step cap (default 0.05,0.35)",
+    )
+    add_backend_flags(robust)
+    add_compare_flags(robust)
+
+
+def sweep_command(args: argparse.Namespace) -> int:
+    """``mresim sweep``: run every missing run of a study; exit 1 if runs failed."""
+    require_extra(args.dask is not None)
+    from mresim_phys.sweeps.study import load_study
+
+    study = load_study(args.study)
+    text = args.study.read_text(encoding="utf-8")
+    return sweep_and_report(study, args.study, text, args)
+
+
+def sweep_and_report(study: Study, path: Path, text: str, args: argparse.Namespace) -> int:
+    """Run the sweep, print its summary; 1 if some runs failed."""
+    from mresim_phys.sweeps.runner import SweepOptions, run_sweep
+
+    out = args.out or Path("sweeps") / study.name
+    options = SweepOptions(
+        out, args.workers, args.dask, getattr(args, "video_for", None), args.verbose, args.quiet
+    )
+    result = run_sweep(study, path, text, options)
+    if not args.quiet:
+        print(result.summary())
+    return 1 if result.failed else 0
+
+
+def compare_command(args: argparse.Namespace) -> int:
+    """``mresim compare``: figures and report of a sweep folder."""
+    require_extra()
+    from mresim_phys.sweeps.compare import run_compare
+
+    for path in run_compare(
+        args.sweep_dir, args.by, args.metric, args.out, args.reference, args.svg
+    ):
+        print(path)
+    return 0
+
+
+def robustness_command(args: argparse.Namespace) -> int:
+    """``mresim robustness``: build the failure study, sweep it, compare it."""
+    require_extra(args.dask is not None)
+    from mresim_phys.sweeps.compare import run_compare
+    from mresim_phys.sweeps.robustness import robustness_study
+    from mresim_phys.sweeps.study import parse_study
+
+    data, text = robustness_study(
+        args.scenario, args.strategies, args.failures, args.seeds, args.steps, args.fail_between
+    )
+    study = parse_study(data, str(args.scenario))
+    args.out = args.out or Path("sweeps") / study.name
+    status = sweep_and_report(study, args.scenario, text, args)
+    by = ["team.strategy", "failures"]
+    for path in run_compare(args.out, by, args.metric, None, args.reference, args.svg):
+        print(path)
+    return status
+
+
+SWEEP_COMMANDS = {
+    "sweep": sweep_command,
+    "compare": compare_command,
+    "robustness": robustness_command,
+}
