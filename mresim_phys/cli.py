@@ -14,7 +14,7 @@ import sys
 from collections.abc import Callable, Sequence
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
-from typing import Any, Literal
+from typing import Literal
 
 import yaml
 from tqdm import tqdm
@@ -22,12 +22,13 @@ from tqdm import tqdm
 from mresim_phys.errors import MresimError
 from mresim_phys.metrics import StepRecord
 from mresim_phys.output.bench import PRESETS, run_bench
-from mresim_phys.output.plots import plot_runs, plotting_available
+from mresim_phys.output.plots import plot_runs
 from mresim_phys.output.recorders import default_run_dir
 from mresim_phys.output.replay import replay_run
 from mresim_phys.output.session import INTERRUPTED, Outcome, run_session
 from mresim_phys.output.signals import StopRequest, stop_on_signals
 from mresim_phys.render.layers import GLOBAL_LAYERS, ROBOT_LAYERS
+from mresim_phys.run_args import draw_plots, render_overrides, simulation_overrides, summary_line
 from mresim_phys.scenario.load import validate_scenario
 from mresim_phys.scenario.team_file import read_team_file
 from mresim_phys.sim import Simulation
@@ -196,23 +197,6 @@ def add_render_flags(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def render_overrides(args: argparse.Namespace) -> dict[str, Any]:
-    """The render-block fields given on the command line."""
-    given = {
-        "video": args.video,
-        "fps": args.fps,
-        "every": args.every,
-        "layers": args.layers,
-        "scale": args.scale,
-        "snapshots": args.snapshot,
-    }
-    if getattr(args, "no_log", False):
-        given["log"] = False
-    if getattr(args, "no_plots", False):
-        given["plots"] = False
-    return {k: v for k, v in given.items() if v is not None}
-
-
 def positive_float(text: str) -> float:
     """argparse type: a number > 0."""
     try:
@@ -268,18 +252,6 @@ def bench_command(args: argparse.Namespace) -> int:
     )
     print(report)
     return 0
-
-
-def simulation_overrides(args: argparse.Namespace) -> dict[str, Any]:
-    """The simulation-block fields given on the command line (as an override)."""
-    given: dict[str, Any] = {}
-    if args.fixed:
-        given["vary_with_seed"] = False
-    if args.threads is not None:
-        given["threads"] = args.threads
-    if args.paired:
-        given["paired"] = True
-    return {"simulation": given} if given else {}
 
 
 def run_command(args: argparse.Namespace) -> int:
@@ -338,33 +310,6 @@ def run_with_bar(
             bar.total = bar.n
             bar.refresh()
     return outcome
-
-
-def summary_line(sim: Simulation, outcome: Outcome, plotted: bool) -> str:
-    """The one line ``mresim run`` prints at the end."""
-    scenario, summary, out_dir = sim.scenario, outcome.summary, outcome.out_dir
-    reason = outcome.reason + (f" by {outcome.signal}" if outcome.signal else "")
-    paired = scenario.simulation.paired
-    return (
-        f"{scenario.name} seed {scenario.seed}: {summary['steps']} steps ({reason}),"
-        f" explored {summary['final_explored']:.3f}, at base"
-        f" {summary['final_known_at_base']:.3f}, {summary['wall_time_s']:.1f} s -> {out_dir}"
-        + (f"; video {outcome.video}" if outcome.video else "")
-        + (f"; plots in {out_dir / 'plots'}" if plotted else "")
-        + (f"; baseline in {out_dir / 'robustness.json'}" if paired and not outcome.signal else "")
-    )
-
-
-def draw_plots(wanted: bool, run_dirs: list[Path], out_dir: Path, quiet: bool) -> bool:
-    """Plots at the end of a run when asked for and matplotlib is installed."""
-    if not wanted:
-        return False
-    if not plotting_available():
-        if not quiet:
-            print("(plots skipped: pip install -e '.[plot]' for matplotlib and pandas)")
-        return False
-    plot_runs(run_dirs, out_dir)
-    return True
 
 
 def validate_command(args: argparse.Namespace) -> int:

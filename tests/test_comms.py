@@ -14,9 +14,9 @@ from mresim_phys.comms import Radios
 from mresim_phys.comms.disk import DiskComm, DiskParams
 from mresim_phys.comms.line_of_sight import LineOfSightComm, LineOfSightParams
 from mresim_phys.comms.path_loss import PathLossComm, PathLossParams
-from mresim_phys.comms.walls import segment_walls
 from mresim_phys.types import FloatArray
 from mresim_phys.world.space import World
+from mresim_phys.world.walls import segment_walls
 
 WAF_FACTOR = 10 ** (-3.65 / 25)  # the original's range factor per wall: 0.714
 

@@ -10,11 +10,11 @@ import pytest
 
 from mresim_phys.comms.base import Radios
 from mresim_phys.comms.line_of_sight import LineOfSightComm, LineOfSightParams
-from mresim_phys.comms.walls import walls_between
 from mresim_phys.sim import Simulation
 from mresim_phys.world.changes import circles_cover
 from mresim_phys.world.doors import DoorParams, door_cells
 from mresim_phys.world.space import World
+from mresim_phys.world.walls import walls_between
 
 ROOT_SCENARIOS = "scenarios"
 

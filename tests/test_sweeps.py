@@ -90,6 +90,15 @@ def test_a_value_the_schema_rejects_is_reported_with_its_arm(
     assert not (tmp_path / "out").exists()
 
 
+def test_a_start_inside_a_wall_is_reported_with_its_arm_before_running(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    study = write_study(tmp_path, axes={"robots.A.start": [[66, 52], [0.5, 0.5]]})
+    code, err = sweep_cli(capsys, study, "--out", tmp_path / "out")
+    assert code == 2 and "arm 1" in err and "inside or overlapping a wall" in err
+    assert "Traceback" not in err and not (tmp_path / "out").exists()
+
+
 def test_bad_study_fields_are_user_errors(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -82,9 +82,10 @@ def test_pool_and_dask_give_the_same_runs(tmp_path: Path) -> None:
 def test_a_failing_run_is_recorded_and_the_sweep_goes_on(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    study = write_study(tmp_path, axes={"robots.A.start": [[66, 52], [1, 1]]}, seeds=2)
+    strategies = ["random_walk", "sweep_plugins:Breaks"]  # tests/sweep_plugins.py
+    study = write_study(tmp_path, axes={"team.strategy": strategies}, seeds=2)
     out = tmp_path / "out"
-    video_for = "seed == 1 and start == [66, 52]"
+    video_for = "seed == 1 and strategy == 'random_walk'"
     code = main(
         [
             "sweep",
@@ -104,7 +105,7 @@ def test_a_failing_run_is_recorded_and_the_sweep_goes_on(
     runs = pd.read_parquet(out / "runs.parquet").set_index("run_id")
     assert list(runs["status"]) == ["done", "done", "failed", "failed"]
     failed = runs.loc["a001-s0000"]
-    assert "inside or overlapping a wall" in failed["error"]
+    assert "RuntimeError: this strategy has a bug" in failed["error"]
     log = Path(failed["log"])
     assert log.parent == out / "errors" and "Traceback" in log.read_text(encoding="utf-8")
     assert not (out / "runs" / "a001-s0000").exists()
@@ -117,8 +118,8 @@ def test_a_failing_run_is_recorded_and_the_sweep_goes_on(
     failed_part = report.split("## Failed runs", 1)[1]
     assert "a001-s0000" in failed_part and "a001-s0001" in failed_part
     assert (
-        "| start=[66, 52] | 2 | " in report
-        and "| start=[1, 1] | 0 | - | - | [-, -] | 0 | 2 |" in report
+        "| strategy=random_walk | 2 | " in report
+        and "| strategy=sweep_plugins:Breaks | 0 | - | - | [-, -] | 0 | 2 |" in report
     )
 
 

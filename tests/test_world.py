@@ -6,9 +6,9 @@ import numpy as np
 import pymunk
 import pytest
 
-from mresim_phys.comms.walls import walls_between
 from mresim_phys.world.maps import wall_segments
 from mresim_phys.world.space import MOVABLE_CATEGORY, SHUFFLE_SEED, WALL_CATEGORY, World
+from mresim_phys.world.walls import walls_between
 
 
 def test_a_swept_circle_hits_a_wall_corner_its_centre_line_passes() -> None:

@@ -35,10 +35,10 @@ from mresim_phys.comms.base import (
     pair_distances,
     symmetric_links,
 )
-from mresim_phys.comms.walls import reach_along_rays, walls_between
 from mresim_phys.plugin import Plugin
 from mresim_phys.types import FloatArray, IntArray
 from mresim_phys.world.space import World
+from mresim_phys.world.walls import reach_along_rays, walls_between
 
 
 class PathLossParams(CommParams):

@@ -30,9 +30,9 @@ import numpy as np
 from scipy.stats import qmc
 from skimage.graph import MCP_Geometric
 
-from mresim_phys.comms.walls import walls_between
 from mresim_phys.planning.grid import Box
 from mresim_phys.types import OCCUPIED, UNKNOWN, BeliefGrid, BoolGrid, FloatArray
+from mresim_phys.world.walls import walls_between
 
 RANGE_DEFLATION = 1.1  # the original's robot-side estimate: R / 1.1
 WALL_DB = 4.015  # dB per wall in the robot-side estimate (the simulator's: 3.65)

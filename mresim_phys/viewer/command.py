@@ -20,6 +20,7 @@ from mresim_phys.errors import MresimError
 from mresim_phys.output.recorders import default_run_dir
 from mresim_phys.output.session import Outcome, run_session
 from mresim_phys.output.signals import StopRequest, stop_on_signals
+from mresim_phys.run_args import draw_plots, render_overrides, simulation_overrides, summary_line
 from mresim_phys.sim import Simulation
 from mresim_phys.viewer.frames import FrameMaker
 from mresim_phys.viewer.livesource import LiveSource, ViewerStop
@@ -117,8 +118,6 @@ def check_run_flags(args: argparse.Namespace) -> None:
 
 def view_run(args: argparse.Namespace) -> int:
     """``mresim run SCENARIO --view``: the run, driven from the page; then its replay."""
-    from mresim_phys import cli  # the run command's own helpers (cli imports this module)
-
     stop = ViewerStop(notice=not args.quiet)
     # Signals after the run (while its log is indexed, then while it is served) go to
     # ``later``; during the run, to ``stop``.
@@ -128,8 +127,8 @@ def view_run(args: argparse.Namespace) -> int:
                 args.scenario,
                 seed=args.seed,
                 steps=args.steps,
-                render=cli.render_overrides(args),
-                **cli.simulation_overrides(args),
+                render=render_overrides(args),
+                **simulation_overrides(args),
             )
             server, live = live_server(sim, stop, args)
             try:
@@ -138,7 +137,7 @@ def view_run(args: argparse.Namespace) -> int:
                 server.close()
                 raise
         if not args.quiet:
-            print(cli.summary_line(sim, outcome, plotted), flush=True)
+            print(summary_line(sim, outcome, plotted), flush=True)
         replay_after(server, outcome, stop, later)
     return outcome.exit_status
 
@@ -177,14 +176,12 @@ def live_session(
     sim: Simulation, args: argparse.Namespace, live: LiveSource, stop: ViewerStop
 ) -> tuple[Outcome, bool]:
     """Run the session with the page's hook; whether plots were drawn."""
-    from mresim_phys import cli
-
     out_dir = args.out or default_run_dir(sim.scenario)
     plotted: list[bool] = []
 
     def plots(folder: Path) -> None:
         wanted = sim.scenario.render.plots
-        plotted.append(cli.draw_plots(wanted, [folder], folder / "plots", args.quiet))
+        plotted.append(draw_plots(wanted, [folder], folder / "plots", args.quiet))
 
     outcome = run_session(
         sim, out_dir, live.on_step, overwrite=args.overwrite, stop=stop, finish=plots

@@ -1,4 +1,4 @@
-"""Walls between agents (phase 6, kernels): what a radio signal crosses on the true grid.
+"""Walls between points (world geometry, kernels): what a radio signal crosses on a grid.
 
 An exact grid traversal (Amanatides-Woo) of the straight segment between two
 points, in the world's continuous coordinates (cell (r, c) covers
