@@ -28,7 +28,14 @@ from mresim_phys.output.replay import replay_run
 from mresim_phys.output.session import INTERRUPTED, Outcome, run_session
 from mresim_phys.output.signals import StopRequest, stop_on_signals
 from mresim_phys.render.layers import GLOBAL_LAYERS, ROBOT_LAYERS
-from mresim_phys.run_args import draw_plots, render_overrides, simulation_overrides, summary_line
+from mresim_phys.run_args import (
+    draw_plots,
+    non_negative_int,
+    positive_int,
+    render_overrides,
+    simulation_overrides,
+    summary_line,
+)
 from mresim_phys.scenario.load import validate_scenario
 from mresim_phys.scenario.team_file import read_team_file
 from mresim_phys.sim import Simulation
@@ -53,27 +60,6 @@ def package_version() -> str:
         return version("mresim_phys")
     except PackageNotFoundError:
         return "unknown"
-
-
-def whole_number(text: str, minimum: int) -> int:
-    """``text`` as an integer >= ``minimum``, or an argparse error saying what was expected."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < minimum:
-        raise argparse.ArgumentTypeError(f"expected a number >= {minimum}, got {value}")
-    return value
-
-
-def positive_int(text: str) -> int:
-    """argparse type: an integer >= 1."""
-    return whole_number(text, 1)
-
-
-def non_negative_int(text: str) -> int:
-    """argparse type: an integer >= 0."""
-    return whole_number(text, 0)
 
 
 def make_parser() -> argparse.ArgumentParser:

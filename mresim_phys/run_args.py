@@ -1,7 +1,8 @@
-"""What ``mresim run`` makes of its command line (output edge): overrides, plots, summary line.
+"""Command-line helpers shared by mresim's commands (output edge): argparse number types, and
+what ``mresim run`` makes of its command line (overrides, plots, the summary line).
 
-Shared by the run command (``cli.py``) and the viewer's live run
-(``viewer/command.py``), which runs the same session with a page attached.
+Used by ``cli.py``, the viewer's live run (``viewer/command.py``, the same session with a
+page attached) and the sweep commands (``sweeps/cli.py``), which ``cli.py`` imports.
 """
 
 from __future__ import annotations
@@ -69,3 +70,24 @@ def draw_plots(wanted: bool, run_dirs: list[Path], out_dir: Path, quiet: bool) -
         return False
     plot_runs(run_dirs, out_dir)
     return True
+
+
+def whole_number(text: str, minimum: int) -> int:
+    """``text`` as an integer >= ``minimum``, or an argparse error saying what was expected."""
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
+    if value < minimum:
+        raise argparse.ArgumentTypeError(f"expected a number >= {minimum}, got {value}")
+    return value
+
+
+def positive_int(text: str) -> int:
+    """argparse type: an integer >= 1."""
+    return whole_number(text, 1)
+
+
+def non_negative_int(text: str) -> int:
+    """argparse type: an integer >= 0."""
+    return whole_number(text, 0)

@@ -12,6 +12,7 @@ import importlib.util
 from pathlib import Path
 
 from mresim_phys.errors import MresimError
+from mresim_phys.run_args import positive_int, whole_number
 from mresim_phys.sweeps.study import Study  # no pandas, pyarrow or matplotlib behind it
 
 NEEDED = ("pandas", "pyarrow", "matplotlib", "scipy")
@@ -32,25 +33,9 @@ def installed(module: str) -> bool:
     return importlib.util.find_spec(module) is not None
 
 
-def whole(text: str, minimum: int) -> int:
-    """argparse type helper: an integer >= ``minimum``."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < minimum:
-        raise argparse.ArgumentTypeError(f"expected a number >= {minimum}, got {value}")
-    return value
-
-
-def positive(text: str) -> int:
-    """argparse type: an integer >= 1."""
-    return whole(text, 1)
-
-
 def counts(text: str) -> list[int]:
     """argparse type: comma-separated whole numbers >= 0 (at least one)."""
-    values = [whole(part, 0) for part in text.split(",") if part.strip()]
+    values = [whole_number(part, 0) for part in text.split(",") if part.strip()]
     if not values:
         raise argparse.ArgumentTypeError(f"expected numbers such as 0,1,2,3, got {text!r}")
     return values
@@ -78,7 +63,10 @@ def add_backend_flags(parser: argparse.ArgumentParser) -> None:
     """--workers / --dask, --out, --verbose, --quiet."""
     where = parser.add_mutually_exclusive_group()
     where.add_argument(
-        "--workers", type=positive, metavar="N", help="local worker processes (default: the cores)"
+        "--workers",
+        type=positive_int,
+        metavar="N",
+        help="local worker processes (default: the cores)",
     )
     where.add_argument(
         "--dask",
@@ -143,8 +131,8 @@ def add_sweep_parsers(commands: argparse._SubParsersAction[argparse.ArgumentPars
         metavar="A,B",
         help="strategies to compare (default frontier)",
     )
-    robust.add_argument("--seeds", type=positive, default=20, help="seeds 0..N-1 (default 20)")
-    robust.add_argument("--steps", type=positive, help="step cap (default the scenario's)")
+    robust.add_argument("--seeds", type=positive_int, default=20, help="seeds 0..N-1 (default 20)")
+    robust.add_argument("--steps", type=positive_int, help="step cap (default the scenario's)")
     robust.add_argument(
         "--fail-between",
         type=window,
