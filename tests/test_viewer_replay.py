@@ -341,3 +341,19 @@ def test_a_silent_failure_is_marked_once() -> None:
     add(3, ("failed", "failed"))
     assert timeline.events == [(1, "B failed"), (2, "fail A")]
     assert timeline.to_json(2)["steps"] == [2, 3] and timeline.to_json(2)["explored"] == [0.2, 0.3]
+
+
+def test_a_server_starts_from_a_thread_that_runs_an_event_loop(run_dir: Path) -> None:
+    """A notebook, or Playwright's sync API, runs an event loop in the caller's thread: the
+    server binds and serves in its own thread all the same."""
+
+    async def start_and_fetch() -> int:
+        server = ViewerServer(ReplaySource.open(run_dir), "127.0.0.1", 0)
+        server.start()
+        try:
+            async with aiohttp.ClientSession() as session, session.get(server.url) as page:
+                return page.status
+        finally:
+            server.close()
+
+    assert asyncio.run(start_and_fetch()) == 200

@@ -15,6 +15,7 @@ opened by a page of another site (its ``Origin`` is not this server) is refused 
 from __future__ import annotations
 
 import asyncio
+import concurrent.futures
 import contextlib
 import errno
 import ipaddress
@@ -94,25 +95,43 @@ class ViewerServer:
         return app
 
     def start(self) -> str:
-        """Bind and start serving; return the URL. MresimError if the port is taken."""
-        self._runner = web.AppRunner(self.app(), access_log=None)
+        """Bind and start serving; return the URL. MresimError if the port is taken.
+
+        The server's event loop lives in its own thread from the start (binding included),
+        so a caller that runs an event loop of its own (a notebook, Playwright's sync API)
+        can start it too."""
+        self._runner = runner = web.AppRunner(self.app(), access_log=None)
         self._loop = loop = asyncio.new_event_loop()
-        try:
-            loop.run_until_complete(self._bind(self._runner))
-        except OSError as exc:
-            loop.run_until_complete(self._runner.cleanup())
-            loop.close()
-            raise MresimError(bind_error(self.host, self.port, exc)) from None
+        bound: concurrent.futures.Future[None] = concurrent.futures.Future()
         self._thread = threading.Thread(
-            target=self._serve, args=(loop,), name="viewer", daemon=True
+            target=self._serve, args=(loop, runner, bound), name="viewer", daemon=True
         )
         self._thread.start()
+        try:
+            bound.result()
+        except OSError as exc:
+            self._thread.join(5)
+            self._thread = None
+            raise MresimError(bind_error(self.host, self.port, exc)) from None
         return self.url
 
-    @staticmethod
-    def _serve(loop: asyncio.AbstractEventLoop) -> None:
-        """The server thread: run the loop until close(), then close it."""
+    def _serve(
+        self,
+        loop: asyncio.AbstractEventLoop,
+        runner: web.AppRunner,
+        bound: concurrent.futures.Future[None],
+    ) -> None:
+        """The server thread: bind (the outcome goes to ``bound``), then run the loop
+        until close(), then close it."""
         asyncio.set_event_loop(loop)
+        try:
+            loop.run_until_complete(self._bind(runner))
+        except BaseException as exc:
+            loop.run_until_complete(runner.cleanup())
+            loop.close()
+            bound.set_exception(exc)
+            return
+        bound.set_result(None)
         loop.run_forever()
         loop.close()
 
