@@ -29,6 +29,7 @@ from mresim_phys.output.session import INTERRUPTED, Outcome, run_session
 from mresim_phys.output.signals import StopRequest, stop_on_signals
 from mresim_phys.render.layers import GLOBAL_LAYERS, ROBOT_LAYERS
 from mresim_phys.run_args import (
+    comma_separated,
     draw_plots,
     non_negative_int,
     positive_int,
@@ -201,10 +202,7 @@ def step_list(text: str) -> list[int]:
 
 def robot_counts(text: str) -> tuple[int, ...]:
     """argparse type: comma-separated positive team sizes (at least one)."""
-    counts = tuple(positive_int(part) for part in text.split(",") if part.strip())
-    if not counts:
-        raise argparse.ArgumentTypeError(f"expected team sizes such as 4,8,16, got {text!r}")
-    return counts
+    return tuple(comma_separated(text, positive_int, "team sizes such as 4,8,16"))
 
 
 def thread_setting(text: str) -> int | Literal["auto"]:

@@ -8,12 +8,15 @@ page attached) and the sweep commands (``sweeps/cli.py``), which ``cli.py`` impo
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 from mresim_phys.output.plots import plot_runs, plotting_available
 from mresim_phys.output.session import Outcome
 from mresim_phys.sim import Simulation
+
+T = TypeVar("T")
 
 
 def render_overrides(args: argparse.Namespace) -> dict[str, Any]:
@@ -91,3 +94,12 @@ def positive_int(text: str) -> int:
 def non_negative_int(text: str) -> int:
     """argparse type: an integer >= 0."""
     return whole_number(text, 0)
+
+
+def comma_separated(text: str, parse: Callable[[str], T], expected: str) -> list[T]:
+    """argparse helper: the comma-separated parts of ``text``, each parsed (at least one;
+    else an error saying ``expected``, e.g. 'team sizes such as 4,8,16')."""
+    values = [parse(part) for part in text.split(",") if part.strip()]
+    if not values:
+        raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
+    return values

@@ -12,7 +12,7 @@ import importlib.util
 from pathlib import Path
 
 from mresim_phys.errors import MresimError
-from mresim_phys.run_args import positive_int, whole_number
+from mresim_phys.run_args import comma_separated, positive_int, whole_number
 from mresim_phys.sweeps.study import Study  # no pandas, pyarrow or matplotlib behind it
 
 NEEDED = ("pandas", "pyarrow", "matplotlib", "scipy")
@@ -35,18 +35,12 @@ def installed(module: str) -> bool:
 
 def counts(text: str) -> list[int]:
     """argparse type: comma-separated whole numbers >= 0 (at least one)."""
-    values = [whole_number(part, 0) for part in text.split(",") if part.strip()]
-    if not values:
-        raise argparse.ArgumentTypeError(f"expected numbers such as 0,1,2,3, got {text!r}")
-    return values
+    return comma_separated(text, lambda part: whole_number(part, 0), "numbers such as 0,1,2,3")
 
 
 def names(text: str) -> list[str]:
     """argparse type: comma-separated names (at least one)."""
-    values = [part.strip() for part in text.split(",") if part.strip()]
-    if not values:
-        raise argparse.ArgumentTypeError(f"expected comma-separated names, got {text!r}")
-    return values
+    return comma_separated(text, str.strip, "comma-separated names")
 
 
 def window(text: str) -> tuple[float, float]:
