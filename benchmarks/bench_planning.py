@@ -27,7 +27,8 @@ import cv2
 import numpy as np
 from skimage.graph import MCP_Geometric
 
-from mresim_phys.knowledge.frontiers import find_frontiers, frontier_targets
+from mresim_phys.knowledge.frontiers import find_frontiers
+from mresim_phys.knowledge.targets import frontier_targets
 from mresim_phys.planning.fields import distance_field, plan_path, traversable
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN, BeliefGrid, BoolGrid
 

@@ -11,9 +11,9 @@ from scipy import ndimage
 from mresim_phys.knowledge.frontiers import (
     find_frontiers,
     frontier_mask,
-    frontier_targets,
     label_cells,
 )
+from mresim_phys.knowledge.targets import frontier_targets
 from mresim_phys.planning.fields import distance_field, traversable
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 

@@ -12,22 +12,19 @@ only between free cells). Clusters are the 8-connected components of frontier ce
 :func:`sees_unknown` on those alone) and a union-find over the frontier
 cells alone (:func:`label_cells`): labelling the whole 800x600 grid with
 ``cv2.connectedComponentsWithStats`` cost ~2.5 ms a replan, most of a replan's frontier
-work. ``frontier_targets`` then picks, for every
-cluster, the cheapest cell of a ``DistanceField`` from which the cluster is within reach,
-in one numba pass over the frontier cells.
+work. ``knowledge.targets`` then picks, for every
+cluster, the cheapest cell of a ``DistanceField`` from which the cluster is within reach.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
 
 import cv2
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from mresim_phys.planning.fields import DistanceField
 from mresim_phys.planning.grid import Box, bbox
 from mresim_phys.types import (
     FREE,
@@ -41,7 +38,6 @@ from mresim_phys.types import (
 
 _KERNEL_3X3 = np.ones((3, 3), dtype=np.uint8)
 _NO_EXCLUDE = np.zeros((0, 0), dtype=np.bool_)
-_EARLIER = ((0, -1), (-1, 0), (-1, -1), (-1, 1))  # 8-neighbours before a cell in raster order
 
 
 @dataclass(frozen=True, eq=False)
@@ -266,124 +262,3 @@ def frontiers_in(
         cells_rc=np.column_stack((rows[kept] + r0, cols[kept] + c0)).astype(np.intp),
         cluster_of=cluster[kept],
     )
-
-
-def _disc(reach: float) -> IntArray:
-    """(n, 2) offsets (dr, dc) with dr^2 + dc^2 <= reach^2, in raster order."""
-    radius = int(np.floor(reach))
-    dr, dc = np.mgrid[-radius : radius + 1, -radius : radius + 1]
-    inside = dr**2 + dc**2 <= reach**2
-    return np.column_stack((dr[inside], dc[inside]))
-
-
-@njit(cache=True, nogil=True)
-def _parent_direction(flat: IntArray, width: int) -> IntArray:
-    """Index in ``_EARLIER`` of each cell's first earlier 8-neighbour among the cells
-    ``flat`` (indices row * width + col of a grid padded by one column on each side,
-    ascending); 4 if it has none."""
-    group = np.full(len(flat), len(_EARLIER), dtype=np.int64)
-    for i in range(len(flat)):
-        for d in range(len(_EARLIER)):
-            dr, dc = _EARLIER[d]
-            wanted = flat[i] + dr * width + dc
-            j = np.searchsorted(flat[:i], wanted)  # every earlier neighbour comes before i
-            if j < i and flat[j] == wanted:
-                group[i] = d
-                break
-    return group
-
-
-@njit(cache=True, nogil=True)
-def _cluster_targets(
-    cells: IntArray,
-    cluster_of: IntArray,
-    group: IntArray,
-    offsets: IntArray,
-    starts: IntArray,
-    window_costs: FloatArray,
-    origin: tuple[int, int],
-    passable: BoolGrid,
-    k: int,
-) -> tuple[FloatArray, IntArray]:
-    """Per cluster, the least (cost, flat index) over the passable, reached cells at
-    ``cell + offsets[starts[g]:starts[g + 1]]`` of its cells (``g`` = the cell's group);
-    cost inf and index -1 where none qualifies."""
-    best = np.full(k, np.inf)
-    where = np.full(k, -1, dtype=np.int64)
-    hp, wp = window_costs.shape
-    width = passable.shape[1]
-    for i in range(len(cells)):
-        row, col, j = cells[i, 0], cells[i, 1], cluster_of[i]
-        for o in range(starts[group[i]], starts[group[i] + 1]):
-            r, c = row + offsets[o, 0], col + offsets[o, 1]
-            lr, lc = r - origin[0], c - origin[1]
-            if lr < 0 or lr >= hp or lc < 0 or lc >= wp:
-                continue
-            cost = window_costs[lr, lc]  # finite only on in-grid cells the search reached
-            if cost == np.inf or not passable[r, c]:
-                continue
-            flat = r * width + c
-            if cost < best[j] or (cost == best[j] and flat < where[j]):
-                best[j], where[j] = cost, flat
-    return best, where
-
-
-@lru_cache(maxsize=16)
-def _offsets_by_group(reach: float) -> tuple[IntArray, IntArray]:
-    """The disc's offsets for each parent direction (the disc minus the parent's disc;
-    the whole disc for a cell without an earlier neighbour), concatenated, and where each
-    group starts (5 + 1 entries)."""
-    disc = _disc(reach)
-    pieces = [disc[((disc - step) ** 2).sum(axis=1) > reach**2] for step in _EARLIER]
-    pieces.append(disc)
-    starts = np.cumsum([0] + [len(p) for p in pieces]).astype(np.int64)
-    offsets = np.concatenate(pieces).astype(np.int64)
-    offsets.flags.writeable = starts.flags.writeable = False  # shared by the cache
-    return offsets, starts
-
-
-def frontier_targets(
-    frontiers: Frontiers, field: DistanceField, passable: BoolGrid, reach: float
-) -> tuple[IntArray, FloatArray]:
-    """Cheapest place to look at each frontier cluster from.
-
-    For cluster j the target is the passable cell within Euclidean distance ``reach``
-    (cell centres) of any of its cells with the smallest cost in ``field``. Ties go to
-    the smaller (row, col). The answer is exact. Each cell of the cluster contributes
-    the disc of cells around it, minus the disc of an earlier 8-neighbour (in raster
-    order) in the same cluster. Together these pieces cover the cluster's whole reach
-    area, and a piece holds about 2 * reach cells instead of pi * reach^2. One compiled
-    pass (``_cluster_targets``) keeps each cluster's least (cost, flat index): ~0.1 ms a
-    call in a library run where the numpy gather it replaced took ~1 ms.
-
-    Args:
-        frontiers: Clusters from ``find_frontiers``.
-        field: Distance field of the robot.
-        passable: Cells a target may be (normally the field's own passable mask).
-        reach: Largest distance from target to frontier cell, in cells.
-
-    Returns:
-        ``targets`` (k, 2) (row, col), (-1, -1) where no cell qualifies, and their
-        ``costs`` (k,), inf where no cell qualifies.
-    """
-    k = len(frontiers)
-    targets = np.full((k, 2), -1, dtype=np.intp)
-    costs = np.full(k, np.inf)
-    if k == 0 or reach < 0 or field.start_rc is None:
-        return targets, costs
-    cells = frontiers.cells_rc.astype(np.int64)
-    width = int(cells[:, 1].max()) + 3
-    flat = (cells[:, 0] + 1) * width + cells[:, 1] + 1
-    order = np.argsort(flat, kind="stable")
-    group = np.empty(len(cells), dtype=np.int64)
-    group[order] = _parent_direction(flat[order], width)
-    offsets, starts = _offsets_by_group(float(reach))
-    origin = (int(field.origin[0]), int(field.origin[1]))
-    best, where = _cluster_targets(
-        cells, frontiers.cluster_of.astype(np.int64), group, offsets, starts,
-        field.window_costs, origin, passable, k,
-    )  # fmt: skip
-    found = np.isfinite(best)
-    costs[found] = best[found]
-    targets[found] = np.column_stack(np.divmod(where[found], passable.shape[1]))
-    return targets, costs

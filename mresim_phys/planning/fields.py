@@ -16,20 +16,20 @@ the reference Dijkstra in the tests):
   least ``clearance`` from known obstacles, so a path clears walls by ``clearance - 0.71``.
   With ``clearance >= robot radius + 0.71`` a robot following the path never touches a known wall.
 
-Engine: ``_dijkstra``, a numba kernel (``@njit(cache=True, nogil=True)``) running Dijkstra
-with Dial's bucket queue (bands of cost width 1, the cheapest move) over the search window
-padded by one blocked cell; it writes float64 costs and flat int32 predecessors straight into
-the ``DistanceField`` arrays. Searches are limited to the bounding box of passable cells, and
-with ``limit`` to a window of that radius. Medians on a shared 2-core machine, against the
-``scipy.sparse.csgraph`` engine it replaced (a CSR graph built for every window, then
-``csgraph.dijkstra``): 1.2 vs 8.8 ms per search in the 8-robot ``mresim bench`` run (windows
-of ~40k cells; planning 8 vs 37 ms per step), 15 vs 75-83 ms for a fully known 800x600 map,
-1.5-1.8 vs 18-20 ms at 35% known. A numba binary heap (``heapq``) was 4-5x slower than the
-buckets (5.9 ms per search, 60-78 ms fully known), ``skimage.graph.MCP_Geometric`` takes
-110-150 ms and cuts corners. That factor of 5-7 is what numba (~210 MB with llvmlite) is
-installed for. The first search in a process compiles the kernel (~1.4 s), or loads it from
-the on-disk cache (~0.2 s). Transient memory is ~25 bytes per window cell. The kernel
-releases the GIL; csgraph held it.
+Engine: ``planning.dial._dijkstra``, a numba kernel (``@njit(cache=True, nogil=True)``)
+running Dijkstra with Dial's bucket queue (bands of cost width 1, the cheapest move) over
+the search window padded by one blocked cell; it writes float64 costs and flat int32
+predecessors straight into the ``DistanceField`` arrays. Searches are limited to the
+bounding box of passable cells, and with ``limit`` to a window of that radius. Medians on a
+shared 2-core machine, against the ``scipy.sparse.csgraph`` engine it replaced (a CSR graph
+built for every window, then ``csgraph.dijkstra``): 1.2 vs 8.8 ms per search in the 8-robot
+``mresim bench`` run (windows of ~40k cells; planning 8 vs 37 ms per step), 15 vs 75-83 ms
+for a fully known 800x600 map, 1.5-1.8 vs 18-20 ms at 35% known. A numba binary heap
+(``heapq``) was 4-5x slower than the buckets (5.9 ms per search, 60-78 ms fully known),
+``skimage.graph.MCP_Geometric`` takes 110-150 ms and cuts corners. That factor of 5-7 is
+what numba (~210 MB with llvmlite) is installed for. The first search in a process compiles
+the kernel (~1.4 s), or loads it from the on-disk cache (~0.2 s). Transient memory is ~25
+bytes per window cell. The kernel releases the GIL; csgraph held it.
 """
 
 from __future__ import annotations
@@ -39,24 +39,14 @@ from functools import cached_property, lru_cache
 
 import cv2
 import numpy as np
-from numba import njit
 from numpy.typing import NDArray
 
 from mresim_phys.planning.costs import dijkstra_weighted
-from mresim_phys.planning.grid import (
-    DIAGONAL,
-    SQRT2,
-    STRAIGHT,
-    Box,
-    Window,
-    bbox,
-    flat_moves,
-    passes_corner,
-)
+from mresim_phys.planning.dial import _NO_PRED, _dijkstra
+from mresim_phys.planning.grid import SQRT2, Box, Window, bbox
 from mresim_phys.types import FREE, OCCUPIED, BeliefGrid, BoolGrid, FloatArray, IntArray
 
-_NO_PRED = -9999  # "no predecessor" (the marker scipy.sparse.csgraph uses)
-
+MAX_SNAP = 3.0  # cells: how far a start off the passable cells is moved onto them
 
 # --------------------------------------------------------------------------- C-space
 
@@ -163,64 +153,6 @@ def snap_to_passable(
         return None
     best = np.lexsort((cc[ok], rr[ok], dist2[ok]))[0]
     return int(rr[ok][best]), int(cc[ok][best])
-
-
-@njit(cache=True, nogil=True)
-def _dijkstra(
-    pad: NDArray[np.bool_], wp: int, source: int, limit: float, stop_at: int = -1
-) -> tuple[FloatArray, NDArray[np.int32], int]:
-    """Dijkstra over a flat padded mask (border cells blocked) with the module move rules.
-
-    Dial's bucket queue: band ``b`` holds the cells whose cost is in ``[b, b + 1)``. Every
-    move costs >= 1, so expanding band ``b`` only reaches bands ``b + 1`` and ``b + 2``: its
-    cells are final when it is expanded, in any order, and a ring of 3 buckets replaces the
-    heap (same costs, ~4x faster). A cell enters a band's bucket only when its cost moves
-    into that band (a cheaper cost within the same band finds it queued there already), so
-    no bucket outgrows the passable cell count; an entry whose cell has since moved to an
-    earlier band is skipped. Costs above ``limit`` are never stored.
-
-    With a ``stop_at`` cell (>= 0) the search stops before expanding the first band ``b`` with
-    ``dist[stop_at] < b + 1``: every cell costing less than ``b + 1`` then has its final
-    cost, the others cost at least ``b + 1``. Returns (costs, predecessors, ``b``), ``b`` =
-    -1 when the search ran out of cells (no ``stop_at``, or it is not reached within ``limit``).
-    """
-    dist = np.full(pad.size, np.inf)
-    pred = np.full(pad.size, _NO_PRED, dtype=np.int32)
-    ring = np.empty((3, np.count_nonzero(pad)), dtype=np.int32)
-    sizes = np.zeros(3, dtype=np.int64)
-    dist[source] = 0.0
-    ring[0, 0], sizes[0] = source, 1
-    step, beside_row, beside_col = flat_moves(wp)
-    band = 0
-    while sizes[band % 3] + sizes[(band + 1) % 3] > 0:
-        if stop_at >= 0 and dist[stop_at] < band + 1:
-            return dist, pred, band
-        slot = band % 3
-        for j in range(sizes[slot]):
-            u = ring[slot, j]
-            here = dist[u]
-            if int(here) != band:
-                continue  # moved to an earlier band, already expanded
-            for k in range(len(step)):
-                v = u + step[k]
-                if not pad[v]:
-                    continue
-                if beside_row[k] != 0:  # a diagonal move
-                    if not passes_corner(pad[u + beside_row[k]], pad[u + beside_col[k]]):
-                        continue
-                    cost = here + DIAGONAL
-                else:
-                    cost = here + STRAIGHT
-                old = dist[v]
-                if cost <= limit and cost < old:
-                    dist[v], pred[v] = cost, u
-                    target = int(cost)
-                    if old == np.inf or int(old) != target:  # not yet in band target's bucket
-                        ring[target % 3, sizes[target % 3]] = v
-                        sizes[target % 3] += 1
-        sizes[slot] = 0
-        band += 1
-    return dist, pred, -1
 
 
 def _search(
@@ -345,7 +277,7 @@ def distance_field(
     passable: BoolGrid,
     start_xy: tuple[float, float],
     *,
-    max_snap: float = 3.0,
+    max_snap: float = MAX_SNAP,
     limit: float = np.inf,
     slowness: FloatArray | None = None,
     box: Box | None = None,
@@ -382,7 +314,7 @@ def plan_path(
     start_xy: tuple[float, float],
     goal_xy: tuple[float, float],
     *,
-    max_snap: float = 3.0,
+    max_snap: float = MAX_SNAP,
 ) -> FloatArray:
     """Shortest cell-centre path (n, 2) of world (x, y) from ``start_xy`` to ``goal_xy``.
 

@@ -3,7 +3,7 @@ one goal needs.
 
 A teammate's bid in the frontier auction needs the path costs from the teammate to the
 auction's few goals, and only one of them is asked for at a time: :func:`goal_costs`
-runs the distance field's Dijkstra (``fields._dijkstra``, the same moves, bands and
+runs the distance field's Dijkstra (``dial._dijkstra``, the same moves, bands and
 window) from the start and stops as soon as that goal's cost is final, instead of
 searching the whole window of ``limit``. A goal's cost is the same float whichever way
 the search ends: a cell's cost is the least ``cost(u) + move`` over its neighbours ``u``
@@ -18,7 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from mresim_phys.planning.costs import dijkstra_weighted
-from mresim_phys.planning.fields import _dijkstra, _window, snap_to_passable
+from mresim_phys.planning.dial import _dijkstra
+from mresim_phys.planning.fields import _window, snap_to_passable
 from mresim_phys.planning.grid import Box, Window
 from mresim_phys.types import BoolGrid, FloatArray, IntArray
 

@@ -32,7 +32,14 @@ from mresim_phys.knowledge.prior import planning_map as belief_with_prior
 from mresim_phys.knowledge.teammates import Payload, TeammateInfo
 from mresim_phys.planning import Planner, TopologicalMap, shared_map
 from mresim_phys.planning.costs import slowness_of
-from mresim_phys.planning.fields import DistanceField, distance_field, passable_cells
+from mresim_phys.planning.dial import PausedSearch
+from mresim_phys.planning.fields import (
+    MAX_SNAP,
+    DistanceField,
+    distance_field,
+    passable_cells,
+    snap_to_passable,
+)
 from mresim_phys.planning.grid import Box, bbox
 from mresim_phys.planning.topological import TopologicalPlanner
 from mresim_phys.plugin import PluginParams
@@ -189,9 +196,31 @@ class PlanContext:
         return slowness_of(self.view.terrain)
 
     @cached_property
+    def search(self) -> PausedSearch | None:
+        """The robot's own unbounded search over its passable box, run only as far as
+        asked (``fields_staged``, ``field``); None with terrain costs (the weighted search
+        cannot pause) or when the robot has no passable cell within snapping reach."""
+        box = self.passable_box
+        if self.slowness is not None or box is None:
+            return None
+        start = snap_to_passable(self.passable, self.view.position, MAX_SNAP)
+        return None if start is None else PausedSearch(self.passable, start, box)
+
+    @cached_property
     def field(self) -> DistanceField:
         """Path costs from the robot to every passable cell it can reach."""
-        return self.field_from(self.view.position)
+        search = self.search
+        if search is None:
+            return self.field_from(self.view.position)
+        search.run_below(np.inf)
+        return self._field_of(search)
+
+    def _field_of(self, search: PausedSearch) -> DistanceField:
+        """The search's arrays as a field (shared: they change as the search goes on)."""
+        window = search.window
+        shape = (int(self.passable.shape[0]), int(self.passable.shape[1]))
+        costs = search.dist.reshape(-1, window.wp)
+        return DistanceField(shape, search.start, window.origin, costs, search.pred)
 
     def field_from(self, position: tuple[float, float], limit: float = np.inf) -> DistanceField:
         """Path costs on this robot's map from ``position`` (the robot's own, or a
@@ -214,6 +243,29 @@ class PlanContext:
             yield limit, self.field_from(self.view.position, limit)
             limit *= 2
         yield np.inf, self.field
+
+    def fields_staged(self, first_bound: float) -> Iterator[tuple[float, DistanceField, float]]:
+        """(horizon, field, final_below): the robot's own field searched out to a cost
+        horizon that doubles, ending with the whole field (horizon inf). The field's costs
+        below ``final_below`` are final, the others count as unreached; every cell not
+        reached costs at least ``horizon``.
+
+        One search pauses at each horizon and goes on from there (``planning.dial``;
+        ``final_below`` = horizon), so a strategy that stops at the first field holding
+        what it needs pays only for the cells below that horizon. With terrain costs the
+        fields of :meth:`fields_growing` (each holds final costs only: ``final_below`` inf).
+        """
+        search = self.search
+        if search is None:
+            for limit, field in self.fields_growing(first_bound):
+                yield limit, field, np.inf
+            return
+        bound = max(first_bound, 1.0)
+        while not search.finished:
+            search.run_below(bound)
+            yield search.final_below, self._field_of(search), search.final_below
+            bound *= 2
+        yield np.inf, self.field, np.inf
 
     def plan_to(self, row: int, col: int) -> FloatArray:
         """The path the robot follows to cell (row, col): from its planner, if it has one.

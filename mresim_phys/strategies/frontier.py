@@ -34,13 +34,9 @@ from numba import njit
 from numpy.typing import NDArray
 from pydantic import Field
 
-from mresim_phys.knowledge.frontiers import (
-    Frontiers,
-    any_frontier,
-    frontier_targets,
-    frontiers_in,
-)
+from mresim_phys.knowledge.frontiers import Frontiers, any_frontier, frontiers_in
 from mresim_phys.knowledge.prior import walled_in
+from mresim_phys.knowledge.targets import TargetFinder
 from mresim_phys.knowledge.teammates import TeammateInfo
 from mresim_phys.planning.goals import GoalCosts, goal_costs
 from mresim_phys.plugin import Plugin
@@ -187,10 +183,11 @@ class FrontierExploration(Plugin):
                 return step
         frontiers = self._frontiers(view, context)
         reach = self.params.reach or view.clearance + 2.0
-        fields = context.fields_growing(self.params.horizon * view.sensor_range)
+        fields = context.fields_staged(self.params.horizon * view.sensor_range)
         searching = len(frontiers) > 0 and not self._goal_met(view)
-        for limit, field in fields if searching else ():
-            targets, costs = frontier_targets(frontiers, field, context.passable, reach)
+        finder = TargetFinder.of(frontiers, context.passable, reach)
+        for limit, field, final in fields if searching else ():
+            targets, costs = finder.targets(field, final)
             candidates = self._candidates(frontiers, costs)
             if len(candidates) and self._settled(frontiers, costs, candidates, limit):
                 break
