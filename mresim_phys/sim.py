@@ -42,6 +42,7 @@ from mresim_phys.knowledge.mapping import integrate_scan
 from mresim_phys.knowledge.robustness import FailureWatch, robot_states
 from mresim_phys.knowledge.teammates import presumed_lost
 from mresim_phys.knowledge.terrain import learn_terrain
+from mresim_phys.memory import keep_freed_memory
 from mresim_phys.metrics import (
     CommTotals,
     Curves,
@@ -78,6 +79,7 @@ class Simulation:
     """
 
     def __init__(self, scenario: Scenario) -> None:
+        keep_freed_memory()  # big arrays come back from the heap, not from page faults
         self.scenario = scenario
         self.setup: Setup = build_setup(scenario)
         s = self.setup
