@@ -135,6 +135,19 @@ def test_the_pool_keeps_task_order_and_raises_the_first_error() -> None:
     pool.close()
 
 
+def test_threads_hand_the_gil_over_often_while_tasks_run_and_only_then() -> None:
+    """A task returning from a compiled kernel waits for the GIL at most one short turn."""
+    before = sys.getswitchinterval()
+    pool = RobotPool(2)
+    seen = pool.run([sys.getswitchinterval, sys.getswitchinterval])
+    assert seen == pytest.approx([parallel.SWITCH_INTERVAL] * 2) and max(seen) < before
+    with pytest.raises(ZeroDivisionError):
+        pool.run([sys.getswitchinterval, lambda: 1 / 0])
+    assert sys.getswitchinterval() == before  # restored, also after a failing task
+    assert RobotPool(1).run([sys.getswitchinterval]) == [before]  # serial: untouched
+    pool.close()
+
+
 def test_an_interrupted_run_leaves_no_task_running(monkeypatch: pytest.MonkeyPatch) -> None:
     """A KeyboardInterrupt while the robots run: the queued tasks never start, the running
     ones finish before it propagates (nothing changes a robot after the step is given up)."""
