@@ -40,6 +40,7 @@ from mresim_phys.faults.runtime import hazard_grid
 from mresim_phys.knowledge.latest import LatestCoverage
 from mresim_phys.knowledge.mapping import integrate_scan
 from mresim_phys.knowledge.robustness import FailureWatch, robot_states
+from mresim_phys.knowledge.scanfold import folds_in_one_call, scan_into_map
 from mresim_phys.knowledge.teammates import presumed_lost
 from mresim_phys.knowledge.terrain import learn_terrain
 from mresim_phys.memory import keep_freed_memory
@@ -265,18 +266,21 @@ class Simulation:
         laser = robot.laser
         robot.scans += 1
         started = perf_counter()
-        result = scan(
-            self.world,
-            robot.position,
-            robot.heading,
-            laser,
-            self.robot_filter(robot),
-            self._sensing_rngs[robot.index - 1],
-        )
-        scanned = perf_counter()
-        update = integrate_scan(
-            robot.belief, robot.safe, result, laser.safe_fraction, robot.observed, self.t
-        )
+        if folds_in_one_call(laser, robot.observed):  # the fold is timed as sensing
+            update = scan_into_map(
+                self.world, robot.position, robot.heading, laser, self.robot_filter(robot),
+                robot.belief, robot.safe,
+            )  # fmt: skip
+            scanned = perf_counter()
+        else:
+            result = scan(
+                self.world, robot.position, robot.heading, laser, self.robot_filter(robot),
+                self._sensing_rngs[robot.index - 1],
+            )  # fmt: skip
+            scanned = perf_counter()
+            update = integrate_scan(
+                robot.belief, robot.safe, result, laser.safe_fraction, robot.observed, self.t
+            )
         if update is not None and robot.terrain is not None and self.setup.terrain is not None:
             learn_terrain(robot.terrain, self.setup.terrain, update)
         effects.spend("sensing", scanned - started)

@@ -264,7 +264,8 @@ def report(results: Sequence[BenchResult], map_path: Path, preset: Preset = OFFI
         times = f"{r.median_ms:8.2f} {r.p90_ms:8.2f} {per_robot:9.2f}"
         lines.append(f"{r.strategy:>14} {r.robots:>6} {r.threads!s:>7} {times} {split}")
     lines.append("(phase columns are per-step medians; they need not add up to the median;")
-    lines.append(" with threads they add up the time spent on every thread)")
+    lines.append(" with threads they add up the time spent on every thread; sensing holds the map")
+    lines.append(" update of scans without range noise, cast and folded in one call)")
     return "\n".join(lines)
 
 

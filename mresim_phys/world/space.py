@@ -348,19 +348,26 @@ class World:
         """
         n = len(angles)
         ranges, normals, wall_hit = np.empty(n), np.empty((n, 2)), np.empty(n, dtype=np.bool_)
-        quiet_blocks = shape_filter[2] & QUIET_CATEGORY
+        grid, circles = self.ray_targets(shape_filter)
         cast_fan(
-            self.occupied if quiet_blocks else self.radio_occupied,
+            grid,
             float(origin[0]),
             float(origin[1]),
             np.ascontiguousarray(angles, dtype=np.float64),
             float(max_range),
-            self._blocking_circles(shape_filter),
+            circles,
             ranges,
             normals,
             wall_hit,
         )
         return Scan(origin, angles, ranges, normals, wall_hit, max_range)
+
+    def ray_targets(self, shape_filter: QueryFilter) -> tuple[BoolGrid, FloatArray]:
+        """What rays cast with ``shape_filter`` stop at: the grid they traverse and the
+        (k, 3) robot circles (x, y, radius) that block them (``cast_fan``'s inputs)."""
+        quiet_blocks = shape_filter[2] & QUIET_CATEGORY
+        grid = self.occupied if quiet_blocks else self.radio_occupied
+        return grid, self._blocking_circles(shape_filter)
 
     def _blocking_circles(self, shape_filter: QueryFilter) -> FloatArray:
         """(k, 3) rows (x, y, radius) of the robot bodies ``shape_filter`` collides with."""
