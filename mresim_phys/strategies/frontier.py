@@ -38,6 +38,7 @@ from mresim_phys.knowledge.frontiers import Frontiers, any_frontier, frontiers_i
 from mresim_phys.knowledge.prior import walled_in
 from mresim_phys.knowledge.targets import TargetFinder
 from mresim_phys.knowledge.teammates import TeammateInfo
+from mresim_phys.planning.dial import PausedSearch
 from mresim_phys.planning.goals import GoalCosts, goal_costs
 from mresim_phys.plugin import Plugin
 from mresim_phys.strategies.base import (
@@ -132,10 +133,18 @@ class Bidder:
 
     @classmethod
     def estimated(
-        cls, name: str, position: tuple[float, float], goals_rc: IntArray, rank: int = 0
+        cls,
+        name: str,
+        position: tuple[float, float],
+        goals_rc: IntArray,
+        rank: int = 0,
+        bounds: FloatArray | None = None,
     ) -> Bidder:
-        """A teammate bidding with straight-line distances (lower bounds on path costs)."""
+        """A teammate bidding with lower bounds on its path costs: straight-line distances,
+        or ``bounds`` where those are higher (:func:`path_bounds`)."""
         costs = straight_line(position, goals_rc)
+        if bounds is not None:
+            costs = np.maximum(costs, bounds)
         return cls(name, costs, np.zeros(len(costs), dtype=bool), position, rank)
 
     def refine(self, searched: GoalCosts | None) -> None:
@@ -294,8 +303,12 @@ class FrontierExploration(Plugin):
         mine = costs[candidates]
         rank = view.tie_rank
         me = Bidder(view.name, mine, np.ones(len(mine), dtype=bool), view.position, rank(view.name))
+        search = context.search
         bidders = [me] + [
-            Bidder.estimated(t.name, t.position, goals, rank(t.name)) for t in self.teammates(view)
+            Bidder.estimated(
+                t.name, t.position, goals, rank(t.name), path_bounds(search, t.position, mine)
+            )
+            for t in self.teammates(view)
         ]
         won = greedy_auction(
             bidders, sizes, lambda b, k, limit: exact_costs(context, b.position, goals, k, limit)
@@ -352,6 +365,39 @@ def straight_line(position: tuple[float, float], goals_rc: IntArray) -> FloatArr
     return distance
 
 
+BOUND_MARGIN = 1e-6  # cells: what a lower bound from two float path costs gives up
+
+
+def path_bounds(
+    search: PausedSearch | None, position: tuple[float, float], mine: FloatArray
+) -> FloatArray | None:
+    """Lower bounds on a teammate's path costs to the goals, from this robot's own search
+    (``mine``: its exact costs to the goals; None without a search, or where the teammate
+    stands on no passable cell of its window).
+
+    Path costs on one passable mask are a metric (moves and the corner rule are the same
+    both ways), so cost(teammate, goal) >= |cost(me, teammate) - cost(me, goal)|; where the
+    search has not settled the teammate's cell, cost(me, teammate) >= its ``final_below``.
+    A margin covers the two costs' float rounding. Bounds only decide which teammates the
+    auction searches for: the winner depends on exact costs alone."""
+    if search is None:
+        return None
+    window = search.window
+    row, col = int(np.floor(position[1])), int(np.floor(position[0]))
+    r, c = row - window.origin[0], col - window.origin[1]
+    if not (0 <= r < window.pad.size // window.wp and 0 <= c < window.wp):
+        return None
+    node = r * window.wp + c
+    if not window.pad[node]:
+        return None
+    here = float(search.dist[node])
+    if here < search.final_below:
+        bounds: FloatArray = np.abs(here - mine) - BOUND_MARGIN
+    else:
+        bounds = search.final_below - mine - BOUND_MARGIN
+    return bounds
+
+
 def exact_costs(
     context: PlanContext,
     position: tuple[float, float],
@@ -370,6 +416,7 @@ def exact_costs(
 def greedy_auction(bidders: list[Bidder], sizes: FloatArray, search: PathSearch) -> int:
     """Index of the frontier bidder 0 wins in the greedy auction.
 
+    Teammates bid with lower bounds (straight lines, raised by :func:`path_bounds`).
     A pair whose cost is only a lower bound is refined before it can win: the
     teammate's path search runs to 1.5 times the bound (at least ``MIN_SEARCH``
     cells more), so a teammate far away by path is ruled out by a small search, which

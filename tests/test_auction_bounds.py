@@ -1,0 +1,96 @@
+"""Phase 4 (decide): the frontier auction's lower bounds from the robot's own search.
+
+A teammate's bid starts from lower bounds on its path costs; the auction searches for the
+exact cost of a pair only when its bound could win. Bounds from the robot's own field
+(the triangle inequality of path costs) rule out teammates behind walls without a search;
+they must never exceed the exact cost, and the winner must not change.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from test_frontiers import random_belief
+
+import mresim_phys.strategies.frontier as frontier
+from mresim_phys.knowledge.teammates import TeammateInfo
+from mresim_phys.planning.dial import PausedSearch
+from mresim_phys.planning.fields import distance_field, traversable
+from mresim_phys.planning.grid import bbox
+from mresim_phys.strategies.base import RobotView, plan_context
+from mresim_phys.strategies.frontier import path_bounds, straight_line
+from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), pause=st.sampled_from([3.0, 10.0, 25.0, np.inf]))
+def test_bounds_never_exceed_the_teammates_exact_path_costs(seed: int, pause: float) -> None:
+    passable = traversable(random_belief(seed, (40, 48)), 0.8)
+    cells = np.argwhere(passable)
+    box = bbox(passable)
+    if len(cells) < 3 or box is None:
+        return
+    rng = np.random.default_rng(seed)
+    me, mate, *goals = (tuple(int(v) for v in cells[i]) for i in rng.choice(len(cells), 5))
+    search = PausedSearch(passable, me, box)
+    search.run_below(np.inf)
+    whole = search.dist.copy()
+    search = PausedSearch(passable, me, box)
+    search.run_below(pause)
+    goals_rc = np.array(goals)
+    node = search.window.node
+    mine = np.array([whole[node(g)] for g in goals])
+    if not np.isfinite(mine).all():
+        return
+    bounds = path_bounds(search, (mate[1] + 0.5, mate[0] + 0.5), mine)
+    assert bounds is not None
+    exact = distance_field(passable, (mate[1] + 0.5, mate[0] + 0.5)).cost_at(*goals_rc.T)
+    assert (bounds <= exact).all()
+
+
+def corridor_world() -> np.ndarray:
+    """Two parallel corridors joined at the far east end; a frontier at the north one's
+    west end."""
+    belief = np.full((30, 200), OCCUPIED, dtype=np.uint8)
+    belief[3:9, 2:196] = FREE  # north corridor
+    belief[20:26, 2:196] = FREE  # south corridor
+    belief[3:26, 190:196] = FREE  # the only link, 190 cells east
+    belief[3:9, 2] = UNKNOWN
+    return belief
+
+
+def test_a_teammate_behind_a_wall_is_ruled_out_without_a_search(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """The teammate stands ~17 cells from this robot's frontier, through a wall, but ~370
+    cells away by path: its straight-line bound beat this robot's own bid and cost a
+    search; the triangle bound does not, and the robot still wins that frontier. (Where
+    its own search has paused short of the teammate, the bound is weaker: ``path_bounds``.)"""
+    belief = corridor_world()
+    mate = TeammateInfo("B", (8.5, 22.5), None, "active", role="explorer", step=10)
+    view = RobotView(
+        step=10, name="A", position=(30.5, 5.5), heading=0.0, belief=belief, radius=0.5,
+        clearance=1.0, speed=2.0, sensor_range=40.0, role="explorer",
+        base_position=(30.5, 5.5), teammates={"B": mate}, rng=np.random.default_rng(0),
+    )  # fmt: skip
+    searched_from: list[tuple[float, float]] = []
+    real = frontier.goal_costs
+
+    def counted(passable: np.ndarray, start_xy: tuple[float, float], *args: Any) -> Any:
+        searched_from.append(start_xy)
+        return real(passable, start_xy, *args)
+
+    monkeypatch.setattr(frontier, "goal_costs", counted)
+    params = frontier.FrontierParams(horizon=10.0)  # its first search settles both robots
+    decision = frontier.FrontierExploration(params).decide(view)
+    assert decision.goal is not None and decision.goal[1] < 10  # its own, north corridor
+    context = plan_context(view)
+    north = np.array([[5, 4]])
+    assert straight_line(mate.position, north)[0] < 20
+    bounds = path_bounds(context.search, mate.position, context.field.cost_at(*north.T))
+    assert bounds is not None and bounds[0] > 300
+    assert mate.position not in searched_from
