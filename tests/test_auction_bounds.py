@@ -16,13 +16,14 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 from test_frontiers import random_belief
 
+import mresim_phys.strategies.auction as auction
 import mresim_phys.strategies.frontier as frontier
 from mresim_phys.knowledge.teammates import TeammateInfo
 from mresim_phys.planning.dial import PausedSearch
 from mresim_phys.planning.fields import distance_field, traversable
 from mresim_phys.planning.grid import bbox
+from mresim_phys.strategies.auction import path_bounds, straight_line
 from mresim_phys.strategies.base import RobotView, plan_context
-from mresim_phys.strategies.frontier import path_bounds, straight_line
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 
 
@@ -78,13 +79,13 @@ def test_a_teammate_behind_a_wall_is_ruled_out_without_a_search(
         base_position=(30.5, 5.5), teammates={"B": mate}, rng=np.random.default_rng(0),
     )  # fmt: skip
     searched_from: list[tuple[float, float]] = []
-    real = frontier.goal_costs
+    real = auction.goal_costs
 
     def counted(passable: np.ndarray, start_xy: tuple[float, float], *args: Any) -> Any:
         searched_from.append(start_xy)
         return real(passable, start_xy, *args)
 
-    monkeypatch.setattr(frontier, "goal_costs", counted)
+    monkeypatch.setattr(auction, "goal_costs", counted)
     params = frontier.FrontierParams(horizon=10.0)  # its first search settles both robots
     decision = frontier.FrontierExploration(params).decide(view)
     assert decision.goal is not None and decision.goal[1] < 10  # its own, north corridor

@@ -36,6 +36,7 @@ from pydantic import Field
 
 from mresim_phys.knowledge.frontiers import Frontiers
 from mresim_phys.knowledge.teammates import Payload
+from mresim_phys.strategies.auction import utility
 from mresim_phys.strategies.base import (
     STRATEGIES,
     Decision,
@@ -45,7 +46,7 @@ from mresim_phys.strategies.base import (
     heading_for,
     plan_context,
 )
-from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams, utility
+from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams
 from mresim_phys.types import FloatArray, IntArray
 
 

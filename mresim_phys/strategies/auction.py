@@ -1,0 +1,200 @@
+"""The frontier auction (phase 4, decide): which frontier a robot wins against its teammates.
+
+The original's greedy auction: the best (robot, frontier) pair by utility
+``U = size * 1e8 / d**4`` is fixed, that robot and that frontier leave the auction, until
+the best pair is the deciding robot's. The robot knows its own path costs; a teammate bids
+with lower bounds (the straight line from its last known position, raised by the triangle
+inequality through the robot's own search: :func:`path_bounds`), and a bound is replaced
+by the exact path cost on the robot's map (``planning.goals``) before it can win.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+from numpy.typing import NDArray
+
+from mresim_phys.planning.dial import PausedSearch
+from mresim_phys.planning.goals import GoalCosts, goal_costs
+from mresim_phys.strategies.base import PlanContext
+from mresim_phys.types import FloatArray, IntArray
+
+UTILITY_SCALE = 1e8  # original: U = area * 10^8 / d^4
+MIN_SEARCH = 10.0  # cells: smallest extra horizon when refining a teammate's bid
+SEARCH_GROWTH = 1.5  # a refinement searches to this multiple of the current lower bound
+MAX_BOUNDED_SEARCH = 2000.0  # cells: beyond this a teammate's search is unbounded
+BoolArray = NDArray[np.bool_]
+PathSearch = Callable[["Bidder", int, float], "GoalCosts | None"]
+
+
+@dataclass
+class Bidder:
+    """One robot in the auction: lower bounds on its path costs, and which are exact."""
+
+    name: str
+    costs: FloatArray
+    exact: BoolArray
+    position: tuple[float, float]
+    rank: int = 0  # the team's tie-break order: of two equal bids the lower rank wins
+
+    @classmethod
+    def estimated(
+        cls,
+        name: str,
+        position: tuple[float, float],
+        goals_rc: IntArray,
+        rank: int = 0,
+        bounds: FloatArray | None = None,
+    ) -> Bidder:
+        """A teammate bidding with lower bounds on its path costs: straight-line distances,
+        or ``bounds`` where those are higher (:func:`path_bounds`)."""
+        costs = straight_line(position, goals_rc)
+        if bounds is not None:
+            costs = np.maximum(costs, bounds)
+        return cls(name, costs, np.zeros(len(costs), dtype=bool), position, rank)
+
+    def refine(self, searched: GoalCosts | None) -> None:
+        """Take the exact path costs a search found; the bounds of the others rise to its
+        floor. Costs known exactly before stay (the same search from the same cell)."""
+        if searched is None:  # the teammate stands where this robot knows nothing: keep estimates
+            self.exact[:] = True
+            return
+        known = np.isfinite(searched.found) | (searched.floor == np.inf)
+        raised = np.where(self.exact, self.costs, np.maximum(self.costs, searched.floor))
+        self.costs = np.where(known, searched.found, raised)
+        self.exact = self.exact | known
+
+
+def utility(sizes: FloatArray, costs: FloatArray) -> FloatArray:
+    """The original's frontier utility; unreachable frontiers get -inf."""
+    with np.errstate(divide="ignore", over="ignore"):
+        u = sizes * UTILITY_SCALE / np.maximum(costs, 1.0) ** 4
+    return np.where(np.isfinite(costs), u, -np.inf)
+
+
+def straight_line(position: tuple[float, float], goals_rc: IntArray) -> FloatArray:
+    """Straight-line distance from the centre of ``position``'s cell to each goal cell centre.
+
+    Path costs run from cell centre to cell centre, so this is a true lower bound of
+    the teammate's path cost: its bid is refined before it can lose a tie it would win.
+    """
+    col, row = np.floor(position[0]), np.floor(position[1])
+    distance: FloatArray = np.hypot(goals_rc[:, 1] - col, goals_rc[:, 0] - row)
+    return distance
+
+
+BOUND_MARGIN = 1e-6  # cells: what a lower bound from two float path costs gives up
+
+
+def path_bounds(
+    search: PausedSearch | None, position: tuple[float, float], mine: FloatArray
+) -> FloatArray | None:
+    """Lower bounds on a teammate's path costs to the goals, from this robot's own search
+    (``mine``: its exact costs to the goals; None without a search, or where the teammate
+    stands on no passable cell of its window).
+
+    Path costs on one passable mask are a metric (moves and the corner rule are the same
+    both ways), so cost(teammate, goal) >= |cost(me, teammate) - cost(me, goal)|; where the
+    search has not settled the teammate's cell, cost(me, teammate) >= its ``final_below``.
+    A margin covers the two costs' float rounding. Bounds only decide which teammates the
+    auction searches for: the winner depends on exact costs alone."""
+    if search is None:
+        return None
+    window = search.window
+    row, col = int(np.floor(position[1])), int(np.floor(position[0]))
+    r, c = row - window.origin[0], col - window.origin[1]
+    if not (0 <= r < window.pad.size // window.wp and 0 <= c < window.wp):
+        return None
+    node = r * window.wp + c
+    if not window.pad[node]:
+        return None
+    here = float(search.dist[node])
+    if here < search.final_below:
+        bounds: FloatArray = np.abs(here - mine) - BOUND_MARGIN
+    else:
+        bounds = search.final_below - mine - BOUND_MARGIN
+    return bounds
+
+
+def exact_costs(
+    context: PlanContext,
+    position: tuple[float, float],
+    goals_rc: IntArray,
+    wanted: int,
+    limit: float,
+) -> GoalCosts | None:
+    """Path costs on this robot's map from a teammate's position, searched up to ``limit``
+    or until goal ``wanted``'s cost is known (None if the position is off the map)."""
+    return goal_costs(
+        context.passable, position, goals_rc, wanted, limit, context.passable_box,
+        context.slowness,
+    )  # fmt: skip
+
+
+def greedy_auction(bidders: list[Bidder], sizes: FloatArray, search: PathSearch) -> int:
+    """Index of the frontier bidder 0 wins in the greedy auction.
+
+    Teammates bid with lower bounds (straight lines, raised by :func:`path_bounds`).
+    A pair whose cost is only a lower bound is refined before it can win: the
+    teammate's path search runs to 1.5 times the bound (at least ``MIN_SEARCH``
+    cells more), so a teammate far away by path is ruled out by a small search, which
+    stops once the pair's cost is final (``planning.goals``). Which pair wins depends only
+    on the exact costs (lower bounds never win: they are refined first, and a bound's
+    utility is never below its exact one), so how far a search went never changes it.
+    Utilities are one (bidders x frontiers) matrix; a refinement recomputes its row.
+    When every frontier is taken before bidder 0 wins one, the auction starts again
+    over all the frontiers among the bidders not yet assigned (the original's
+    ``keepAssigningRobotsToFrontiers``), so robots that outnumber the frontiers
+    spread over them instead of all following the best one.
+    """
+    u = utility(sizes[None, :], np.array([b.costs for b in bidders]))
+    ranks = np.array([b.rank for b in bidders])
+    active = np.ones(len(bidders), dtype=bool)
+    taken = np.zeros(len(sizes), dtype=bool)
+    while active.any():
+        if taken.all():  # more robots than frontiers: a new round for the unassigned
+            taken[:] = False
+        who, which = best_pair(u, ranks, active, taken)
+        if who < 0:
+            break
+        bidder = bidders[who]
+        if not bidder.exact[which]:
+            bound = float(bidder.costs[which])
+            limit = max(SEARCH_GROWTH * bound, bound + MIN_SEARCH)
+            limit = np.inf if limit > MAX_BOUNDED_SEARCH else limit
+            bidder.refine(search(bidder, which, limit))
+            u[who] = utility(sizes, bidder.costs)
+            continue
+        if who == 0:
+            return which
+        active[who] = False
+        taken[which] = True
+    return int(np.argmax(utility(sizes, bidders[0].costs)))
+
+
+@njit(cache=True, nogil=True)
+def best_pair(
+    u: FloatArray, ranks: IntArray, active: BoolArray, taken: BoolArray
+) -> tuple[int, int]:
+    """The (bidder, frontier) pair of highest utility in ``u`` among active bidders and
+    frontiers not taken; (-1, -1) if none is left.
+
+    Each bidder bids for its best frontier (the first of equal ones); equal bids go
+    to the bidder of lower rank (then the earlier bidder), so robots that see the same
+    bids (robots started on one spot) agree on who wins instead of each taking the tie.
+    One compiled pass (comparisons only: the utilities are numpy's).
+    """
+    who, which, top, top_rank = -1, -1, -np.inf, 0
+    for i in range(u.shape[0]):
+        if not active[i]:
+            continue
+        bid, pick = -np.inf, -1
+        for j in range(u.shape[1]):
+            if not taken[j] and u[i, j] > bid:
+                bid, pick = u[i, j], j
+        if bid > top or (bid == top and bid > -np.inf and ranks[i] < top_rank):
+            who, which, top, top_rank = i, pick, bid, ranks[i]
+    return who, which
