@@ -65,6 +65,18 @@ def wants_plan(robot: Robot, step: int, interval: int) -> bool:
     )
 
 
+def replans_on_the_way(robot: Robot) -> bool:
+    """Whether the robot's path ends within this step's move, so it will likely replan
+    on the way (a hint for scheduling threads, never for what the robot does)."""
+    path = robot.path
+    if len(path) == 0:
+        return True
+    if len(path) > robot.speed + 2:  # grid paths: legs of a cell or more; enough for a hint
+        return False
+    legs = np.diff(np.vstack((robot.position, path)), axis=0)
+    return bool(np.hypot(legs[:, 0], legs[:, 1]).sum() <= robot.speed)
+
+
 def take_step(
     robot: Robot,
     world: World,

@@ -113,14 +113,21 @@ class RobotPool:
         self.threads = max(1, threads)
         self._executor: ThreadPoolExecutor | None = None
 
-    def run(self, tasks: Sequence[Callable[[], T]]) -> list[T]:
+    def run(self, tasks: Sequence[Callable[[], T]], heavy: Sequence[bool] = ()) -> list[T]:
         """Every task's result, in the order of ``tasks``; the first task's error (in that
         order) is raised after all tasks have finished. Interrupted while waiting, it
-        cancels the tasks not yet started and waits for the running ones before raising."""
+        cancels the tasks not yet started and waits for the running ones before raising.
+
+        On threads the tasks marked ``heavy`` start first (a robot that will replan), so
+        the light ones fill the threads' time at the end instead of one long task
+        running alone; the results keep the order of ``tasks``."""
         if self.threads == 1 or len(tasks) <= 1:
             return [task() for task in tasks]
+        marks = list(heavy) + [False] * (len(tasks) - len(heavy))
+        start = sorted(range(len(tasks)), key=lambda i: not marks[i])  # stable: heavy first
         with short_gil_turns():
-            futures = [self._pool().submit(task) for task in tasks]
+            started = {i: self._pool().submit(tasks[i]) for i in start}
+            futures = [started[i] for i in range(len(tasks))]
             try:
                 wait(futures)
             except BaseException:  # e.g. KeyboardInterrupt: no task may go on after we return

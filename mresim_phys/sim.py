@@ -55,7 +55,7 @@ from mresim_phys.metrics import (
     measure_step,
     update_known_at_base,
 )
-from mresim_phys.motion import MoveRules, path_blocked, take_step, wants_plan
+from mresim_phys.motion import MoveRules, path_blocked, replans_on_the_way, take_step, wants_plan
 from mresim_phys.parallel import Effects, RobotPool, thread_count
 from mresim_phys.snapshot import (
     CommSummary,
@@ -232,7 +232,9 @@ class Simulation:
         failed (and whose sensor works) scans once where it stands."""
         movers = [r for r in self.robots if r.can_move]
         tasks = [partial(self.robot_turn, r, r.name in due, r.name in given) for r in movers]
-        for effects in self.pool.run(tasks):
+        threaded = self.pool.threads > 1
+        heavy = [r.name in due or replans_on_the_way(r) for r in movers] if threaded else []
+        for effects in self.pool.run(tasks, heavy):
             self.apply(effects)
         for robot in self.robots:
             if robot.alive and not robot.can_move and robot.can_sense:

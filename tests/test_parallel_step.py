@@ -70,6 +70,19 @@ def test_eight_robots_at_the_originals_settings_on_threads() -> None:
     assert trace(path, 25, **{"simulation.threads": "auto"}) == trace(path, 25)
 
 
+def slowed(
+    real: Callable[..., Any], jitter: random.Random, threads_seen: set[int]
+) -> Callable[..., Any]:
+    """``real`` taking a random extra time, noting the threads that called it."""
+
+    def slow(*args: Any, **kwargs: Any) -> Any:
+        threads_seen.add(threading.get_ident())
+        time.sleep(jitter.random() * 2e-4)
+        return real(*args, **kwargs)
+
+    return slow
+
+
 def test_the_threads_timing_does_not_matter(monkeypatch: pytest.MonkeyPatch) -> None:
     """Scans that take random extra time (so robots finish in ever other orders) change
     nothing: every shared effect is applied in robot order."""
@@ -77,14 +90,10 @@ def test_the_threads_timing_does_not_matter(monkeypatch: pytest.MonkeyPatch) -> 
     serial = trace(path, 40, **{"simulation.robots_block": True})
     jitter = random.Random(7)
     threads_seen: set[int] = set()
-    real_scan = sim_module.scan
-
-    def slow_scan(*args: Any, **kwargs: Any) -> Any:
-        threads_seen.add(threading.get_ident())
-        time.sleep(jitter.random() * 2e-4)
-        return real_scan(*args, **kwargs)
-
-    monkeypatch.setattr(sim_module, "scan", slow_scan)
+    for name in ("scan", "scan_into_map"):  # noisy and noiseless scans
+        monkeypatch.setattr(
+            sim_module, name, slowed(getattr(sim_module, name), jitter, threads_seen)
+        )
     threaded = trace(path, 40, simulation={"robots_block": True, "threads": 3})
     assert threaded == serial
     assert len(threads_seen) > 1  # the robots really ran on several threads
@@ -132,6 +141,27 @@ def test_the_pool_keeps_task_order_and_raises_the_first_error() -> None:
         pool.run([task(k) for k in range(5)])
     pool.close()
     assert pool.run([task(0), task(1)]) == [0, 1]  # a closed pool starts new threads
+    pool.close()
+
+
+def test_heavy_tasks_start_first_and_results_keep_the_task_order() -> None:
+    started: list[int] = []
+    lock = threading.Lock()
+
+    def task(k: int) -> Callable[[], int]:
+        def run() -> int:
+            with lock:
+                started.append(k)
+            time.sleep(0.01)
+            return k
+
+        return run
+
+    pool = RobotPool(1 + 1)
+    heavy = [False, False, True, False, True]
+    assert pool.run([task(k) for k in range(5)], heavy) == [0, 1, 2, 3, 4]
+    assert set(started[:2]) == {2, 4}  # the two threads took the heavy ones first
+    assert started[2:] == [0, 1, 3]
     pool.close()
 
 
