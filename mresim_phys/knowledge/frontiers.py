@@ -25,6 +25,8 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from mresim_phys.knowledge.targets import TargetFinder as TargetFinder
+from mresim_phys.knowledge.targets import frontier_targets as frontier_targets
 from mresim_phys.planning.grid import Box, bbox
 from mresim_phys.types import (
     FREE,

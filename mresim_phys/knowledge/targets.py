@@ -10,15 +10,30 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from functools import lru_cache
+from typing import Protocol
 
 import numpy as np
 from numba import njit
 
-from mresim_phys.knowledge.frontiers import Frontiers
 from mresim_phys.planning.fields import DistanceField
 from mresim_phys.types import BoolGrid, FloatArray, IntArray
 
 _EARLIER = ((0, -1), (-1, 0), (-1, -1), (-1, 1))  # 8-neighbours before a cell in raster order
+
+
+class Clusters(Protocol):
+    """What targets are found for: frontier clusters (``knowledge.frontiers.Frontiers``)."""
+
+    @property
+    def cells_rc(self) -> IntArray:
+        """(n, 2) (row, col) of every cell of every cluster."""
+
+    @property
+    def cluster_of(self) -> IntArray:
+        """The cluster of each cell."""
+
+    def __len__(self) -> int:
+        """How many clusters."""
 
 
 def _disc(reach: float) -> IntArray:
@@ -117,7 +132,7 @@ class TargetFinder:
     starts: IntArray  # where each piece starts in ``offsets``
 
     @classmethod
-    def of(cls, frontiers: Frontiers, passable: BoolGrid, reach: float) -> TargetFinder:
+    def of(cls, frontiers: Clusters, passable: BoolGrid, reach: float) -> TargetFinder:
         """The finder of ``frontiers``' targets among ``passable`` cells within ``reach``."""
         k = len(frontiers) if reach >= 0 else 0
         cells = frontiers.cells_rc.astype(np.int64)
@@ -152,7 +167,7 @@ class TargetFinder:
 
 
 def frontier_targets(
-    frontiers: Frontiers,
+    frontiers: Clusters,
     field: DistanceField,
     passable: BoolGrid,
     reach: float,
