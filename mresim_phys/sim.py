@@ -324,7 +324,7 @@ class Simulation:
             self.network.note_scan(
                 robot.index, box_around(robot.position, robot.radius + 2, self.world.shape)
             )
-        self.comm = self.network.communicate(self.agents, self.world, self.t)
+        self.comm = self.network.communicate(self.agents, self.world, self.t, self.pool.run)
         self.note_links()
         if isinstance(self.coverage, LatestCoverage):
             self.touch_merged(self.coverage)

@@ -16,8 +16,9 @@ on. What was sent is counted in bytes (:class:`~.exchange.Traffic`).
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from functools import partial
 
 import numpy as np
 
@@ -88,6 +89,15 @@ class CommRecord:
     control_traffic: Traffic
 
 
+RunAll = Callable[[Sequence[Callable[[], None]]], object]  # runs every task (any order)
+
+
+def run_in_turn(tasks: Sequence[Callable[[], None]]) -> None:
+    """Run ``tasks`` one after another in the calling thread."""
+    for task in tasks:
+        task()
+
+
 class Network:
     """Runs the communication phase for a fixed set of agents (index 0 = base)."""
 
@@ -128,10 +138,16 @@ class Network:
                 silent[list(blackout.members)] = True
         return silent
 
-    def communicate(self, agents: Sequence[Agent], world: World, step: int) -> CommRecord:
-        """Find this step's links and move knowledge along them."""
-        for agent in agents:
-            self.ledger.stamp_sensed(agent.index, agent.belief, agent.safe, step)
+    def communicate(
+        self, agents: Sequence[Agent], world: World, step: int, run_all: RunAll = run_in_turn
+    ) -> CommRecord:
+        """Find this step's links and move knowledge along them.
+
+        First each agent's own changes of the step are stamped in its ledger (each task
+        touches only its agent's arrays and rows, so ``run_all`` may run them on threads:
+        ``parallel.RobotPool.run``)."""
+        ledger = self.ledger
+        run_all([partial(ledger.stamp_sensed, a.index, a.belief, a.safe, step) for a in agents])
         n = len(agents)
         links = self.main.links(agents, world, self.silent(n, step, "main"))
         groups = hop_groups(links, self.multi_hop)
