@@ -68,9 +68,11 @@ def _grid_hit(
     # cells on both sides of the line: the twin column (row) is checked too
     twin_col = col - 1 if abs(dx) < AXIS_EPS and ox == col else NO_TWIN
     twin_row = row - 1 if abs(dy) < AXIS_EPS and oy == row else NO_TWIN
+    # each crossing distance is recomputed from its boundary only when that boundary moves
+    # (the same division as before, so the same floats, one division a cell instead of two)
+    tx = (bx - ox) / dx if sx != 0 else math.inf
+    ty = (by - oy) / dy if sy != 0 else math.inf
     while True:
-        tx = (bx - ox) / dx if sx != 0 else math.inf
-        ty = (by - oy) / dy if sy != 0 else math.inf
         t = min(tx, ty)
         if t > max_range:
             return math.inf, 0.0, 0.0
@@ -81,6 +83,7 @@ def _grid_hit(
                 twin_row != NO_TWIN and _occupied(grid, twin_row, col)
             ):
                 return tx, float(-sx), 0.0
+            tx = (bx - ox) / dx
         elif ty < tx - CORNER_EPS:
             row += sy
             by += sy
@@ -88,6 +91,7 @@ def _grid_hit(
                 twin_col != NO_TWIN and _occupied(grid, row, twin_col)
             ):
                 return ty, 0.0, float(-sy)
+            ty = (by - oy) / dy
         else:  # through a corner: stop if any of the three cells beyond it is a wall
             if _occupied(grid, row, col + sx):
                 return t, float(-sx), 0.0
@@ -97,6 +101,8 @@ def _grid_hit(
             row += sy
             bx += sx
             by += sy
+            tx = (bx - ox) / dx if sx != 0 else math.inf
+            ty = (by - oy) / dy if sy != 0 else math.inf
 
 
 @njit(cache=True, nogil=True)
