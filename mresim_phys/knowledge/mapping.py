@@ -79,7 +79,7 @@ def integrate_scan(
     ranges = np.ascontiguousarray(scan.ranges, dtype=np.float64)
     wall_hit = np.ascontiguousarray(scan.wall_hit, dtype=np.bool_)
     ox, oy, max_range = float(scan.origin[0]), float(scan.origin[1]), float(scan.max_range)
-    row0, col0, free = fold_scan(
+    row0, col0, free = _fold_alone(
         ox,
         oy,
         angles,
@@ -98,6 +98,28 @@ def integrate_scan(
             ox, oy, angles, ranges, wall_hit, max_range, free, row0, col0, belief, observed, step
         )
     return Update(row0, col0, free.view(bool))
+
+
+@njit(cache=True, nogil=True)
+def _fold_alone(
+    ox: float,
+    oy: float,
+    angles: FloatArray,
+    ranges: FloatArray,
+    normals: FloatArray,
+    wall_hit: BoolGrid,
+    max_range: float,
+    belief: BeliefGrid,
+    safe: BoolGrid,
+    safe_radius: float,
+) -> tuple[int, int, BeliefGrid]:
+    """:func:`fold_scan` called from Python. Numba's cache can lose the boxing environment
+    of a kernel that another cached kernel also calls (``knowledge/scanfold.py``): its
+    array result then fails to reach Python ("'descr' is NULL", seen when a noiseless run
+    and then a noisy one ran in one process with warm caches). Each caller from Python is a
+    kernel of its own."""
+    radius = safe_radius
+    return fold_scan(ox, oy, angles, ranges, normals, wall_hit, max_range, belief, safe, radius)
 
 
 @njit(cache=True, nogil=True)

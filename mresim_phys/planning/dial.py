@@ -111,6 +111,17 @@ def _dijkstra(
     return dist, pred, band
 
 
+@njit(cache=True, nogil=True)
+def _start_paused(
+    pad: NDArray[np.bool_], source: int
+) -> tuple[FloatArray, NDArray[np.int32], NDArray[np.int32], NDArray[np.int64]]:
+    """:func:`_start` called from Python. Numba's cache can lose the boxing environment of
+    a kernel that another cached kernel (here ``_dijkstra``) also calls, and its arrays
+    then fail to reach Python ("'descr' is NULL"); each caller from Python is a kernel of
+    its own (``knowledge.mapping._fold_alone`` is the other)."""
+    return _start(pad, source)
+
+
 class PausedSearch:
     """An unbounded Dijkstra from one cell over a window, run band by band on demand.
 
@@ -123,7 +134,7 @@ class PausedSearch:
     def __init__(self, passable: BoolGrid, start: tuple[int, int], box: Box) -> None:
         self.start = start  # full-grid (row, col) of the source
         self.window = Window.around(passable, box)
-        self.dist, self.pred, self._ring, self._sizes = _start(
+        self.dist, self.pred, self._ring, self._sizes = _start_paused(
             self.window.pad, self.window.node(start)
         )
         self._band = 0  # the next band to expand; -1 once the queue ran out
