@@ -60,7 +60,7 @@ def main() -> None:
         medians: dict[str, list[float]] = {name: [] for name in maps}
         for _ in range(args.rounds):
             for name, path in maps.items():
-                result = time_team(args.robots, path, preset.warmup, args.steps, preset)
+                result = time_team(args.robots, path, preset.warmup, args.steps, preset)[0]
                 medians[name].append(result.median_ms)
     small, large = (statistics.median(medians[name]) for name in maps)
     print(f"library, {args.robots} robots, original settings, {args.rounds} rounds:")
