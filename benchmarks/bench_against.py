@@ -62,11 +62,14 @@ def main() -> None:
     args = parser.parse_args()
     with tempfile.TemporaryDirectory() as scratch:
         old = Path(scratch) / "before"
-        subprocess.run(
+        added = subprocess.run(
             ["git", "-C", str(ROOT), "worktree", "add", "--detach", str(old), args.rev],
-            check=True,
             capture_output=True,
+            text=True,
         )
+        if added.returncode != 0:
+            print(f"bench_against.py: cannot check out {args.rev!r}: {added.stderr.strip()}")
+            raise SystemExit(2)
         try:
             compare(old, args)
         finally:
