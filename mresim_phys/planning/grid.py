@@ -138,6 +138,12 @@ class Window:
         """Flat window index of full-grid cell ``rc``."""
         return (rc[0] - self.origin[0]) * self.wp + (rc[1] - self.origin[1])
 
+    def node_inside(self, rc: tuple[int, int]) -> int | None:
+        """Flat window index of full-grid cell ``rc``; None where it lies outside the window."""
+        r, c = rc[0] - self.origin[0], rc[1] - self.origin[1]
+        inside = 0 <= r < self.pad.size // self.wp and 0 <= c < self.wp
+        return r * self.wp + c if inside else None
+
     def padded(self, grid: FloatArray) -> FloatArray:
         """A full-grid float array cut to this window, flat, its border 1.0 (never entered)."""
         hp = self.pad.size // self.wp

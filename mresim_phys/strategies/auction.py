@@ -103,13 +103,8 @@ def path_bounds(
     auction searches for: the winner depends on exact costs alone."""
     if search is None:
         return None
-    window = search.window
-    row, col = int(np.floor(position[1])), int(np.floor(position[0]))
-    r, c = row - window.origin[0], col - window.origin[1]
-    if not (0 <= r < window.pad.size // window.wp and 0 <= c < window.wp):
-        return None
-    node = r * window.wp + c
-    if not window.pad[node]:
+    node = search.window.node_inside((int(np.floor(position[1])), int(np.floor(position[0]))))
+    if node is None or not search.window.pad[node]:
         return None
     here = float(search.dist[node])
     if here < search.final_below:
