@@ -8,11 +8,14 @@ from typing import Any
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from scipy.sparse import csr_matrix
 from scipy.sparse.csgraph import breadth_first_order, connected_components
 
 from mresim_phys import Simulation
 from mresim_phys.agents import Agent, empty_belief
+from mresim_phys.comms.deltas import TILE, select_cells, tile_shape
 from mresim_phys.comms.exchange import (
     Exchange,
     Traffic,
@@ -270,3 +273,50 @@ def test_groups_and_trees_are_scipys(seed: int) -> None:
     root = int(rng.integers(n))
     order, parents = breadth_first_order(csr_matrix(links), root, directed=False)
     assert spanning_tree(links, root) == [(int(parents[c]), int(c)) for c in order[1:]]
+
+
+@given(seed=st.integers(0, 2**32 - 1), since=st.integers(-1, 6), only_lacking=st.booleans())
+@settings(max_examples=60, deadline=None)
+def test_a_selection_skips_only_tiles_with_nothing_newer(
+    seed: int, since: int, only_lacking: bool
+) -> None:
+    """``select_cells`` reads each tile's newest stamp to skip parts of rows; it must pick
+    exactly the cells, in the same order, that a pass over every cell of the boxes picks."""
+    rng = np.random.default_rng(seed)
+    shape = (45, 70)  # not a whole number of tiles either way
+    stamps = np.full(shape, -1, np.int32)
+    for _ in range(6):  # changes come in patches, as scans make them
+        r, c = rng.integers(0, shape[0]), rng.integers(0, shape[1])
+        patch = stamps[r : r + rng.integers(1, 12), c : c + rng.integers(1, 20)]
+        patch[...] = rng.integers(0, 6, size=patch.shape)
+    tiles = np.full(tile_shape(shape), -1, np.int32)
+    for (r, c), tick in np.ndenumerate(stamps):
+        tiles[r // TILE, c // TILE] = max(tiles[r // TILE, c // TILE], tick)
+    origins = rng.integers(-1, 3, size=shape).astype(np.int16)
+    codes = rng.integers(0, 8, size=shape).astype(np.uint8)
+    theirs = np.where(rng.random(shape) < 0.5, codes, rng.integers(0, 8, size=shape)).astype(
+        np.uint8
+    )
+    corners = rng.integers(0, [shape[0], shape[0], shape[1], shape[1]], size=(3, 4))
+    boxes = np.column_stack(
+        (
+            np.minimum(corners[:, 0], corners[:, 1]),
+            np.maximum(corners[:, 0], corners[:, 1]) + 1,
+            np.minimum(corners[:, 2], corners[:, 3]),
+            np.maximum(corners[:, 2], corners[:, 3]) + 1,
+        )
+    ).astype(np.int64)
+    index, values = select_cells(
+        boxes, since, 2, stamps, tiles, origins, codes, theirs, only_lacking
+    )
+    expected: list[int] = []
+    for r0, r1, c0, c1 in boxes.tolist():
+        for r in range(r0, r1):
+            for c in range(c0, c1):
+                flat = r * shape[1] + c
+                lacking = not only_lacking or codes[r, c] != theirs[r, c]
+                fresh = stamps[r, c] > since and origins[r, c] != 2 and lacking
+                if fresh and flat not in expected:
+                    expected.append(flat)
+    assert index.tolist() == expected
+    assert values.tolist() == codes.reshape(-1)[expected].tolist()

@@ -232,6 +232,7 @@ class Exchange:
             int(ledger.synced[i, j]),
             j,
             ledger.stamps[i],
+            ledger.tiles[i],
             ledger.origins[i],
             ledger.copies[i],
             ledger.copies[j],

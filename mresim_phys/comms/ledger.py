@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from mresim_phys.comms.deltas import Cells, merge_cells, merge_latest, stamp_changes
+from mresim_phys.comms.deltas import Cells, merge_cells, merge_latest, stamp_changes, tile_shape
 from mresim_phys.types import BeliefGrid, BoolGrid
 
 Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)
@@ -54,6 +54,8 @@ class Ledger:
     def __init__(self, shape: tuple[int, int], n: int, latest: bool = False) -> None:
         self.latest = latest  # cells carry their observation step; the newer value wins
         self.stamps = [np.full(shape, -1, dtype=np.int32) for _ in range(n)]
+        # the newest stamp in each tile of an agent's grid (``deltas.TILE``)
+        self.tiles = [np.full(tile_shape(shape), -1, dtype=np.int32) for _ in range(n)]
         self.copies = [np.zeros(shape, dtype=np.uint8) for _ in range(n)]
         self.origins = [np.full(shape, OWN, dtype=np.int16) for _ in range(n)]
         self.box_ticks = np.zeros((n, MAX_BOXES + 1), dtype=np.int64)
@@ -72,8 +74,8 @@ class Ledger:
         if box is None:
             return
         tick = sensed_tick(step)
-        args = (self.copies[index], self.stamps[index], self.origins[index], tick)
-        changed, *tight = stamp_changes(np.array(box, np.int64), belief, safe, *args)
+        grid = (self.copies[index], self.stamps[index], self.tiles[index], self.origins[index])
+        changed, *tight = stamp_changes(np.array(box, np.int64), belief, safe, *grid, tick)
         if changed:
             self.add_box(index, tick, (tight[0], tight[1], tight[2], tight[3]))
 
@@ -106,7 +108,7 @@ class Ledger:
         """Merge received ``cells`` (flat indices, codes[, observation steps]) into agent
         ``index``'s grids (and its ``observed`` steps, with 'latest' beliefs)."""
         tick = received_tick(step)
-        grid = (self.copies[index], self.stamps[index], self.origins[index])
+        grid = (self.copies[index], self.stamps[index], self.tiles[index], self.origins[index])
         if cells.seen is not None and observed is not None:
             changed, *tight = merge_latest(
                 cells.flat, cells.codes, cells.seen, *grids, observed, *grid, tick, sender
