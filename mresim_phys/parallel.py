@@ -9,11 +9,12 @@ kernels are numba ``nogil`` functions, and Chipmunk's queries go through cffi (w
 ``World`` serialises with a lock: a Chipmunk query locks its Space by a counter that
 concurrent queries would corrupt).
 
-What a robot's task does to shared state (the team coverage's touched windows, the
-comm ledger's scan boxes, the phase timers) is held in its :class:`Effects` and applied
-by the caller in robot order after every task has finished, so a run gives the same
-results, byte for byte, whatever the thread count and the threads' timing
-(``tests/test_parallel_step.py``).
+What a robot's task does to shared state (the team coverage's touched windows, the phase
+timers) is held in its :class:`Effects` and applied by the caller in robot order after
+every task has finished, so a run gives the same results, byte for byte, whatever the
+thread count and the threads' timing (``tests/test_parallel_step.py``). A task also
+stamps its robot's changes in the comm ledger (``comms.network.Network.stamp_own``),
+which touches only that robot's rows of it.
 
 A strategy or planner plugin run on threads must keep no mutable state shared between
 robots, nor scratch arrays shared between calls unless per thread (the built-in ones share
@@ -34,36 +35,37 @@ from contextlib import contextmanager
 from dataclasses import dataclass, field
 from typing import Literal, TypeVar
 
+from mresim_phys.comms.ledger import Box, union_box
 from mresim_phys.knowledge.mapping import Update
 from mresim_phys.types import BeliefGrid
 
 T = TypeVar("T")
-Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)
 
 
 @dataclass
 class Effects:
-    """What one robot's task did to shared state, held back until every robot is done."""
+    """What one robot's task did to shared state, held back until every robot is done: the
+    union of its scan windows (the team coverage recounts it) and the time it spent."""
 
-    touched: list[tuple[BeliefGrid, Update]] = field(default_factory=list)  # coverage windows
-    scans: list[tuple[int, Box]] = field(default_factory=list)  # (agent index, box) for the ledger
+    belief: BeliefGrid | None = None  # the robot's map, once a scan changed it
+    window: Box | None = None  # the union of its scan windows (row0, row1, col0, col1)
     seconds: dict[str, float] = field(default_factory=dict)  # phase -> time spent
+
+    def scanned(self, belief: BeliefGrid, update: Update) -> None:
+        """A scan changed ``belief`` inside ``update``'s window."""
+        h, w = update.free.shape
+        self.belief = belief
+        self.window = union_box(self.window, (update.row0, update.row0 + h, update.col0,
+                                              update.col0 + w))  # fmt: skip
 
     def spend(self, phase: str, seconds: float) -> None:
         """Add ``seconds`` to ``phase``'s timer."""
         self.seconds[phase] = self.seconds.get(phase, 0.0) + seconds
 
-    def apply(
-        self,
-        touch: Callable[[BeliefGrid, Update], None],
-        note_scan: Callable[[int, Box], None],
-        timers: dict[str, float],
-    ) -> None:
-        """Pass the held-back windows on in the order they were noted; add the times."""
-        for belief, update in self.touched:
-            touch(belief, update)
-        for index, box in self.scans:
-            note_scan(index, box)
+    def apply(self, touch_box: Callable[[BeliefGrid, Box], None], timers: dict[str, float]) -> None:
+        """Pass the held-back window on; add the times."""
+        if self.belief is not None and self.window is not None:
+            touch_box(self.belief, self.window)
         for phase, seconds in self.seconds.items():
             timers[phase] += seconds
 

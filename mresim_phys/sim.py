@@ -107,10 +107,9 @@ class Simulation:
         self.move_rules = MoveRules(s.rules.scan_every_point, self.robot_filter, s.terrain)
         self.pool = RobotPool(thread_count(scenario.simulation.threads, len(self.robots)))
         self.apply_events()
-        effects = Effects()
+        self._stamped: frozenset[int] = frozenset()  # robots whose task stamped the ledger
         for robot in self.robots:
-            self.sense(robot, effects)
-        self.apply(effects)
+            self.sense_in_place(robot)
         self.communicate()
         self.drain_batteries()
         self.record = self.measure()
@@ -236,24 +235,37 @@ class Simulation:
         heavy = [r.name in due or replans_on_the_way(r) for r in movers] if threaded else []
         for effects in self.pool.run(tasks, heavy):
             self.apply(effects)
+        self._stamped = frozenset(r.index for r in movers)
         for robot in self.robots:
             if robot.alive and not robot.can_move and robot.can_sense:
-                effects = Effects()
-                self.sense(robot, effects)
-                self.apply(effects)
+                self.sense_in_place(robot)
+
+    def sense_in_place(self, robot: Robot) -> None:
+        """A scan where ``robot`` stands, outside the robots' tasks (at the start of a run,
+        or for a robot whose drive has failed); the ledger learns its window at once."""
+        effects = Effects()
+        self.sense(robot, effects)
+        self.apply(effects)
+        if effects.window is not None:
+            self.network.note_scan(robot.index, effects.window)
 
     def robot_turn(self, robot: Robot, due: bool, given: bool) -> Effects:
-        """One robot's decide and move phases; what they did to shared state, held back."""
+        """One robot's decide and move phases, then the stamping of its own changes in the
+        comm ledger (which the communication phase would do otherwise: nothing changes the
+        robot's map in between); what they did to shared state, held back."""
         effects = Effects()
         if due:
             self.replan(robot, effects)
         replan, sense = partial(self.replan, effects=effects), partial(self.sense, effects=effects)
         take_step(robot, self.world, self.move_rules, due or given, replan, sense)
+        started = perf_counter()
+        self.network.stamp_own(robot, effects.window, self.t)
+        effects.spend("communication", perf_counter() - started)
         return effects
 
     def apply(self, effects: Effects) -> None:
-        """Fold one robot's held-back effects into the team coverage, ledger and timers."""
-        effects.apply(self.coverage.touch, self.network.note_scan, self.phase_times)
+        """Fold one robot's held-back effects into the team coverage and timers."""
+        effects.apply(self.coverage.touch_box, self.phase_times)
 
     def robot_filter(self, robot: Robot) -> tuple[int, int, int]:
         """What ``robot``'s rays and motion collide with."""
@@ -292,10 +304,7 @@ class Simulation:
         if checks_path and path_blocked(robot.belief, robot.path, robot.radius, lookahead):
             robot.stop_for_replan()
         if update is not None:
-            effects.touched.append((robot.belief, update))
-            h, w = update.free.shape
-            box = (update.row0, update.row0 + h, update.col0, update.col0 + w)
-            effects.scans.append((robot.index, box))
+            effects.scanned(robot.belief, update)
 
     def replan(self, robot: Robot, effects: Effects) -> None:
         """Ask the robot's strategy for a new path from what the robot knows."""
@@ -321,10 +330,14 @@ class Simulation:
         """Find links among alive agents and exchange knowledge along them."""
         started = perf_counter()
         for robot in self.robots:  # a bump marks a cell next to the robot outside any scan
-            self.network.note_scan(
-                robot.index, box_around(robot.position, robot.radius + 2, self.world.shape)
-            )
-        self.comm = self.network.communicate(self.agents, self.world, self.t, self.pool.run)
+            if robot.index not in self._stamped:
+                self.network.note_scan(
+                    robot.index, box_around(robot.position, robot.radius + 2, self.world.shape)
+                )
+        self.comm = self.network.communicate(
+            self.agents, self.world, self.t, self.pool.run, self._stamped
+        )
+        self._stamped = frozenset()
         self.note_links()
         if isinstance(self.coverage, LatestCoverage):
             self.touch_merged(self.coverage)

@@ -22,10 +22,10 @@ from functools import partial
 
 import numpy as np
 
-from mresim_phys.agents import Agent
+from mresim_phys.agents import Agent, Robot
 from mresim_phys.comms.base import CommModel, Radios
 from mresim_phys.comms.exchange import Exchange, Traffic, hop_groups, stamp_base_contacts
-from mresim_phys.comms.ledger import Box, Ledger
+from mresim_phys.comms.ledger import Box, Ledger, box_around
 from mresim_phys.types import FloatArray
 from mresim_phys.world.space import World
 
@@ -138,16 +138,40 @@ class Network:
                 silent[list(blackout.members)] = True
         return silent
 
+    def stamp_own(self, robot: Robot, window: Box | None, step: int) -> None:
+        """Stamp in the ledger the cells ``robot`` changed itself this step: inside
+        ``window`` (the union of its scans' windows, None: it did not scan) and next to its
+        body (a bump marks a cell outside any scan). It touches only the robot's own rows
+        and arrays of the ledger, so robots' tasks call it on threads (``sim.py``)."""
+        ledger = self.ledger
+        if window is not None:
+            ledger.note(robot.index, window)
+        shape = ledger.stamps[robot.index].shape
+        ledger.note(robot.index, box_around(robot.position, robot.radius + 2, shape))
+        ledger.stamp_sensed(robot.index, robot.belief, robot.safe, step)
+
     def communicate(
-        self, agents: Sequence[Agent], world: World, step: int, run_all: RunAll = run_in_turn
+        self,
+        agents: Sequence[Agent],
+        world: World,
+        step: int,
+        run_all: RunAll = run_in_turn,
+        stamped: frozenset[int] = frozenset(),
     ) -> CommRecord:
         """Find this step's links and move knowledge along them.
 
-        First each agent's own changes of the step are stamped in its ledger (each task
-        touches only its agent's arrays and rows, so ``run_all`` may run them on threads:
-        ``parallel.RobotPool.run``)."""
+        First each agent's own changes of the step are stamped in its ledger, but for the
+        agents (indices) ``stamped`` already (:meth:`stamp_own`); each stamp touches only
+        its agent's arrays and rows, so ``run_all`` may run them on threads:
+        ``parallel.RobotPool.run``."""
         ledger = self.ledger
-        run_all([partial(ledger.stamp_sensed, a.index, a.belief, a.safe, step) for a in agents])
+        run_all(
+            [
+                partial(ledger.stamp_sensed, a.index, a.belief, a.safe, step)
+                for a in agents
+                if a.index not in stamped
+            ]
+        )
         n = len(agents)
         links = self.main.links(agents, world, self.silent(n, step, "main"))
         groups = hop_groups(links, self.multi_hop)

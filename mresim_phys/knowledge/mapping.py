@@ -426,7 +426,12 @@ class Coverage:
     def touch(self, belief: BeliefGrid, update: Update) -> None:
         """Remember that ``update``'s window of ``belief`` changed this step."""
         h, w = update.free.shape
-        self._pending.append((belief, update.row0, update.row0 + h, update.col0, update.col0 + w))
+        self.touch_box(belief, (update.row0, update.row0 + h, update.col0, update.col0 + w))
+
+    def touch_box(self, belief: BeliefGrid, box: tuple[int, int, int, int]) -> None:
+        """Remember that ``belief`` may have changed inside ``box`` (row0, row1, col0, col1)
+        this step."""
+        self._pending.append((belief, *box))
 
     def settle(self) -> None:
         """Count the reachable cells now FREE in the touched windows, not counted before.
