@@ -6,6 +6,7 @@ import numpy as np
 import pymunk
 import pytest
 
+from mresim_phys.world.clearance import box_clear
 from mresim_phys.world.maps import wall_segments
 from mresim_phys.world.space import MOVABLE_CATEGORY, SHUFFLE_SEED, WALL_CATEGORY, World
 from mresim_phys.world.walls import walls_between
@@ -197,3 +198,41 @@ def test_radio_wall_counts_and_line_of_sight_follow_a_closed_door(rooms: np.ndar
     assert runs[0] == 1 and inside[0] == pytest.approx(2.0)
     hit = world.first_hit((10.5, 30.5), (70.5, 30.5), 0.0, walls(world))
     assert hit is not None and hit.point[0] == pytest.approx(40.0)
+
+
+def test_a_move_clear_of_every_cell_and_body_skips_chipmunk_with_the_same_answer(
+    rooms: np.ndarray,
+) -> None:
+    """``World.blocked`` answers "nothing" without asking Chipmunk when no occupied cell and
+    no robot touches the swept box (``world/clearance.py``): over random short moves near
+    walls, a movable cart, a door and other robots, it answers exactly what Chipmunk's
+    query answers (the same hits, the same Nones), and the skip is taken for most moves."""
+    world = World(rooms.copy(), [0.5, 0.5, 1.5])
+    world.add_movable("cart", (3, 2), (20, 60))
+    world.place_robots([(10.5, 10.5), (30.0, 45.25), (20.0, 20.0)])
+    rng = np.random.default_rng(7)
+    skipped = 0
+    for _ in range(3000):
+        start = (float(rng.uniform(1.5, 78.5)), float(rng.uniform(1.5, 58.5)))
+        angle, length = rng.uniform(0, 2 * np.pi), rng.uniform(0.0, 3.0)
+        end = (start[0] + length * np.cos(angle), start[1] + length * np.sin(angle))
+        radius = float(rng.choice([0.0, 0.5, 1.0, 2.0]))
+        shape_filter = world.query_filter(int(rng.integers(-1, 3)), bool(rng.integers(0, 2)))
+        if world.buried(start):
+            continue
+        grid, circles = world.ray_targets(shape_filter)
+        box = (min(start[0], end[0]) - radius, min(start[1], end[1]) - radius,
+               max(start[0], end[0]) + radius, max(start[1], end[1]) + radius)  # fmt: skip
+        clear = box_clear(grid, circles, *box)
+        skipped += clear
+        chipmunk = world.first_hit(start, end, radius, shape_filter)
+        if clear:
+            assert chipmunk is None
+        expected = chipmunk
+        if chipmunk is not None and chipmunk.alpha <= 1e-9:  # a contact it moves away from
+            along = chipmunk.normal[0] * (end[0] - start[0]) + chipmunk.normal[1] * (
+                end[1] - start[1]
+            )
+            expected = None if along >= 0 else chipmunk
+        assert world.blocked(start, end, radius, shape_filter) == expected
+    assert skipped > 1000

@@ -56,6 +56,7 @@ from mresim_phys.world.changes import (
     circles_on_cells,
     join_boxes,
 )
+from mresim_phys.world.clearance import box_clear
 from mresim_phys.world.maps import wall_segments
 from mresim_phys.world.queries import ALL_BITS, Hit, QueryFilter, SpaceQuery
 from mresim_phys.world.raycast import cast_fan
@@ -394,6 +395,11 @@ class World:
         """
         if self.buried(start):
             return Hit(start, (0.0, 0.0), 0.0, True)
+        grid, circles = self.ray_targets(shape_filter)  # every shape the filter can hit
+        x0, x1 = min(start[0], end[0]) - radius, max(start[0], end[0]) + radius
+        y0, y1 = min(start[1], end[1]) - radius, max(start[1], end[1]) + radius
+        if box_clear(grid, circles, x0, y0, x1, y1):  # no shape near: Chipmunk finds none
+            return None
         hit = self.first_hit(start, end, radius, shape_filter)
         if hit is None:
             return None
