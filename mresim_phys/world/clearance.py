@@ -23,7 +23,7 @@ from mresim_phys.types import BoolGrid, FloatArray
 TOUCH_EPS = 1e-6  # cells: a box this close to a cell or circle counts as touching it
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True)  # keeps the GIL: a sub-microsecond call would only wait to get it back
 def box_clear(
     grid: BoolGrid, circles: FloatArray, x0: float, y0: float, x1: float, y1: float
 ) -> bool:
