@@ -27,7 +27,7 @@ from scipy import ndimage
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from mresim_phys.knowledge.mapping import Coverage  # noqa: E402
+from mresim_phys.knowledge.coverage import Coverage  # noqa: E402
 from mresim_phys.scenario.readers import load_map  # noqa: E402
 from mresim_phys.types import BoolGrid  # noqa: E402
 from mresim_phys.world.changes import Change  # noqa: E402

@@ -33,8 +33,8 @@ from mresim_phys.comms.network import Channel, Network
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.errors import ScenarioError
 from mresim_phys.faults.runtime import Faults, build_faults
+from mresim_phys.knowledge.coverage import Coverage
 from mresim_phys.knowledge.latest import LatestCoverage
-from mresim_phys.knowledge.mapping import Coverage
 from mresim_phys.knowledge.teammates import BASE_NAME
 from mresim_phys.planning import PLANNERS
 from mresim_phys.rng import Streams

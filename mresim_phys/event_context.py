@@ -16,7 +16,7 @@ import numpy as np
 
 from mresim_phys.agents import Agent, Robot
 from mresim_phys.comms.network import Blackout, Network
-from mresim_phys.knowledge.mapping import Coverage
+from mresim_phys.knowledge.coverage import Coverage
 from mresim_phys.types import BoolGrid, FloatArray
 from mresim_phys.world.changes import Change, circles_cover
 from mresim_phys.world.debris import Crush

@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from mresim_phys.knowledge.mapping import Coverage
+from mresim_phys.knowledge.coverage import Coverage
 from mresim_phys.types import FREE, BeliefGrid
 
 THRESHOLDS = (0.5, 0.9, 0.95)

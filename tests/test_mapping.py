@@ -9,7 +9,8 @@ import shapely
 from scipy import ndimage
 
 from mresim_phys.agents import empty_belief
-from mresim_phys.knowledge.mapping import NEAR_ROBOT, Coverage, integrate_scan, merge_into
+from mresim_phys.knowledge.coverage import Coverage
+from mresim_phys.knowledge.mapping import NEAR_ROBOT, integrate_scan, merge_into
 from mresim_phys.scenario.schema import SensorSpec
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 from mresim_phys.world.sensing import scan
@@ -87,6 +88,31 @@ def test_coverage_counts_each_reachable_cell_once_and_never_decreases(rooms: np.
     assert fractions == sorted(fractions) and fractions[0] == fractions[1]
     assert coverage.count == np.count_nonzero(coverage.known)
     assert coverage.count <= np.count_nonzero(belief != UNKNOWN)
+
+
+def test_settling_touched_windows_counts_what_a_whole_map_count_gives() -> None:
+    """``Coverage.settle`` reads only the touched windows, in one compiled pass a map: its
+    count is the number of reachable cells some map holds FREE, and the cells it marks
+    known are every FREE cell of the windows, reachable or not."""
+    rng = np.random.default_rng(3)
+    reachable = rng.random((50, 70)) < 0.8
+    coverage = Coverage(reachable)
+    maps = [np.zeros((50, 70), np.uint8) for _ in range(2)]
+    for _ in range(12):
+        belief = maps[int(rng.integers(0, 2))]
+        r0, c0 = int(rng.integers(0, 40)), int(rng.integers(0, 60))
+        r1, c1 = r0 + int(rng.integers(1, 10)), c0 + int(rng.integers(1, 10))
+        belief[r0:r1, c0:c1] = np.maximum(
+            belief[r0:r1, c0:c1], rng.integers(0, 3, (r1 - r0, c1 - c0))
+        )
+        coverage.touch_box(belief, (r0, r1, c0, c1))
+        if rng.random() < 0.5:
+            coverage.settle()
+    coverage.settle()
+    free = (maps[0] == FREE) | (maps[1] == FREE)
+    ever_free = coverage.known
+    assert coverage.count == np.count_nonzero(ever_free & reachable)
+    assert (ever_free >= free).all()  # what is FREE now was counted (an obstacle may hide more)
 
 
 def random_scans(truth: np.ndarray, count: int, seed: int) -> Iterator[Scan]:

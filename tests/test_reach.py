@@ -9,7 +9,7 @@ from hypothesis import strategies as st
 from numpy.typing import NDArray
 from scipy import ndimage
 
-from mresim_phys.knowledge.mapping import Coverage
+from mresim_phys.knowledge.coverage import Coverage
 from mresim_phys.types import FREE, UNKNOWN
 from mresim_phys.world.changes import Change
 from mresim_phys.world.reach import Reachable, follow_changes

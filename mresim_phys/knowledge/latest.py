@@ -22,7 +22,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from mresim_phys.knowledge.mapping import Coverage, Update
+from mresim_phys.knowledge.coverage import Coverage
+from mresim_phys.knowledge.mapping import Update
 from mresim_phys.types import FREE, OCCUPIED, BeliefGrid, BoolGrid
 
 Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)

@@ -24,8 +24,8 @@ from typing import Any
 import numpy as np
 
 from mresim_phys.errors import MresimError
+from mresim_phys.knowledge.coverage import Coverage
 from mresim_phys.knowledge.latest import LatestCoverage
-from mresim_phys.knowledge.mapping import Coverage
 from mresim_phys.knowledge.robustness import FailureWatch, robot_states
 from mresim_phys.metrics import RobotRecord, StepRecord, measure_step, update_known_at_base
 from mresim_phys.output.files import write_json_atomic

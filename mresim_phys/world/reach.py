@@ -44,7 +44,7 @@ NOTHING: Box = (0, 0, 0, 0)
 
 
 class Retargets(Protocol):
-    """Anything that counts against a reachable set (``knowledge.mapping.Coverage``)."""
+    """Anything that counts against a reachable set (``knowledge.coverage.Coverage``)."""
 
     def retarget(
         self, reachable: BoolGrid, window: Box | None = None, before: BoolGrid | None = None
