@@ -16,6 +16,10 @@ thread count and the threads' timing (``tests/test_parallel_step.py``). A task a
 stamps its robot's changes in the comm ledger (``comms.network.Network.stamp_own``),
 which touches only that robot's rows of it.
 
+The communication phase uses the same threads for the map transmissions of one level of
+an exchange tree (``comms.exchange.Exchange.share_group``), a run of them per thread
+(:meth:`RobotPool.run_in_chunks`).
+
 A strategy or planner plugin run on threads must keep no mutable state shared between
 robots, nor scratch arrays shared between calls unless per thread (the built-in ones share
 only the topological map cache, which is locked and content-addressed, and keep their search
@@ -33,6 +37,7 @@ from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor, wait
 from contextlib import contextmanager
 from dataclasses import dataclass, field
+from functools import partial
 from typing import Literal, TypeVar
 
 from mresim_phys.comms.ledger import Box, union_box
@@ -143,6 +148,14 @@ class RobotPool:
                 raise error
         return [f.result() for f in futures]
 
+    def run_in_chunks(self, tasks: Sequence[Callable[[], object]]) -> None:
+        """Run many small ``tasks`` (the exchange's transmissions of one tree level), split
+        into one run of consecutive tasks per thread: a thread hand-over costs more than a
+        small task. Each chunk runs its tasks in their order; the first error is raised."""
+        size = -(-len(tasks) // self.threads)
+        chunks = [tasks[i : i + size] for i in range(0, len(tasks), size)]
+        self.run([partial(_run_each, chunk) for chunk in chunks])
+
     def _pool(self) -> ThreadPoolExecutor:
         if self._executor is None:
             executor = ThreadPoolExecutor(self.threads, thread_name_prefix="mresim-robot")
@@ -155,3 +168,9 @@ class RobotPool:
         if self._executor is not None:
             self._executor.shutdown(wait=True)
             self._executor = None
+
+
+def _run_each(tasks: Sequence[Callable[[], object]]) -> None:
+    """Run ``tasks`` one after another."""
+    for task in tasks:
+        task()

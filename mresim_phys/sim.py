@@ -335,7 +335,7 @@ class Simulation:
                     robot.index, box_around(robot.position, robot.radius + 2, self.world.shape)
                 )
         self.comm = self.network.communicate(
-            self.agents, self.world, self.t, self.pool.run, self._stamped
+            self.agents, self.world, self.t, self.pool.run_in_chunks, self._stamped
         )
         self._stamped = frozenset()
         self.note_links()

@@ -21,10 +21,12 @@ from mresim_phys.comms.exchange import (
     Traffic,
     hop_groups,
     linked_groups,
+    run_in_turn,
     spanning_tree,
     stamp_base_contacts,
 )
-from mresim_phys.comms.ledger import Ledger
+from mresim_phys.comms.ledger import Ledger, received_tick
+from mresim_phys.parallel import RobotPool
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 
 ScenarioFile = Callable[..., Path]
@@ -320,3 +322,73 @@ def test_a_selection_skips_only_tiles_with_nothing_newer(
                     expected.append(flat)
     assert index.tolist() == expected
     assert values.tolist() == codes.reshape(-1)[expected].tolist()
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_a_tree_level_on_threads_ends_in_the_same_maps_ledgers_and_traffic(seed: int) -> None:
+    """``Exchange.run`` moves maps a tree level at a time; on threads (each level's
+    transmissions side by side, merges into one parent in the tree's order) every map,
+    safe grid, ledger array, teammate record and byte count ends as the serial run's."""
+    rng = np.random.default_rng(seed)
+    n, shape = 9, (30, 40)
+    links = np.zeros((n, n), dtype=bool)
+    for child in range(1, n):  # a random tree, several levels deep, plus a few cross links
+        parent = int(rng.integers(0, child))
+        links[parent, child] = links[child, parent] = True
+    for _ in range(3):
+        i, j = rng.integers(0, n, size=2)
+        links[i, j] = links[j, i] = i != j
+    runs = []
+    pool = RobotPool(2)
+    for run_all in (None, run_in_turn, pool.run_in_chunks):  # None: one send at a time
+        sub = np.random.default_rng(seed + 100)
+        agents = make_agents(n, shape)
+        exchanger = Exchanger(agents)
+        traffic = []
+        for step in range(1, 4):
+            for agent in agents:  # each agent learns a patch of its own
+                r, c = sub.integers(0, shape[0] - 6), sub.integers(0, shape[1] - 6)
+                patch = sub.integers(0, 3, size=(6, 6)).astype(np.uint8)
+                np.maximum(
+                    agent.belief[r : r + 6, c : c + 6],
+                    patch,
+                    out=agent.belief[r : r + 6, c : c + 6],
+                )
+                agent.safe[r : r + 6, c : c + 6] |= sub.random((6, 6)) < 0.2
+                exchanger.ledger.note(agent.index, (0, shape[0], 0, shape[1]))
+                exchanger.ledger.stamp_sensed(agent.index, agent.belief, agent.safe, step)
+            groups = hop_groups(links, True)
+            if run_all is None:
+                traffic.append(send_one_by_one(exchanger.exchange, agents, links, step).sent)
+            else:
+                traffic.append(exchanger.exchange.run(agents, links, step, groups, run_all).sent)
+        ledger = exchanger.ledger
+        runs.append(
+            (
+                [a.belief.tobytes() + a.safe.tobytes() for a in agents],
+                [
+                    s.tobytes() + o.tobytes()
+                    for s, o in zip(ledger.stamps, ledger.origins, strict=True)
+                ],
+                [sorted((k, v.step, v.learned) for k, v in a.teammates.items()) for a in agents],
+                [t.tobytes() for t in traffic],
+            )
+        )
+    pool.close()
+    assert runs[0] == runs[1] == runs[2]
+
+
+def send_one_by_one(
+    exchange: Exchange, agents: list[Agent], links: np.ndarray, step: int
+) -> Traffic:
+    """The multi-hop exchange as a sequence of whole transmissions: up the tree in reverse
+    visiting order, then down it (what ``Exchange.run`` does a level at a time)."""
+    traffic = Traffic.empty(len(agents))
+    for group in linked_groups(links):
+        tree = spanning_tree(links, group[0])
+        for parent, child in reversed(tree):
+            exchange.send(agents, child, parent, step, traffic, only_lacking=False)
+        for parent, child in tree:
+            exchange.send(agents, parent, child, step, traffic, only_lacking=True)
+        exchange.ledger.mark_synced(group, received_tick(step))
+    return traffic

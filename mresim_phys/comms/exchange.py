@@ -25,8 +25,9 @@ Without it, each agent merges what its direct neighbours knew before the phase.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
@@ -37,6 +38,14 @@ from mresim_phys.knowledge.teammates import TeammateInfo
 
 CELL_BYTES = 5
 SEEN_BYTES = 4  # per cell with 'latest' beliefs: the step of the value's observation
+RunAll = Callable[[Sequence[Callable[[], None]]], object]  # runs every task (any order)
+Edge = tuple[int, int]  # (sender, receiver)
+
+
+def run_in_turn(tasks: Sequence[Callable[[], None]]) -> None:
+    """Run ``tasks`` one after another in the calling thread."""
+    for task in tasks:
+        task()
 
 
 @dataclass
@@ -116,6 +125,20 @@ def spanning_tree(links: np.ndarray, root: int) -> list[tuple[int, int]]:
     return edges
 
 
+def depths(tree: list[tuple[int, int]]) -> dict[int, int]:
+    """Each tree member's depth (the root's is 0), from (parent, child) edges in visiting
+    order (:func:`spanning_tree`)."""
+    depth = {tree[0][0]: 0} if tree else {}
+    for parent, child in tree:
+        depth[child] = depth[parent] + 1
+    return depth
+
+
+def _size(cells: Cells | None) -> int:
+    """Map cells in a transmission."""
+    return 0 if cells is None else len(cells[0])
+
+
 def held_records(agent: Agent, step: int) -> list[TeammateInfo]:
     """Every record ``agent`` can send: those it holds and its own."""
     return [*agent.teammates.values(), agent.own_record(step)]
@@ -142,16 +165,25 @@ class Exchange:
         self.full_maps = full_maps
         self.maps = maps
 
-    def run(self, agents: Sequence[Agent], links: np.ndarray, step: int, groups: Groups) -> Traffic:
+    def run(
+        self,
+        agents: Sequence[Agent],
+        links: np.ndarray,
+        step: int,
+        groups: Groups,
+        run_all: RunAll = run_in_turn,
+    ) -> Traffic:
         """Exchange along ``links`` (index 0 = base); return the traffic.
 
         ``groups`` are the linked groups for multi-hop exchange (:func:`hop_groups`),
-        None for one hop per step.
+        None for one hop per step. ``run_all`` runs a tree level's map transmissions
+        (:meth:`share_group`); on threads (``parallel.RobotPool.run``) it ends in the same
+        maps, byte for byte.
         """
         traffic = Traffic.empty(len(agents))
         if groups is not None:
             for group in groups:
-                self.share_group(agents, links, group, step, traffic)
+                self.share_group(agents, links, group, step, traffic, run_all)
         else:
             self.share_direct(agents, links, step, traffic)
         return traffic
@@ -163,15 +195,90 @@ class Exchange:
         group: list[int],
         step: int,
         traffic: Traffic,
+        run_all: RunAll = run_in_turn,
     ) -> None:
-        """Gather the group's knowledge up a spanning tree, then scatter it back down."""
+        """Gather the group's knowledge up a spanning tree, then scatter it back down.
+
+        Maps and records do not read each other, so the maps move first, a tree level at
+        a time (:meth:`gather_maps`, :meth:`scatter_maps`), then the records travel along
+        the same transmissions in the tree's order, and each transmission is counted."""
         tree = spanning_tree(links, group[0])
-        for parent, child in reversed(tree):
-            self.send(agents, child, parent, step, traffic, only_lacking=False)
-        for parent, child in tree:
-            self.send(agents, parent, child, step, traffic, only_lacking=True)
+        up = [(child, parent) for parent, child in reversed(tree)]
+        down = list(tree)
+        cells: dict[Edge, int] = {}
+        if self.maps:
+            self.gather_maps(agents, up, depths(tree), step, cells, run_all)
+        for sender, receiver in up:
+            self.count(agents, sender, receiver, step, traffic, cells.get((sender, receiver), 0))
+        if self.maps:
+            self.scatter_maps(agents, down, depths(tree), step, cells, run_all)
+        for sender, receiver in down:
+            self.count(agents, sender, receiver, step, traffic, cells.get((sender, receiver), 0))
         if self.maps:
             self.ledger.mark_synced(group, received_tick(step))
+
+    def gather_maps(
+        self,
+        agents: Sequence[Agent],
+        up: list[Edge],
+        depth: dict[int, int],
+        step: int,
+        cells: dict[Edge, int],
+        run_all: RunAll,
+    ) -> None:
+        """Children to parents, deepest level first: a level's selections side by side
+        (each reads its child, whose own children merged into it a level before), then
+        its merges, one task per parent taking its children in the tree's order (a cell
+        two children send comes from the first: its origin is the first's)."""
+        for level in sorted({depth[s] for s, _ in up}, reverse=True):
+            edges = [(s, r) for s, r in up if depth[s] == level]
+            picked: dict[Edge, Cells | None] = {}
+            run_all([partial(self._pick, agents, edge, picked) for edge in edges])
+            parents = list(dict.fromkeys(r for _, r in edges))
+            run_all([partial(self._merge_from, agents, p, edges, picked, step) for p in parents])
+            cells.update({edge: _size(c) for edge, c in picked.items()})
+
+    def _pick(self, agents: Sequence[Agent], edge: Edge, out: dict[Edge, Cells | None]) -> None:
+        """A child's upload: all it has that its parent has not had from it."""
+        out[edge] = self.select(agents[edge[0]], agents[edge[1]], only_lacking=False)
+
+    def _merge_from(
+        self,
+        agents: Sequence[Agent],
+        parent: int,
+        edges: list[Edge],
+        picked: dict[Edge, Cells | None],
+        step: int,
+    ) -> None:
+        """Merge into ``parent`` what its children among ``edges`` picked, in that order."""
+        for sender, receiver in edges:
+            if receiver == parent:
+                self.deliver(agents[parent], picked[sender, receiver], step, sender)
+
+    def scatter_maps(
+        self,
+        agents: Sequence[Agent],
+        down: list[Edge],
+        depth: dict[int, int],
+        step: int,
+        cells: dict[Edge, int],
+        run_all: RunAll,
+    ) -> None:
+        """Parents to children, level by level from the root: each transmission of a level
+        reads its parent (complete once the level above is done) and writes its own child,
+        so a level's transmissions run side by side; a parent sends what the child lacks."""
+        for level in sorted({depth[r] for _, r in down}):
+            edges = [(s, r) for s, r in down if depth[r] == level]
+            run_all([partial(self._transmit, agents, edge, step, cells) for edge in edges])
+
+    def _transmit(
+        self, agents: Sequence[Agent], edge: Edge, step: int, cells: dict[Edge, int]
+    ) -> None:
+        """A parent's download to a child: what the child lacks; note its size."""
+        sender, receiver = edge
+        picked = self.select(agents[sender], agents[receiver], only_lacking=True)
+        self.deliver(agents[receiver], picked, step, sender)
+        cells[edge] = _size(picked)
 
     def share_direct(
         self, agents: Sequence[Agent], links: np.ndarray, step: int, traffic: Traffic
@@ -181,7 +288,7 @@ class Exchange:
         packets = {(i, j): self.package(agents[i], agents[j], step) for i, j in pairs}
         for (i, j), (cells, records) in packets.items():
             self.deliver(agents[j], cells, step, i)
-            count = 0 if cells is None else len(cells[0])
+            count = _size(cells)
             traffic.add(i, j, count, learn_records(agents[j], records, step), self.cell_bytes)
             if self.maps:
                 self.ledger.synced[i, j] = sensed_tick(step)
@@ -204,10 +311,21 @@ class Exchange:
         """One transmission of maps and records from ``sender`` to ``receiver``."""
         cells = self.select(agents[sender], agents[receiver], only_lacking)
         self.deliver(agents[receiver], cells, step, sender)
+        self.count(agents, sender, receiver, step, traffic, _size(cells))
+
+    def count(
+        self,
+        agents: Sequence[Agent],
+        sender: int,
+        receiver: int,
+        step: int,
+        traffic: Traffic,
+        cells: int,
+    ) -> None:
+        """The records of one transmission (the receiver keeps the newer ones); count it,
+        with its ``cells`` map cells."""
         records = learn_records(agents[receiver], held_records(agents[sender], step), step)
-        traffic.add(
-            sender, receiver, 0 if cells is None else len(cells[0]), records, self.cell_bytes
-        )
+        traffic.add(sender, receiver, cells, records, self.cell_bytes)
 
     def package(
         self, agent: Agent, receiver: Agent, step: int

@@ -16,7 +16,7 @@ on. What was sent is counted in bytes (:class:`~.exchange.Traffic`).
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from functools import partial
 
@@ -24,7 +24,14 @@ import numpy as np
 
 from mresim_phys.agents import Agent, Robot
 from mresim_phys.comms.base import CommModel, Radios
-from mresim_phys.comms.exchange import Exchange, Traffic, hop_groups, stamp_base_contacts
+from mresim_phys.comms.exchange import (
+    Exchange,
+    RunAll,
+    Traffic,
+    hop_groups,
+    run_in_turn,
+    stamp_base_contacts,
+)
 from mresim_phys.comms.ledger import Box, Ledger, box_around
 from mresim_phys.types import FloatArray
 from mresim_phys.world.space import World
@@ -87,15 +94,6 @@ class CommRecord:
     control_links: np.ndarray
     traffic: Traffic
     control_traffic: Traffic
-
-
-RunAll = Callable[[Sequence[Callable[[], None]]], object]  # runs every task (any order)
-
-
-def run_in_turn(tasks: Sequence[Callable[[], None]]) -> None:
-    """Run ``tasks`` one after another in the calling thread."""
-    for task in tasks:
-        task()
 
 
 class Network:
@@ -175,7 +173,7 @@ class Network:
         n = len(agents)
         links = self.main.links(agents, world, self.silent(n, step, "main"))
         groups = hop_groups(links, self.multi_hop)
-        traffic = self.maps.run(agents, links, step, groups)
+        traffic = self.maps.run(agents, links, step, groups, run_all)
         stamp_base_contacts(agents, links, step, groups)
         control_links = np.zeros_like(links)
         control_traffic = Traffic.empty(n)
