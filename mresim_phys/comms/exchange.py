@@ -207,15 +207,12 @@ class Exchange:
         down = list(tree)
         cells: dict[Edge, int] = {}
         if self.maps:
-            self.gather_maps(agents, up, depths(tree), step, cells, run_all)
-        for sender, receiver in up:
-            self.count(agents, sender, receiver, step, traffic, cells.get((sender, receiver), 0))
-        if self.maps:
-            self.scatter_maps(agents, down, depths(tree), step, cells, run_all)
-        for sender, receiver in down:
-            self.count(agents, sender, receiver, step, traffic, cells.get((sender, receiver), 0))
-        if self.maps:
+            depth = depths(tree)
+            self.gather_maps(agents, up, depth, step, cells, run_all)
+            self.scatter_maps(agents, down, depth, step, cells, run_all)
             self.ledger.mark_synced(group, received_tick(step))
+        for sender, receiver in up + down:
+            self.count(agents, sender, receiver, step, traffic, cells.get((sender, receiver), 0))
 
     def gather_maps(
         self,
