@@ -329,11 +329,9 @@ class Simulation:
     def communicate(self) -> None:
         """Find links among alive agents and exchange knowledge along them."""
         started = perf_counter()
-        for robot in self.robots:  # a bump marks a cell next to the robot outside any scan
+        for robot in self.robots:
             if robot.index not in self._stamped:
-                self.network.note_scan(
-                    robot.index, box_around(robot.position, robot.radius + 2, self.world.shape)
-                )
+                self.network.note_body(robot)
         self.comm = self.network.communicate(
             self.agents, self.world, self.t, self.pool.run_in_chunks, self._stamped
         )

@@ -141,12 +141,16 @@ class Network:
         ``window`` (the union of its scans' windows, None: it did not scan) and next to its
         body (a bump marks a cell outside any scan). It touches only the robot's own rows
         and arrays of the ledger, so robots' tasks call it on threads (``sim.py``)."""
-        ledger = self.ledger
         if window is not None:
-            ledger.note(robot.index, window)
-        shape = ledger.stamps[robot.index].shape
-        ledger.note(robot.index, box_around(robot.position, robot.radius + 2, shape))
-        ledger.stamp_sensed(robot.index, robot.belief, robot.safe, step)
+            self.ledger.note(robot.index, window)
+        self.note_body(robot)
+        self.ledger.stamp_sensed(robot.index, robot.belief, robot.safe, step)
+
+    def note_body(self, robot: Robot) -> None:
+        """``robot``'s map may have changed next to its body: a bump marks a cell there
+        outside any scan."""
+        shape = self.ledger.stamps[robot.index].shape
+        self.ledger.note(robot.index, box_around(robot.position, robot.radius + 2, shape))
 
     def communicate(
         self,
