@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 from functools import partial
 from typing import Literal, TypeVar
 
+from mresim_phys.comms.exchange import run_in_turn
 from mresim_phys.comms.ledger import Box, union_box
 from mresim_phys.knowledge.mapping import Update
 from mresim_phys.types import BeliefGrid
@@ -148,13 +149,13 @@ class RobotPool:
                 raise error
         return [f.result() for f in futures]
 
-    def run_in_chunks(self, tasks: Sequence[Callable[[], object]]) -> None:
+    def run_in_chunks(self, tasks: Sequence[Callable[[], None]]) -> None:
         """Run many small ``tasks`` (the exchange's transmissions of one tree level), split
         into one run of consecutive tasks per thread: a thread hand-over costs more than a
         small task. Each chunk runs its tasks in their order; the first error is raised."""
-        size = -(-len(tasks) // self.threads)
+        size = max(-(-len(tasks) // self.threads), 1)
         chunks = [tasks[i : i + size] for i in range(0, len(tasks), size)]
-        self.run([partial(_run_each, chunk) for chunk in chunks])
+        self.run([partial(run_in_turn, chunk) for chunk in chunks])
 
     def _pool(self) -> ThreadPoolExecutor:
         if self._executor is None:
@@ -168,9 +169,3 @@ class RobotPool:
         if self._executor is not None:
             self._executor.shutdown(wait=True)
             self._executor = None
-
-
-def _run_each(tasks: Sequence[Callable[[], object]]) -> None:
-    """Run ``tasks`` one after another."""
-    for task in tasks:
-        task()

@@ -177,7 +177,7 @@ class Exchange:
 
         ``groups`` are the linked groups for multi-hop exchange (:func:`hop_groups`),
         None for one hop per step. ``run_all`` runs a tree level's map transmissions
-        (:meth:`share_group`); on threads (``parallel.RobotPool.run``) it ends in the same
+        (:meth:`share_group`); on threads (``parallel.RobotPool.run_in_chunks``) it ends in the same
         maps, byte for byte.
         """
         traffic = Traffic.empty(len(agents))

@@ -127,6 +127,7 @@ class World:
         self.bodies = [self._add_robot(i, r) for i, r in enumerate(robot_radii)]
         self._radii = np.asarray(robot_radii, dtype=np.float64)
         self._robot_xy = self._body_positions()
+        self._circles: dict[int, FloatArray] = {}  # blocking circles by query group, this step
         self._query = SpaceQuery(self.space)
         self.version = 0  # bumped by every change of the truth after step 0
         self._layers: Layers | None = None  # built by the first change
@@ -309,6 +310,7 @@ class World:
             body.position = position
             self.space.reindex_shapes_for_body(body)
         self._robot_xy = self._body_positions()
+        self._circles = {}
 
     def _body_positions(self) -> FloatArray:
         """(n, 2) positions of the robot bodies, for the scan kernel's blocking circles."""
@@ -375,8 +377,11 @@ class World:
         group, _, mask = shape_filter
         if not mask & ROBOT_CATEGORY or not self.bodies:
             return NO_CIRCLES
-        keep = np.arange(len(self.bodies)) != group - 1  # a robot's own body never blocks
-        circles: FloatArray = np.column_stack((self._robot_xy, self._radii))[keep]
+        circles = self._circles.get(group)
+        if circles is None:  # once per robot and step: every scan and move of it asks
+            keep = np.arange(len(self.bodies)) != group - 1  # its own body never blocks
+            circles = np.column_stack((self._robot_xy, self._radii))[keep]
+            self._circles[group] = circles
         return circles
 
     def blocked(
