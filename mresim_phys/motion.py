@@ -84,11 +84,14 @@ def take_step(
     planned: bool,
     replan: Callable[[Robot], None],
     sense: Callable[[Robot], None],
+    settle: Callable[[], None] = lambda: None,
 ) -> None:
     """Move ``robot`` up to its speed along its path, sensing after each path point.
 
     ``planned``: the robot already decided this step (its strategy is not asked
-    again when the path runs out; the robot waits for the next step).
+    again when the path runs out; the robot waits for the next step). ``sense`` may hold
+    its scans back (``knowledge.scanfold.ScanQueue``) until ``settle``, which is called
+    before anything here reads or writes the robot's map (a replan, a bump) and at the end.
     """
     budget = robot.speed * factor_at(rules.terrain, robot.position)
     moved = False
@@ -96,10 +99,11 @@ def take_step(
         if len(robot.path) == 0:
             if planned or not robot.reached_goal:
                 break
+            settle()
             replan(robot)
             planned = True
             continue
-        used = move_towards(robot, world, rules, budget)
+        used = move_towards(robot, world, rules, budget, settle)
         if used is None:
             break
         budget -= used
@@ -109,10 +113,18 @@ def take_step(
             sense(robot)
     if moved and not rules.scan_every_point:
         sense(robot)
+    settle()
 
 
-def move_towards(robot: Robot, world: World, rules: MoveRules, budget: float) -> float | None:
-    """Move toward the next path point by at most ``budget``; None if a wall is in the way."""
+def move_towards(
+    robot: Robot,
+    world: World,
+    rules: MoveRules,
+    budget: float,
+    settle: Callable[[], None] = lambda: None,
+) -> float | None:
+    """Move toward the next path point by at most ``budget``; None if a wall is in the way
+    (its map, ``settle``d first, then marks the bump)."""
     target = (float(robot.path[0, 0]), float(robot.path[0, 1]))
     x, y = robot.position
     gap = math.hypot(target[0] - x, target[1] - y)
@@ -123,6 +135,7 @@ def move_towards(robot: Robot, world: World, rules: MoveRules, budget: float) ->
     end = (x + share * (target[0] - x), y + share * (target[1] - y))
     hit = world.blocked(robot.position, end, robot.radius, rules.shape_filter_of(robot))
     if hit is not None:
+        settle()
         stop_with_error(robot, hit.point)
         return None
     robot.advance_to(end)

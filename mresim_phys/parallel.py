@@ -60,9 +60,12 @@ class Effects:
     def scanned(self, belief: BeliefGrid, update: Update) -> None:
         """A scan changed ``belief`` inside ``update``'s window."""
         h, w = update.free.shape
+        self.scanned_box(belief, (update.row0, update.row0 + h, update.col0, update.col0 + w))
+
+    def scanned_box(self, belief: BeliefGrid, window: Box) -> None:
+        """Scans changed ``belief`` inside ``window``."""
         self.belief = belief
-        self.window = union_box(self.window, (update.row0, update.row0 + h, update.col0,
-                                              update.col0 + w))  # fmt: skip
+        self.window = union_box(self.window, window)
 
     def spend(self, phase: str, seconds: float) -> None:
         """Add ``seconds`` to ``phase``'s timer."""

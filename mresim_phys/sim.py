@@ -38,11 +38,8 @@ from mresim_phys.errors import ScenarioError, UnknownRobotError
 from mresim_phys.event_context import RunEventContext
 from mresim_phys.faults.runtime import hazard_grid
 from mresim_phys.knowledge.latest import LatestCoverage
-from mresim_phys.knowledge.mapping import integrate_scan
 from mresim_phys.knowledge.robustness import FailureWatch, robot_states
-from mresim_phys.knowledge.scanfold import folds_in_one_call, scan_into_map
 from mresim_phys.knowledge.teammates import presumed_lost
-from mresim_phys.knowledge.terrain import learn_terrain
 from mresim_phys.memory import keep_freed_memory
 from mresim_phys.metrics import (
     CommTotals,
@@ -55,19 +52,18 @@ from mresim_phys.metrics import (
     measure_step,
     update_known_at_base,
 )
-from mresim_phys.motion import MoveRules, path_blocked, replans_on_the_way, take_step, wants_plan
+from mresim_phys.motion import MoveRules, replans_on_the_way, take_step, wants_plan
 from mresim_phys.parallel import Effects, RobotPool, thread_count
+from mresim_phys.sensing_phase import Senses
 from mresim_phys.snapshot import (
     CommSummary,
     Snapshot,
     read_only,
 )
 from mresim_phys.strategies import Decision, RobotView
-from mresim_phys.world.sensing import scan
 from mresim_phys.world.views import movable_views
 
 PHASES = ("sensing", "mapping", "planning", "communication", "metrics")
-LOOKAHEAD_STEPS = 3  # 'latest' beliefs: a path blocked within this many steps is dropped
 
 
 class Simulation:
@@ -97,7 +93,7 @@ class Simulation:
         self.curves = Curves()
         self.failures = FailureWatch([r.name for r in self.robots])
         self.fault_columns = s.rules.fault_columns  # metrics.csv has the robustness columns
-        self._sensing_rngs = s.sensing_streams()
+        self.senses = Senses(s.world, s.rules.robots_block, s.terrain, s.sensing_streams())
         # the hazard zones' failure probability per cell and step (static; None: no zones)
         self.hazards: NDArray[np.float32] | None = hazard_grid(s.faults, s.world.shape)
         self._events = RunEventContext(
@@ -257,7 +253,13 @@ class Simulation:
         if due:
             self.replan(robot, effects)
         replan, sense = partial(self.replan, effects=effects), partial(self.sense, effects=effects)
-        take_step(robot, self.world, self.move_rules, due or given, replan, sense)
+        queue = self.senses.queue_for(robot)  # scans held back and folded together
+        if queue is None:
+            take_step(robot, self.world, self.move_rules, due or given, replan, sense)
+        else:
+            hold = partial(self.senses.hold, queue=queue)
+            settle = partial(self.senses.fold_held, queue, effects)
+            take_step(robot, self.world, self.move_rules, due or given, replan, hold, settle)
         started = perf_counter()
         self.network.stamp_own(robot, effects.window, self.t)
         effects.spend("communication", perf_counter() - started)
@@ -269,42 +271,11 @@ class Simulation:
 
     def robot_filter(self, robot: Robot) -> tuple[int, int, int]:
         """What ``robot``'s rays and motion collide with."""
-        return self.world.query_filter(robot.index - 1, self.rules.robots_block)
+        return self.senses.filter_of(robot)
 
     def sense(self, robot: Robot, effects: Effects) -> None:
-        """Scan at the robot's pose and fold the scan into its map; note the touched window
-        for the team coverage and the ledger in ``effects``."""
-        if not robot.can_sense or self.world.buried(robot.position):
-            return
-        assert robot.body is not None
-        laser = robot.laser
-        robot.scans += 1
-        started = perf_counter()
-        if folds_in_one_call(laser, robot.observed):  # the fold is timed as sensing
-            update = scan_into_map(
-                self.world, robot.position, robot.heading, laser, self.robot_filter(robot),
-                robot.belief, robot.safe,
-            )  # fmt: skip
-            scanned = perf_counter()
-        else:
-            result = scan(
-                self.world, robot.position, robot.heading, laser, self.robot_filter(robot),
-                self._sensing_rngs[robot.index - 1],
-            )  # fmt: skip
-            scanned = perf_counter()
-            update = integrate_scan(
-                robot.belief, robot.safe, result, laser.safe_fraction, robot.observed, self.t
-            )
-        if update is not None and robot.terrain is not None and self.setup.terrain is not None:
-            learn_terrain(robot.terrain, self.setup.terrain, update)
-        effects.spend("sensing", scanned - started)
-        effects.spend("mapping", perf_counter() - scanned)
-        lookahead = LOOKAHEAD_STEPS * robot.speed
-        checks_path = robot.observed is not None or robot.prior is not None
-        if checks_path and path_blocked(robot.belief, robot.path, robot.radius, lookahead):
-            robot.stop_for_replan()
-        if update is not None:
-            effects.scanned(robot.belief, update)
+        """Scan at the robot's pose into its map (``sensing_phase.Senses.sense``)."""
+        self.senses.sense(robot, effects, self.t)
 
     def replan(self, robot: Robot, effects: Effects) -> None:
         """Ask the robot's strategy for a new path from what the robot knows."""

@@ -19,8 +19,9 @@ import numpy as np
 import pytest
 
 import mresim_phys.parallel as parallel
-import mresim_phys.sim as sim_module
+import mresim_phys.sensing_phase as sensing_phase
 from mresim_phys.cli import main
+from mresim_phys.knowledge.scanfold import ScanQueue
 from mresim_phys.parallel import RobotPool, thread_count, usable_cores
 from mresim_phys.planning.topocache import MapCache
 from mresim_phys.sim import Simulation
@@ -92,8 +93,10 @@ def test_the_threads_timing_does_not_matter(monkeypatch: pytest.MonkeyPatch) -> 
     threads_seen: set[int] = set()
     for name in ("scan", "scan_into_map"):  # noisy and noiseless scans
         monkeypatch.setattr(
-            sim_module, name, slowed(getattr(sim_module, name), jitter, threads_seen)
+            sensing_phase, name, slowed(getattr(sensing_phase, name), jitter, threads_seen)
         )
+    # the scans a robot's turn holds back (ScanQueue) fold together
+    monkeypatch.setattr(ScanQueue, "fold", slowed(ScanQueue.fold, jitter, threads_seen))
     threaded = trace(path, 40, simulation={"robots_block": True, "threads": 3})
     assert threaded == serial
     assert len(threads_seen) > 1  # the robots really ran on several threads

@@ -12,15 +12,48 @@ same map, byte for byte.
 
 from __future__ import annotations
 
+from typing import Protocol
+
 import numpy as np
 from numba import njit
 
 from mresim_phys.knowledge.mapping import Update, fold_scan
+from mresim_phys.planning.grid import Box
 from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray
 from mresim_phys.world.queries import QueryFilter
 from mresim_phys.world.raycast import cast_fan
 from mresim_phys.world.sensing import Laser, ray_offsets
 from mresim_phys.world.space import World
+
+
+class MapHolder(Protocol):
+    """What a queue folds scans into: a robot's map and its safe cells."""
+
+    belief: BeliefGrid
+    safe: BoolGrid
+
+
+@njit(cache=True, nogil=True)
+def _cast_then_fold(
+    grid: BoolGrid,
+    ox: float,
+    oy: float,
+    angles: FloatArray,
+    max_range: float,
+    circles: FloatArray,
+    belief: BeliefGrid,
+    safe: BoolGrid,
+    safe_radius: float,
+) -> tuple[int, int, BeliefGrid]:
+    """``cast_fan`` then ``fold_scan``: (row0, col0, free mask) or row0 = -1. Called only
+    from kernels (a cached kernel that Python also calls can lose its boxing environment,
+    see ``planning.dial._start_paused``): :func:`_cast_and_fold` and
+    :func:`_cast_and_fold_many` are the entries from Python."""
+    n = len(angles)
+    ranges, normals, wall_hit = np.empty(n), np.empty((n, 2)), np.empty(n, dtype=np.bool_)
+    cast_fan(grid, ox, oy, angles, max_range, circles, ranges, normals, wall_hit)
+    radius = safe_radius
+    return fold_scan(ox, oy, angles, ranges, normals, wall_hit, max_range, belief, safe, radius)
 
 
 @njit(cache=True, nogil=True)
@@ -35,12 +68,39 @@ def _cast_and_fold(
     safe: BoolGrid,
     safe_radius: float,
 ) -> tuple[int, int, BeliefGrid]:
-    """``cast_fan`` then ``fold_scan``: (row0, col0, free mask) or row0 = -1."""
-    n = len(angles)
-    ranges, normals, wall_hit = np.empty(n), np.empty((n, 2)), np.empty(n, dtype=np.bool_)
-    cast_fan(grid, ox, oy, angles, max_range, circles, ranges, normals, wall_hit)
-    radius = safe_radius
-    return fold_scan(ox, oy, angles, ranges, normals, wall_hit, max_range, belief, safe, radius)
+    """One scan: :func:`_cast_then_fold`."""
+    return _cast_then_fold(grid, ox, oy, angles, max_range, circles, belief, safe, safe_radius)
+
+
+@njit(cache=True, nogil=True)
+def _cast_and_fold_many(
+    grid: BoolGrid,
+    poses: FloatArray,
+    offsets: FloatArray,
+    max_range: float,
+    circles: FloatArray,
+    belief: BeliefGrid,
+    safe: BoolGrid,
+    safe_radius: float,
+) -> tuple[int, int, int, int]:
+    """:func:`_cast_then_fold` at each row (x, y, heading) of ``poses`` in turn, the rays at
+    ``heading + offsets``; the union (row0, row1, col0, col1) of the windows of the scans
+    that updated the map, row0 = -1 if none did."""
+    r0, r1, c0, c1 = -1, -1, -1, -1
+    for i in range(len(poses)):
+        angles = poses[i, 2] + offsets
+        row0, col0, free = _cast_then_fold(
+            grid, poses[i, 0], poses[i, 1], angles, max_range, circles, belief, safe, safe_radius
+        )
+        if row0 < 0:
+            continue
+        h, w = free.shape
+        if r0 < 0:
+            r0, r1, c0, c1 = row0, row0 + h, col0, col0 + w
+        else:
+            r0, r1 = min(r0, row0), max(r1, row0 + h)
+            c0, c1 = min(c0, col0), max(c1, col0 + w)
+    return r0, r1, c0, c1
 
 
 def folds_in_one_call(laser: Laser, observed: np.ndarray | None) -> bool:
@@ -67,3 +127,42 @@ def scan_into_map(
         belief, safe, float(laser.safe_fraction * laser.range),
     )  # fmt: skip
     return None if row0 < 0 else Update(row0, col0, free.view(bool))
+
+
+class ScanQueue:
+    """The scans of one robot's turn, held until something reads or writes its map, then
+    cast and folded in one compiled call (:meth:`fold`), in the order they were taken.
+
+    A robot scans after every path point (~9 times a step at the original's speed);
+    between those scans only its pose changes, and nothing reads its map until it replans,
+    bumps into something or ends its turn. Folding them together gives the same map, byte
+    for byte, as folding each at once, for a fraction of the Python and, on threads, one
+    hand-over of the GIL instead of one per scan. Only for scans that
+    :func:`folds_in_one_call` can take and whose updates nothing else watches (no terrain
+    to learn, no path to check against each scan: ``sim.Simulation.scan_queue``).
+    """
+
+    def __init__(
+        self, world: World, laser: Laser, shape_filter: QueryFilter, robot: MapHolder
+    ) -> None:
+        self.world, self.laser, self.shape_filter, self.robot = world, laser, shape_filter, robot
+        self.poses: list[tuple[float, float, float]] = []
+
+    def add(self, position: tuple[float, float], heading: float) -> None:
+        """Hold a scan taken at ``position`` facing ``heading``."""
+        self.poses.append((float(position[0]), float(position[1]), float(heading)))
+
+    def fold(self) -> Box | None:
+        """Cast and fold the held scans into the robot's map, in order; the union of the
+        windows they updated (None if none did, or none was held)."""
+        if not self.poses:
+            return None
+        poses = np.array(self.poses, dtype=np.float64)
+        self.poses.clear()
+        laser, robot = self.laser, self.robot
+        grid, circles = self.world.ray_targets(self.shape_filter)
+        r0, r1, c0, c1 = _cast_and_fold_many(
+            grid, poses, ray_offsets(laser.fov_deg, laser.rays), float(laser.range), circles,
+            robot.belief, robot.safe, float(laser.safe_fraction * laser.range),
+        )  # fmt: skip
+        return None if r0 < 0 else (r0, r1, c0, c1)

@@ -1,0 +1,109 @@
+"""Phase 5 (sense, then map): a robot's scans during its turn, folded into its own map.
+
+:class:`Senses` scans where a robot stands and folds the scan into its map: in one compiled
+call when nothing needs to happen between the cast and the fold (``knowledge.scanfold``),
+else cast (with range noise from the robot's seeded stream), folded and stamped for
+'latest' beliefs in turn; it learns the terrain the scan saw and drops a path the new map
+shows blocked (with 'latest' beliefs or a prior map). Within a robot's turn the scans it
+takes after each path point can be held back (:meth:`Senses.queue_for`) and folded
+together when the turn next reads or writes the map (``motion.take_step``'s ``settle``).
+What a scan touched (its window, its time) goes into the turn's
+:class:`~mresim_phys.parallel.Effects`, never straight into shared state.
+"""
+
+from __future__ import annotations
+
+from time import perf_counter
+
+import numpy as np
+
+from mresim_phys.agents import Robot
+from mresim_phys.knowledge.mapping import integrate_scan
+from mresim_phys.knowledge.scanfold import ScanQueue, folds_in_one_call, scan_into_map
+from mresim_phys.knowledge.terrain import learn_terrain
+from mresim_phys.motion import path_blocked
+from mresim_phys.parallel import Effects
+from mresim_phys.world.queries import QueryFilter
+from mresim_phys.world.sensing import scan
+from mresim_phys.world.space import World
+from mresim_phys.world.terrain import TerrainGrid
+
+LOOKAHEAD_STEPS = 3  # 'latest' beliefs: a path blocked within this many steps is dropped
+
+
+class Senses:
+    """Scans of the robots of one run: what their rays hit, how scans fold into maps."""
+
+    def __init__(
+        self,
+        world: World,
+        robots_block: bool,
+        terrain: TerrainGrid | None,
+        streams: list[np.random.Generator],
+    ) -> None:
+        self.world, self.robots_block, self.terrain = world, robots_block, terrain
+        self.streams = streams  # per robot (index - 1): range noise
+
+    def filter_of(self, robot: Robot) -> QueryFilter:
+        """What ``robot``'s rays and motion collide with."""
+        return self.world.query_filter(robot.index - 1, self.robots_block)
+
+    def sense(self, robot: Robot, effects: Effects, step: int) -> None:
+        """Scan at the robot's pose and fold the scan into its map; note the touched window
+        for the team coverage and the ledger in ``effects``."""
+        if not robot.can_sense or self.world.buried(robot.position):
+            return
+        assert robot.body is not None
+        laser = robot.laser
+        robot.scans += 1
+        started = perf_counter()
+        if folds_in_one_call(laser, robot.observed):  # the fold is timed as sensing
+            update = scan_into_map(
+                self.world, robot.position, robot.heading, laser, self.filter_of(robot),
+                robot.belief, robot.safe,
+            )  # fmt: skip
+            scanned = perf_counter()
+        else:
+            result = scan(
+                self.world, robot.position, robot.heading, laser, self.filter_of(robot),
+                self.streams[robot.index - 1],
+            )  # fmt: skip
+            scanned = perf_counter()
+            update = integrate_scan(
+                robot.belief, robot.safe, result, laser.safe_fraction, robot.observed, step
+            )
+        if update is not None and robot.terrain is not None and self.terrain is not None:
+            learn_terrain(robot.terrain, self.terrain, update)
+        effects.spend("sensing", scanned - started)
+        effects.spend("mapping", perf_counter() - scanned)
+        lookahead = LOOKAHEAD_STEPS * robot.speed
+        checks_path = robot.observed is not None or robot.prior is not None
+        if checks_path and path_blocked(robot.belief, robot.path, robot.radius, lookahead):
+            robot.stop_for_replan()
+        if update is not None:
+            effects.scanned(robot.belief, update)
+
+    def queue_for(self, robot: Robot) -> ScanQueue | None:
+        """A queue for the robot's scans of this turn (:class:`ScanQueue`), or None when
+        each scan must fold at once: range noise or latest observations (see
+        ``folds_in_one_call``), a path to check against every scan, terrain to learn."""
+        if not folds_in_one_call(robot.laser, robot.observed) or robot.prior is not None:
+            return None
+        if robot.terrain is not None and self.terrain is not None:
+            return None
+        return ScanQueue(self.world, robot.laser, self.filter_of(robot), robot)
+
+    def hold(self, robot: Robot, queue: ScanQueue) -> None:
+        """:meth:`sense`, held in ``queue`` until the robot's map is next read."""
+        if robot.can_sense and not self.world.buried(robot.position):
+            robot.scans += 1
+            queue.add(robot.position, robot.heading)
+
+    def fold_held(self, queue: ScanQueue, effects: Effects) -> None:
+        """Fold the scans held in ``queue`` (:meth:`ScanQueue.fold`), noted in ``effects``."""
+        if queue.poses:
+            started = perf_counter()
+            window = queue.fold()
+            effects.spend("sensing", perf_counter() - started)
+            if window is not None:
+                effects.scanned_box(queue.robot.belief, window)
