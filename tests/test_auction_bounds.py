@@ -53,6 +53,52 @@ def test_bounds_never_exceed_the_teammates_exact_path_costs(seed: int, pause: fl
     assert (bounds <= exact).all()
 
 
+@settings(max_examples=80, deadline=None)
+@given(
+    seed=st.integers(0, 2**32 - 1),
+    pause=st.sampled_from([3.0, 10.0, np.inf]),
+    mates=st.integers(0, 10),
+    searched=st.booleans(),
+)
+def test_teammates_bid_together_as_each_would_alone(
+    seed: int, pause: float, mates: int, searched: bool
+) -> None:
+    """``teammate_bidders`` (all teammates' straight lines and bounds as arrays) gives each
+    teammate the bid ``Bidder.estimated`` with ``path_bounds`` gives it, bit for bit: on
+    passable cells, on blocked ones, off the search window, with and without a search."""
+    passable = traversable(random_belief(seed, (40, 48)), 0.8)
+    cells = np.argwhere(passable)
+    box = bbox(passable)
+    if len(cells) < 2 or box is None:
+        return
+    rng = np.random.default_rng(seed)
+    me = tuple(int(v) for v in cells[rng.integers(len(cells))])
+    goals_rc = cells[rng.choice(len(cells), 4)]
+    search = PausedSearch(passable, me, box) if searched else None
+    if search is not None:
+        search.run_below(pause)
+    mine = rng.uniform(1.0, 60.0, len(goals_rc))
+    on_cells = cells[rng.choice(len(cells), mates)] + rng.uniform(0.0, 1.0, (mates, 2))
+    anywhere = rng.uniform((-3.0, -3.0), (51.0, 43.0), (mates, 2))  # x, y: off the map too
+    pick = rng.random(mates) < 0.5
+    positions = [
+        (float(a[0]), float(a[1])) if k else (float(c[1]), float(c[0]))
+        for k, a, c in zip(pick, anywhere, on_cells, strict=True)
+    ]
+    names = [f"m{i}" for i in range(mates)]
+    ranks = [int(r) for r in rng.permutation(mates)]
+    together = auction.teammate_bidders(names, positions, ranks, goals_rc, search, mine)
+    alone = [
+        auction.Bidder.estimated(n, xy, goals_rc, r, path_bounds(search, xy, mine))
+        for n, xy, r in zip(names, positions, ranks, strict=True)
+    ]
+    assert len(together) == len(alone)
+    for a, b in zip(together, alone, strict=True):
+        assert (a.name, a.position, a.rank) == (b.name, b.position, b.rank)
+        assert a.costs.tobytes() == b.costs.tobytes()
+        assert not a.exact.any() and a.exact.shape == b.exact.shape
+
+
 def corridor_world() -> np.ndarray:
     """Two parallel corridors joined at the far east end; a frontier at the north one's
     west end."""

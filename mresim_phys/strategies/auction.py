@@ -10,7 +10,7 @@ by the exact path cost on the robot's map (``planning.goals``) before it can win
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -112,6 +112,42 @@ def path_bounds(
     else:
         bounds = search.final_below - mine - BOUND_MARGIN
     return bounds
+
+
+def teammate_bidders(
+    names: Sequence[str],
+    positions: Sequence[tuple[float, float]],
+    ranks: Sequence[int],
+    goals_rc: IntArray,
+    search: PausedSearch | None,
+    mine: FloatArray,
+) -> list[Bidder]:
+    """``Bidder.estimated(name, position, goals_rc, rank, path_bounds(search, position,
+    mine))`` for every teammate, the straight lines and bounds of all of them computed
+    together: the same floats, element by element, for one array operation instead of a
+    few per teammate (a replan at 32 robots has 31 teammates)."""
+    if len(names) == 0:
+        return []
+    xy = np.array(positions, dtype=np.float64).reshape(-1, 2)
+    cols, rows = np.floor(xy[:, 0]), np.floor(xy[:, 1])
+    costs = np.hypot(goals_rc[None, :, 1] - cols[:, None], goals_rc[None, :, 0] - rows[:, None])
+    if search is not None:
+        window = search.window
+        r = rows.astype(np.int64) - window.origin[0]
+        c = cols.astype(np.int64) - window.origin[1]
+        inside = (r >= 0) & (r < window.pad.size // window.wp) & (c >= 0) & (c < window.wp)
+        node = np.where(inside, r * window.wp + c, 0)
+        on = inside & window.pad[node]
+        here = search.dist[node[on]][:, None]
+        settled = here < search.final_below
+        bounds = np.where(
+            settled, np.abs(here - mine) - BOUND_MARGIN, search.final_below - mine - BOUND_MARGIN
+        )
+        costs[on] = np.maximum(costs[on], bounds)
+    return [
+        Bidder(name, costs[i], np.zeros(costs.shape[1], dtype=bool), xy_i, rank)
+        for i, (name, xy_i, rank) in enumerate(zip(names, positions, ranks, strict=True))
+    ]
 
 
 def exact_costs(

@@ -35,7 +35,13 @@ from mresim_phys.knowledge.prior import walled_in
 from mresim_phys.knowledge.targets import TargetFinder
 from mresim_phys.knowledge.teammates import TeammateInfo
 from mresim_phys.plugin import Plugin
-from mresim_phys.strategies.auction import Bidder, exact_costs, greedy_auction, path_bounds, utility
+from mresim_phys.strategies.auction import (
+    Bidder,
+    exact_costs,
+    greedy_auction,
+    teammate_bidders,
+    utility,
+)
 from mresim_phys.strategies.base import (
     STRATEGIES,
     Decision,
@@ -246,13 +252,12 @@ class FrontierExploration(Plugin):
         mine = costs[candidates]
         rank = view.tie_rank
         me = Bidder(view.name, mine, np.ones(len(mine), dtype=bool), view.position, rank(view.name))
-        search = context.search
-        bidders = [me] + [
-            Bidder.estimated(
-                t.name, t.position, goals, rank(t.name), path_bounds(search, t.position, mine)
-            )
-            for t in self.teammates(view)
-        ]
+        team = self.teammates(view)
+        others = teammate_bidders(
+            [t.name for t in team], [t.position for t in team], [rank(t.name) for t in team],
+            goals, context.search, mine,
+        )  # fmt: skip
+        bidders = [me, *others]
         won = greedy_auction(
             bidders, sizes, lambda b, k, limit: exact_costs(context, b.position, goals, k, limit)
         )
