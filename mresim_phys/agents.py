@@ -28,6 +28,7 @@ RobotState = Literal["active", "error", "done", "failed"]
 Part = Literal["drive", "sensor", "radio"]
 FailingPart = Literal["robot", "drive", "sensor", "radio", "degraded"]
 Factors = tuple[float, float]  # (speed factor, sensor range factor) of a degraded robot
+NOTHING_BROKEN: frozenset[str] = frozenset()  # the broken parts of a robot nothing has failed
 
 
 @dataclass(frozen=True)
@@ -133,6 +134,8 @@ class Robot(Agent):
     @property
     def broken(self) -> frozenset[str]:
         """The parts that do not work now (``degraded`` while a degradation is in force)."""
+        if not self.holds and not self.degradations:  # nothing ever failed: asked per scan
+            return NOTHING_BROKEN
         parts = {p for p, n in self.holds.items() if n > 0 and p != "robot"}
         return frozenset(parts | ({"degraded"} if self.degradations else set()))
 
