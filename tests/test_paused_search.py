@@ -9,6 +9,8 @@ for every cluster it has settled.
 
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -141,3 +143,28 @@ def test_a_robot_with_no_passable_cell_near_it_has_no_search() -> None:
     context = plan_context(belief_view(belief, (1.5, 1.5), clearance=0.5))
     assert context.search is None
     assert context.field.start_rc is None
+
+
+def test_the_planner_takes_the_window_the_robots_search_built() -> None:
+    """A replan builds the window over its passable mask for its own search; the planner's
+    ``Window.of`` of that same array (same thread) takes it instead of copying the mask
+    again, and it is the window ``Window.of`` would build. Another array, even one equal
+    to it, and another thread build their own."""
+    belief = np.full((30, 40), OCCUPIED, dtype=np.uint8)
+    belief[3:27, 3:37] = FREE
+    belief[10:20, 30:37] = UNKNOWN
+    context = plan_context(belief_view(belief, (5.5, 5.5), clearance=1.0))
+    search = context.search
+    assert search is not None
+    passable = context.passable
+    assert Window.of(passable) is search.window
+    built = Window.of(passable.copy())
+    assert built is not None and built is not search.window
+    assert built.wp == search.window.wp and built.origin == search.window.origin
+    np.testing.assert_array_equal(built.pad, search.window.pad)
+    elsewhere: list[Window | None] = []
+    thread = threading.Thread(target=lambda: elsewhere.append(Window.of(passable)))
+    thread.start()
+    thread.join()
+    assert elsewhere[0] is not None and elsewhere[0] is not search.window
+    np.testing.assert_array_equal(elsewhere[0].pad, search.window.pad)

@@ -37,6 +37,8 @@ plateaus), the octile heuristic and the walk back along a predecessor array.
 
 from __future__ import annotations
 
+import threading
+import weakref
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -112,6 +114,18 @@ def bbox(mask: BoolGrid) -> Box | None:
     return int(rows[0]), int(rows[-1]) + 1, int(cols[0]), int(cols[-1]) + 1
 
 
+_KNOWN = threading.local()  # per thread: (weak reference to a mask, its whole window)
+
+
+def remember_window(passable: BoolGrid, window: Window) -> None:
+    """Note that ``window`` is ``Window.of(passable)``, so that the next ``Window.of`` of the
+    same array on this thread takes it instead of finding the box and copying the mask
+    again (a robot's replan builds it for its own search, then its planner asks for it:
+    ~0.1 ms a replan on the library). The mask must not change afterwards (nothing writes
+    a passable mask in place); a new mask replaces the note."""
+    _KNOWN.window = (weakref.ref(passable), window)
+
+
 @dataclass(frozen=True)
 class Window:
     """A padded search window over a passable mask (flat, blocked border)."""
@@ -130,7 +144,12 @@ class Window:
 
     @classmethod
     def of(cls, passable: BoolGrid) -> Window | None:
-        """The window over the bounding box of every passable cell (None if there is none)."""
+        """The window over the bounding box of every passable cell (None if there is none);
+        the one :func:`remember_window` noted for this very mask on this thread, if any."""
+        known = getattr(_KNOWN, "window", None)
+        if known is not None and known[0]() is passable:
+            window: Window = known[1]
+            return window
         box = bbox(passable)
         return None if box is None else cls.around(passable, box)
 

@@ -40,7 +40,7 @@ from mresim_phys.planning.fields import (
     passable_cells,
     snap_to_passable,
 )
-from mresim_phys.planning.grid import Box, bbox
+from mresim_phys.planning.grid import Box, bbox, remember_window
 from mresim_phys.planning.topological import TopologicalPlanner
 from mresim_phys.plugin import PluginParams
 from mresim_phys.registry import Registry
@@ -204,7 +204,11 @@ class PlanContext:
         if self.slowness is not None or box is None:
             return None
         start = snap_to_passable(self.passable, self.view.position, MAX_SNAP)
-        return None if start is None else PausedSearch(self.passable, start, box)
+        if start is None:
+            return None
+        search = PausedSearch(self.passable, start, box)
+        remember_window(self.passable, search.window)  # box is bbox(passable): the planner's
+        return search
 
     @cached_property
     def field(self) -> DistanceField:
