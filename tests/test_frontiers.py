@@ -225,3 +225,29 @@ def test_no_frontiers_or_no_field_gives_empty_or_inf() -> None:
     nowhere = distance_field(np.zeros_like(passable), (5.0, 5.0))
     targets, costs = frontier_targets(fr, nowhere, passable, 3.0)
     assert np.isinf(costs).all() and (targets == -1).all()
+
+
+@settings(max_examples=80, deadline=None)
+@given(
+    seed=SEEDS,
+    rows=st.integers(3, 30),
+    cols=st.integers(3, 40),
+    excluded=st.booleans(),
+)
+def test_frontier_cells_are_the_brute_force_ones_in_raster_order(
+    seed: int, rows: int, cols: int, excluded: bool
+) -> None:
+    """The compiled pass over the FREE cells' box lists exactly the brute-force frontier
+    cells, in raster order, with and without excluded cells, also with FREE cells on the
+    grid's edges and corners and in a grid not in C order."""
+    belief = random_belief(seed, (rows, cols))
+    rng = np.random.default_rng(seed)
+    belief[rng.integers(0, rows), [0, -1]] = FREE  # free cells on the side edges
+    belief[[0, -1], rng.integers(0, cols)] = FREE  # ... and on the top and bottom ones
+    exclude = rng.random(belief.shape) < 0.2 if excluded else None
+    expected = np.argwhere(brute_frontier(belief) & (True if exclude is None else ~exclude))
+    found = find_frontiers(belief, min_size=1, exclude=exclude)
+    np.testing.assert_array_equal(found.cells_rc, expected.reshape(-1, 2))
+    other = find_frontiers(np.asfortranarray(belief), min_size=1, exclude=exclude)
+    np.testing.assert_array_equal(other.cells_rc, found.cells_rc)
+    np.testing.assert_array_equal(other.cluster_of, found.cluster_of)
