@@ -51,11 +51,9 @@ class Senses:
     def sense(self, robot: Robot, effects: Effects, step: int) -> None:
         """Scan at the robot's pose and fold the scan into its map; note the touched window
         for the team coverage and the ledger in ``effects``."""
-        if not robot.can_sense or self.world.buried(robot.position):
+        if not self.takes_scan(robot):
             return
-        assert robot.body is not None
         laser = robot.laser
-        robot.scans += 1
         started = perf_counter()
         if folds_in_one_call(laser, robot.observed):  # the fold is timed as sensing
             update = scan_into_map(
@@ -95,9 +93,16 @@ class Senses:
 
     def hold(self, robot: Robot, queue: ScanQueue) -> None:
         """:meth:`sense`, held in ``queue`` until the robot's map is next read."""
-        if robot.can_sense and not self.world.buried(robot.position):
-            robot.scans += 1
+        if self.takes_scan(robot):
             queue.add(robot.position, robot.heading)
+
+    def takes_scan(self, robot: Robot) -> bool:
+        """Whether the robot can scan where it stands (a working laser, not buried by a
+        change of the world); a scan it takes is counted."""
+        if not robot.can_sense or self.world.buried(robot.position):
+            return False
+        robot.scans += 1
+        return True
 
     def fold_held(self, queue: ScanQueue, effects: Effects) -> None:
         """Fold the scans held in ``queue`` (:meth:`ScanQueue.fold`), noted in ``effects``."""
