@@ -7,7 +7,9 @@ and folds them in (``knowledge.mapping.integrate_scan``): two compiled calls wit
 between them, and two hand-overs of the GIL when robots run on threads. Without noise and
 without latest-observation beliefs nothing needs to happen between the two kernels, and
 :func:`scan_into_map` runs both in one call: the same kernels on the same inputs, so the
-same map, byte for byte.
+same map, byte for byte. :class:`ScanQueue` goes one step further: the scans of a robot's
+turn are held and cast and folded together, in order, in one call
+(:func:`_cast_and_fold_many`) when its map is next read or written.
 """
 
 from __future__ import annotations
@@ -139,7 +141,7 @@ class ScanQueue:
     for byte, as folding each at once, for a fraction of the Python and, on threads, one
     hand-over of the GIL instead of one per scan. Only for scans that
     :func:`folds_in_one_call` can take and whose updates nothing else watches (no terrain
-    to learn, no path to check against each scan: ``sim.Simulation.scan_queue``).
+    to learn, no path to check against each scan: ``sensing_phase.Senses.queue_for``).
     """
 
     def __init__(
