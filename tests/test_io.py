@@ -133,7 +133,7 @@ def test_bad_image_files_are_map_errors_naming_the_file(
 
 
 def test_directory_instead_of_image_is_a_map_error(tmp_path: Path) -> None:
-    with pytest.raises(MapError, match="not a file"):
+    with pytest.raises(MapError, match="not a regular file"):
         load_image_map(tmp_path)
 
 
@@ -345,7 +345,7 @@ def test_read_yaml_mapping_errors(tmp_path: Path, text: str, message: str) -> No
 def test_read_yaml_mapping_missing_or_not_a_file(tmp_path: Path) -> None:
     with pytest.raises(ScenarioError, match=r"absent\.yaml does not exist"):
         read_yaml_mapping(tmp_path / "absent.yaml")
-    with pytest.raises(ScenarioError, match="not a file"):
+    with pytest.raises(ScenarioError, match="not a regular file"):
         read_yaml_mapping(tmp_path)
     (tmp_path / "latin.yaml").write_bytes(b"name: caf\xe9\n")
     with pytest.raises(ScenarioError, match="UTF-8"):

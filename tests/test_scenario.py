@@ -480,7 +480,7 @@ def test_yaml_problems_are_scenario_errors_with_a_place(
 
 
 def test_merge_keys_are_not_duplicates() -> None:
-    from mresim_phys.scenario.readers import parse_yaml
+    from mresim_phys.scenario.yamlfile import parse_yaml
 
     text = "a: &x {p: 1, q: 2}\nb:\n  <<: *x\n  q: 3\n"
     assert parse_yaml(text) == {"a": {"p": 1, "q": 2}, "b": {"p": 1, "q": 3}}

@@ -22,6 +22,7 @@ from mresim_phys.faults import spec as fault_spec  # noqa: E402
 from mresim_phys.planning import PLANNERS  # noqa: E402
 from mresim_phys.scenario import schema  # noqa: E402
 from mresim_phys.scenario.maps import PriorSpec  # noqa: E402
+from mresim_phys.scenario.yamlfile import MAX_ALIAS_VALUES, MAX_YAML_BYTES  # noqa: E402
 from mresim_phys.strict import MAX_FLOAT, MAX_INT, UNIT_BOUNDS, bounds_text  # noqa: E402
 from mresim_phys.world import debris, doors, obstacles, shapes, terrain  # noqa: E402
 from mresim_phys.world.events import EVENTS  # noqa: E402
@@ -242,6 +243,10 @@ def numbers_paragraph() -> list[str]:
         "(integers): a value beyond is taken for a mistake. Names (of the scenario and",
         "of robots) name output folders: letters, digits, `_`, `.` and `-`, not only dots.",
         "A key given twice in one mapping is an error, as is a snapshot step past `steps`.",
+        "Every YAML file read (scenarios, studies, ROS map files) is refused unread when",
+        f"it is over {MAX_YAML_BYTES // 2**20} MB or not a regular file, and before any value",
+        f"is built when its aliases (`*name`) would add over {MAX_ALIAS_VALUES:,} values",
+        "once expanded (an alias bomb) or an alias refers to a value holding it (a loop).",
     ]
 
 

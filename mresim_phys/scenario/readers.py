@@ -18,11 +18,11 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import yaml
 from numpy.typing import NDArray
 from PIL import Image
 
-from mresim_phys.errors import MapError, MresimError, ScenarioError
+from mresim_phys.errors import MapError
+from mresim_phys.scenario.yamlfile import read_yaml_file, read_yaml_mapping, require_file
 from mresim_phys.types import BoolGrid, FloatArray
 
 __all__ = [
@@ -64,15 +64,6 @@ class LoadedMap:
     source: Path
 
 
-def _require_file(path: Path, what: str, error: type[MresimError]) -> Path:
-    """Return ``path`` if it is an existing file, else raise ``error`` with a fix."""
-    if not path.exists():
-        raise error(f"{what} {path} does not exist. Check the path and its spelling.")
-    if not path.is_file():
-        raise error(f"{what} {path} is not a file (it is a directory?). Give the file's path.")
-    return path
-
-
 def _finish(
     occupied: NDArray[np.bool_],
     source: Path,
@@ -88,7 +79,7 @@ def _finish(
 @contextmanager
 def _opened_image(path: Path) -> Iterator[Image.Image]:
     """Open an image fully loaded, turning every Pillow failure into a MapError."""
-    _require_file(path, "Map image", MapError)
+    require_file(path, "Map image", MapError)
     try:
         with Image.open(path) as img:
             img.load()
@@ -150,7 +141,7 @@ def _text_error(path: Path, line: int, expected: str, found: str) -> MapError:
 
 def _read_text_lines(path: Path) -> list[str]:
     """Read a text map's lines (LF, CRLF or CR), dropping trailing blank lines."""
-    _require_file(path, "Text map", MapError)
+    require_file(path, "Text map", MapError)
     try:
         lines = path.read_bytes().decode("utf-8-sig").splitlines()
     except OSError as exc:
@@ -222,98 +213,6 @@ def load_text_map(path: Path) -> LoadedMap:
             path, int(row) + 3, f"'0' or '1' at column {col + 1}", repr(chr(codes[row, col]))
         )
     return _finish(codes == ord("1"), path)
-
-
-class UniqueKeyLoader(yaml.SafeLoader):
-    """PyYAML's safe loader, except that a key given twice in one mapping is an error.
-
-    Plain PyYAML keeps the last of two ``seed:`` lines silently; here the second one is
-    a :class:`yaml.constructor.ConstructorError` naming the key and both lines. Keys
-    merged in with ``<<: *anchor`` may still be overridden, as YAML intends.
-    """
-
-    def construct_mapping(self, node: yaml.Node, deep: bool = False) -> dict[Any, Any]:
-        if isinstance(node, yaml.MappingNode):
-            self._check_unique_keys(node)
-        return super().construct_mapping(node, deep=deep)  # type: ignore[arg-type]
-
-    def construct_object(self, node: yaml.Node, deep: bool = False) -> Any:
-        """A value, or a ConstructorError at its line (PyYAML raises a bare ValueError
-        for an impossible date such as ``2001-13-01``)."""
-        try:
-            return super().construct_object(node, deep=deep)
-        except (ValueError, TypeError, OverflowError) as exc:
-            what = f" {node.value!r}" if isinstance(node, yaml.ScalarNode) else ""
-            raise yaml.constructor.ConstructorError(
-                None, None, f"cannot read the value{what}: {exc}", node.start_mark
-            ) from None
-
-    def _check_unique_keys(self, node: yaml.MappingNode) -> None:
-        seen: dict[Any, yaml.Node] = {}
-        for key_node, _ in node.value:
-            if not isinstance(key_node, yaml.ScalarNode) or key_node.tag.endswith(":merge"):
-                continue
-            key = self.construct_object(key_node)
-            try:
-                first = seen.setdefault(key, key_node)
-            except TypeError:  # an unhashable key: the base loader reports it
-                continue
-            if first is not key_node:
-                raise yaml.constructor.ConstructorError(
-                    "while reading a mapping",
-                    node.start_mark,
-                    f"key {key!r} appears twice (first at line {first.start_mark.line + 1});"
-                    " keep only one",
-                    key_node.start_mark,
-                )
-
-
-def parse_yaml(text: str) -> Any:
-    """The YAML document in ``text``, read safely with :class:`UniqueKeyLoader`."""
-    return yaml.load(text, Loader=UniqueKeyLoader)  # a SafeLoader: no arbitrary objects
-
-
-def _yaml_problem(exc: Exception) -> str:
-    """What went wrong reading YAML, as the end of a sentence: ``' at line 3, ...: ...'``."""
-    if isinstance(exc, RecursionError):
-        return ": it is nested too deeply to read (thousands of levels); flatten it"
-    if not isinstance(exc, yaml.YAMLError):  # e.g. a date like 2001-13-01
-        return f": {type(exc).__name__}: {exc}; fix that value"
-    mark = getattr(exc, "problem_mark", None)
-    where = f" at line {mark.line + 1}, column {mark.column + 1}" if mark else ""
-    problem = getattr(exc, "problem", None) or str(exc)
-    if isinstance(exc, yaml.constructor.ConstructorError):
-        return f"{where}: {problem}"
-    return f"{where}: {problem}. Fix the syntax there (indentation, ':' after keys, quotes)"
-
-
-def _yaml_mapping(path: Path, what: str, error: type[MresimError]) -> dict[str, Any]:
-    """Read a YAML file holding a mapping at top level, raising ``error`` on any problem."""
-    _require_file(path, what, error)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except OSError as exc:
-        raise error(f"{what} {path} cannot be read ({exc}). Check its permissions.") from exc
-    except UnicodeDecodeError as exc:
-        raise error(f"{what} {path} is not UTF-8 text ({exc}). Save it as UTF-8.") from exc
-    try:
-        data = parse_yaml(text)
-    except Exception as exc:  # PyYAML's constructors raise more than YAMLError
-        raise error(f"{what} {path} is not valid YAML{_yaml_problem(exc)}.") from None
-    if not isinstance(data, dict):
-        kind = "empty" if data is None else f"a {type(data).__name__}, not a mapping"
-        raise error(f"{what} {path} is {kind}. It must hold 'key: value' pairs at top level.")
-    return data
-
-
-def read_yaml_mapping(path: Path) -> dict[str, Any]:
-    """Read a YAML file that must hold a mapping at its top level.
-
-    Raises:
-        ScenarioError: missing or unreadable file, a YAML syntax error (with line and
-            column) or a top level that is not a mapping.
-    """
-    return _yaml_mapping(Path(path), "Scenario file", ScenarioError)
 
 
 def _ros_number(meta: dict[str, Any], key: str, path: Path, default: float | None) -> float:
@@ -405,7 +304,7 @@ def load_ros_map(yaml_path: Path) -> LoadedMap:
         MapError: missing/invalid YAML or keys, or a missing/unreadable image.
     """
     path = Path(yaml_path)
-    meta = _yaml_mapping(path, "ROS map file", MapError)
+    meta = read_yaml_file(path, "ROS map file", MapError)
     resolution = _ros_number(meta, "resolution", path, None)
     if resolution <= 0:
         raise MapError(f"ROS map {path}: 'resolution' must be positive (metres per cell).")
