@@ -40,10 +40,10 @@ def load_map(spec: MapSpec) -> LoadedMap:
     """Read the ground truth named by ``spec`` (paths already resolved)."""
     kind, path = spec.source
     if kind == "image":
-        return load_image_map(Path(path), threshold=spec.threshold, negate=spec.negate)
+        return load_image_map(Path(path), spec.threshold, spec.negate, spec.max_cells)
     if kind == "grid":
-        return load_text_map(Path(path))
-    return load_ros_map(Path(path))
+        return load_text_map(Path(path), spec.max_cells)
+    return load_ros_map(Path(path), spec.max_cells)
 
 
 def check_event_boxes(scenario: Scenario, world: World) -> None:

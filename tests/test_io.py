@@ -269,7 +269,7 @@ def test_ros_map_bad_settings(tmp_path: Path, extra: str, message: str) -> None:
     [
         ("image: w.pgm\norigin: [0, 0, 0]\n", "no 'resolution' key"),
         ("image: w.pgm\nresolution: fine\n", "'resolution' must be a number"),
-        ("image: w.pgm\nresolution: -1\n", "must be positive"),
+        ("image: w.pgm\nresolution: -1\n", "metres per cell from"),
         ("image: w.pgm\nresolution: 1\norigin: [0]\n", "'origin' must be a list"),
         ("resolution: 1\n", "needs an 'image' key"),
         ("image: [w.pgm\n", "not valid YAML at line"),

@@ -14,6 +14,8 @@ from pydantic import Field, model_validator
 
 from mresim_phys.strict import Strict
 
+MAX_MAP_CELLS = 40_000_000  # 6300 x 6300 cells; a world this size already needs GBs
+
 
 class MapSpec(Strict):
     """Where the ground truth comes from: exactly one of ``image``, ``grid``, ``ros``."""
@@ -28,6 +30,13 @@ class MapSpec(Strict):
         0.5, gt=0, le=1, description="Image maps: luminance below threshold*255 is obstacle."
     )
     negate: bool = Field(False, description="Image maps: bright = obstacle instead of dark.")
+    max_cells: int = Field(
+        MAX_MAP_CELLS,
+        ge=1,
+        le=10**9,
+        description="The largest map read (width x height cells); a bigger one is refused"
+        " before it is loaded.",
+    )
 
     @model_validator(mode="after")
     def _one_source(self) -> MapSpec:

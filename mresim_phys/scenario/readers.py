@@ -11,6 +11,8 @@ one-paragraph message names the file and what to do; no raw PIL/YAML traceback e
 
 from __future__ import annotations
 
+import math
+import warnings
 from collections.abc import Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -22,6 +24,7 @@ from numpy.typing import NDArray
 from PIL import Image
 
 from mresim_phys.errors import MapError
+from mresim_phys.scenario.maps import MAX_MAP_CELLS
 from mresim_phys.scenario.yamlfile import read_yaml_file, read_yaml_mapping, require_file
 from mresim_phys.types import BoolGrid, FloatArray
 
@@ -43,8 +46,10 @@ IMAGE_HINT = (
     "format, or a ROS map_server .yaml file."
 )
 _SIXTEEN_BIT_MODES = frozenset({"I", "I;16", "I;16L", "I;16B", "I;16N"})
-_IMAGE_ERRORS = (OSError, ValueError, SyntaxError, EOFError, Image.DecompressionBombError)
+_IMAGE_ERRORS = (OSError, ValueError, SyntaxError, EOFError)
 _ROS_MODES = ("trinary", "scale", "raw")
+MAX_RESOLUTION = 1e3  # metres per cell: a ROS map's resolution beyond (or below 1e-6) is a typo
+MIN_RESOLUTION = 1e-6
 
 
 @dataclass(frozen=True)
@@ -76,14 +81,33 @@ def _finish(
     return LoadedMap(np.ascontiguousarray(occupied, dtype=np.bool_), resolution, origin, source)
 
 
+def check_map_size(path: Path, what: str, rows: int, cols: int, max_cells: int) -> None:
+    """Refuse a map of more than ``max_cells`` cells before anything is allocated for it."""
+    if rows * cols > max_cells:
+        raise MapError(
+            f"{what} {path} is {cols:,} x {rows:,} = {rows * cols:,} cells, over the limit of"
+            f" {max_cells:,} (map.max_cells). A world this size needs about"
+            f" {rows * cols * 40 / 2**30:.0f} GB; scale the map down, or raise map.max_cells"
+            " if you mean it."
+        )
+
+
 @contextmanager
-def _opened_image(path: Path) -> Iterator[Image.Image]:
-    """Open an image fully loaded, turning every Pillow failure into a MapError."""
+def _opened_image(path: Path, max_cells: int = MAX_MAP_CELLS) -> Iterator[Image.Image]:
+    """Open an image fully loaded, turning every Pillow failure into a MapError; an image
+    of more than ``max_cells`` pixels is refused from its header, before it is decoded."""
     require_file(path, "Map image", MapError)
     try:
-        with Image.open(path) as img:
-            img.load()
-            yield img
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", Image.DecompressionBombWarning)
+            with Image.open(path) as img:
+                check_map_size(path, "Map image", img.height, img.width, max_cells)
+                img.load()
+                yield img
+    except Image.DecompressionBombError as exc:
+        raise MapError(
+            f"Map image {path} has more pixels than any map may ({exc}); scale it down."
+        ) from None
     except _IMAGE_ERRORS as exc:
         raise MapError(f"Map file {path} is not a readable image ({exc}). {IMAGE_HINT}") from exc
 
@@ -103,7 +127,9 @@ def _on_white(img: Image.Image) -> Image.Image:
     return Image.alpha_composite(Image.new("RGBA", rgba.size, (255, 255, 255, 255)), rgba)
 
 
-def load_image_map(path: Path, threshold: float = 0.5, negate: bool = False) -> LoadedMap:
+def load_image_map(
+    path: Path, threshold: float = 0.5, negate: bool = False, max_cells: int = MAX_MAP_CELLS
+) -> LoadedMap:
     """Read an image map: a pixel is an obstacle iff its luminance < ``threshold * 255``.
 
     Transparent pixels are composited on white first; palette images use their colours.
@@ -113,6 +139,7 @@ def load_image_map(path: Path, threshold: float = 0.5, negate: bool = False) -> 
         path: PNG, BMP, GIF or JPEG file (any size; a GIF's first frame).
         threshold: darkness threshold in (0, 1].
         negate: bright pixels are obstacles instead of dark ones.
+        max_cells: the largest map read (width x height); larger is refused unread.
 
     Returns:
         The map, with ``resolution`` and ``origin`` None.
@@ -126,7 +153,7 @@ def load_image_map(path: Path, threshold: float = 0.5, negate: bool = False) -> 
             f"Map threshold {threshold!r} for {path} is out of range. Give a number in (0, 1]: "
             "a pixel darker than threshold * 255 is an obstacle."
         )
-    with _opened_image(path) as img:
+    with _opened_image(path, max_cells) as img:
         level = _grey(_on_white(img))
     if negate:
         level = 255.0 - level
@@ -139,9 +166,17 @@ def _text_error(path: Path, line: int, expected: str, found: str) -> MapError:
     )
 
 
-def _read_text_lines(path: Path) -> list[str]:
-    """Read a text map's lines (LF, CRLF or CR), dropping trailing blank lines."""
+def _read_text_lines(path: Path, max_cells: int) -> list[str]:
+    """Read a text map's lines (LF, CRLF or CR), dropping trailing blank lines; a file too
+    big to hold at most ``max_cells`` cells (a cell is a byte, a row ends in at most two)
+    is refused unread."""
     require_file(path, "Text map", MapError)
+    size = path.stat().st_size
+    if size > 3 * max_cells + 64:
+        raise MapError(
+            f"Text map {path} is {size:,} bytes: more than a map of at most {max_cells:,}"
+            " cells (map.max_cells) can take. Scale the map down, or raise map.max_cells."
+        )
     try:
         lines = path.read_bytes().decode("utf-8-sig").splitlines()
     except OSError as exc:
@@ -186,11 +221,12 @@ def _check_row_lengths(path: Path, body: list[str], rows: int, cols: int) -> Non
         )
 
 
-def load_text_map(path: Path) -> LoadedMap:
+def load_text_map(path: Path, max_cells: int = MAX_MAP_CELLS) -> LoadedMap:
     """Read a map in the original MRESim text format (``1`` = obstacle).
 
     Args:
         path: the ``.txt`` file.
+        max_cells: the largest map read (rows x columns); larger is refused unread.
 
     Returns:
         The map, with ``resolution`` and ``origin`` None.
@@ -200,9 +236,10 @@ def load_text_map(path: Path) -> LoadedMap:
             other than ``0``/``1`` (the message gives the line number).
     """
     path = Path(path)
-    lines = _read_text_lines(path)
+    lines = _read_text_lines(path, max_cells)
     rows = _header_count(path, lines, 0, "rows")
     cols = _header_count(path, lines, 1, "columns")
+    check_map_size(path, "Text map", rows, cols, max_cells)
     body = lines[2:]
     _check_row_lengths(path, body, rows, cols)
     codes = np.frombuffer("".join(body).encode("utf-32-le"), dtype=np.uint32).reshape(rows, cols)
@@ -215,6 +252,13 @@ def load_text_map(path: Path) -> LoadedMap:
     return _finish(codes == ord("1"), path)
 
 
+def _finite(value: float, key: str, path: Path) -> float:
+    """``value``, or a MapError when it is not finite (``.nan``, ``.inf``) or beyond 1e9."""
+    if not math.isfinite(value) or abs(value) > 1e9:
+        raise MapError(f"ROS map {path}: '{key}' must be a finite number, found {value!r}.")
+    return value
+
+
 def _ros_number(meta: dict[str, Any], key: str, path: Path, default: float | None) -> float:
     """Fetch a numeric ROS map key (booleans are not numbers)."""
     value = meta.get(key, default)
@@ -222,7 +266,7 @@ def _ros_number(meta: dict[str, Any], key: str, path: Path, default: float | Non
         raise MapError(f"ROS map {path} has no '{key}' key. Add it (see the ROS map_server docs).")
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise MapError(f"ROS map {path}: '{key}' must be a number, found {value!r}.")
-    return float(value)
+    return _finite(float(value), key, path)
 
 
 def _ros_origin(meta: dict[str, Any], path: Path) -> tuple[float, float, float] | None:
@@ -235,7 +279,7 @@ def _ros_origin(meta: dict[str, Any], path: Path) -> tuple[float, float, float] 
         raise MapError(
             f"ROS map {path}: 'origin' must be a list [x, y, yaw] of numbers, found {origin!r}."
         )
-    x, y, *yaw = (float(v) for v in origin)
+    x, y, *yaw = (_finite(float(v), "origin", path) for v in origin)
     return x, y, yaw[0] if yaw else 0.0
 
 
@@ -292,7 +336,7 @@ def _ros_free(
     return is_free & opaque if mode == "scale" else is_free
 
 
-def load_ros_map(yaml_path: Path) -> LoadedMap:
+def load_ros_map(yaml_path: Path, max_cells: int = MAX_MAP_CELLS) -> LoadedMap:
     """Read a ROS ``map_server`` map (YAML + the PGM/PNG it names).
 
     Keys: ``image`` (relative to the YAML), ``resolution``, optional ``origin``,
@@ -306,11 +350,14 @@ def load_ros_map(yaml_path: Path) -> LoadedMap:
     path = Path(yaml_path)
     meta = read_yaml_file(path, "ROS map file", MapError)
     resolution = _ros_number(meta, "resolution", path, None)
-    if resolution <= 0:
-        raise MapError(f"ROS map {path}: 'resolution' must be positive (metres per cell).")
+    if not MIN_RESOLUTION <= resolution <= MAX_RESOLUTION:
+        raise MapError(
+            f"ROS map {path}: 'resolution' must be metres per cell from {MIN_RESOLUTION:g} to"
+            f" {MAX_RESOLUTION:g}, found {resolution!r}."
+        )
     origin = _ros_origin(meta, path)
     free, _, negate, mode = _ros_settings(meta, path)
-    with _opened_image(_ros_image_path(meta, path)) as img:
+    with _opened_image(_ros_image_path(meta, path), max_cells) as img:
         opaque = np.ones((img.height, img.width), dtype=bool)
         if img.has_transparency_data:
             opaque = np.asarray(img.convert("RGBA"))[:, :, 3] == 255
@@ -318,7 +365,9 @@ def load_ros_map(yaml_path: Path) -> LoadedMap:
     return _finish(~_ros_free(grey, opaque, free, negate, mode), path, resolution, origin)
 
 
-def load_map(path: Path, threshold: float = 0.5, negate: bool = False) -> LoadedMap:
+def load_map(
+    path: Path, threshold: float = 0.5, negate: bool = False, max_cells: int = MAX_MAP_CELLS
+) -> LoadedMap:
     """Read any supported map, choosing the loader by file suffix.
 
     ``.txt`` -> :func:`load_text_map`, ``.yaml``/``.yml`` -> :func:`load_ros_map`,
@@ -327,7 +376,7 @@ def load_map(path: Path, threshold: float = 0.5, negate: bool = False) -> Loaded
     path = Path(path)
     suffix = path.suffix.lower()
     if suffix == ".txt":
-        return load_text_map(path)
+        return load_text_map(path, max_cells)
     if suffix in (".yaml", ".yml"):
-        return load_ros_map(path)
-    return load_image_map(path, threshold, negate)
+        return load_ros_map(path, max_cells)
+    return load_image_map(path, threshold, negate, max_cells)
