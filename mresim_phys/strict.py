@@ -69,6 +69,13 @@ def has_bool(value: Any) -> bool:
     return isinstance(value, (list, tuple)) and any(has_bool(v) for v in value)
 
 
+def has_bytes(value: Any) -> bool:
+    """Whether ``value`` is bytes (YAML ``!!binary``) or a list/tuple holding some."""
+    if isinstance(value, (bytes, bytearray)):
+        return True
+    return isinstance(value, (list, tuple)) and any(has_bytes(v) for v in value)
+
+
 def numbers_in(value: Any) -> Iterator[int | float]:
     """The numbers in a validated value: itself, or the items of its lists and tuples."""
     if isinstance(value, (int, float)) and not isinstance(value, bool):
@@ -146,7 +153,9 @@ class Strict(BaseModel):
     @field_validator("*", mode="before")
     @classmethod
     def _no_booleans_for_numbers(cls, value: Any, info: ValidationInfo) -> Any:
-        """``speed: true`` is a mistake, not the number 1."""
+        """``speed: true`` is a mistake, not the number 1; YAML's ``!!binary`` is not text."""
+        if has_bytes(value):
+            raise PydanticCustomError("binary_value", "expected text or a number, not !!binary")
         name = info.field_name
         if name is not None and has_bool(value):
             field = cls.model_fields[name]

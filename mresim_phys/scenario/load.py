@@ -47,10 +47,41 @@ def load_scenario(path: str | Path, **overrides: Any) -> Scenario:
     every robot, ``robots={"B": {...}}`` one robot, ``**{"team.sensor.range": 80}`` one field.
     """
     source = Path(path)
-    data = apply_overrides(read_yaml_mapping(source), overrides, str(source))
+    own = read_yaml_mapping(source)
+    check_own_values(own, str(source))
+    data = apply_overrides(own, overrides, str(source))
     scenario = validate_scenario(data, str(source))
     scenario = resolve_map_path(scenario, source.resolve().parent, str(source))
     return resolve_mask_paths(scenario, source.resolve().parent)
+
+
+def check_own_values(data: dict[str, Any], source: str) -> None:
+    """The file's own values, before any override: an override (``--steps 10``) replaces a
+    value, it does not excuse a wrong one (``steps: -5``). Keys the file leaves out are not
+    problems here (an override or a default may give them); an event the file schedules
+    after its own step cap would never happen, and is refused.
+    """
+    try:
+        scenario = Scenario.model_validate(data)
+    except ValidationError as exc:
+        own = [
+            describe_error(error, "")
+            for error in exc.errors(include_url=False)
+            if error["type"] != "missing" and not inherited_from_team(error, exc)
+        ]
+        if own:
+            count = len(own)
+            head = f"{source}: {count} problem{'s' if count > 1 else ''} in the scenario:"
+            raise ScenarioError("\n".join([head, *(f"  - {line}" for line in own)])) from None
+        return
+    late = [(i, e.step) for i, e in enumerate(scenario.events) if e.step > scenario.steps]
+    if late:
+        where = ", ".join(f"events[{i}] (step {step})" for i, step in late)
+        raise ScenarioError(
+            f"{source}: {where} come{'s' if len(late) == 1 else ''} after the step cap"
+            f" (steps: {scenario.steps}) and would never happen; give event steps from 0 to"
+            f" {scenario.steps}, or raise 'steps'."
+        )
 
 
 def validate_scenario(data: dict[str, Any], source: str = "<scenario>") -> Scenario:

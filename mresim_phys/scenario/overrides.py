@@ -35,7 +35,8 @@ def deep_merge(base: Any, change: Any) -> Any:
     if isinstance(base, Mapping) and isinstance(change, Mapping):
         merged = dict(base)
         for key, value in change.items():
-            merged[key] = deep_merge(base.get(key), value)
+            if value is not None:  # None leaves the key as it is, absent included
+                merged[key] = deep_merge(base.get(key), value)
         return merged
     return copy.deepcopy(change)
 
@@ -84,6 +85,8 @@ def apply_overrides(
     """The scenario data with ``overrides`` applied by the rules in this module's docstring."""
     result = dict(data)
     for key, change in expand_dotted(overrides).items():
+        if change is None:  # leaves the key as it is: a missing key keeps its default
+            continue
         if key == "robots":
             result[key] = merge_robots(result.get(key), change, source)
             continue

@@ -44,6 +44,12 @@ class DoorParams(Strict):
 
     @model_validator(mode="after")
     def _cycle(self) -> DoorParams:
+        (x0, y0), (x1, y1) = self.between
+        if math.hypot(x1 - x0, y1 - y0) < 1.0:
+            raise ValueError(
+                f"'between': the door's ends {list(self.between[0])} and {list(self.between[1])}"
+                " are less than a cell apart; give the two ends of the doorway"
+            )
         if (self.period is None) != (self.open_for is None):
             raise ValueError("a periodic door needs both 'period' and 'open_for'")
         if self.period is not None and self.open_for is not None and self.open_for >= self.period:
