@@ -37,7 +37,7 @@ from mresim_phys.run_args import (
     simulation_overrides,
     summary_line,
 )
-from mresim_phys.scenario.load import validate_scenario
+from mresim_phys.scenario.load import resolve_map_path, validate_scenario
 from mresim_phys.scenario.team_file import read_team_file
 from mresim_phys.sim import Simulation
 from mresim_phys.strategies import STRATEGIES
@@ -105,7 +105,12 @@ def make_parser() -> argparse.ArgumentParser:
         "import-team", help="turn the original MRESim's team file into a scenario YAML"
     )
     team.add_argument("team_file", type=Path, help="the original's team file (11 columns)")
-    team.add_argument("--map", required=True, help="the map image the scenario uses")
+    team.add_argument(
+        "--map",
+        required=True,
+        help="the map image the scenario uses (as written in the YAML: relative to --out's"
+        " folder, or to the current folder without --out)",
+    )
     team.add_argument("--strategy", default="frontier", help="the team's strategy (frontier)")
     team.add_argument("--out", type=Path, help="where to write the YAML (default: stdout)")
     validate = commands.add_parser("validate", help="check a scenario without running it")
@@ -307,7 +312,13 @@ def import_team_command(args: argparse.Namespace) -> int:
     """``mresim import-team``: the original's team file as a scenario YAML, validated."""
     data = read_team_file(args.team_file, args.map, args.strategy)
     text = yaml.safe_dump(data, sort_keys=False, default_flow_style=None)
-    validate_scenario(data, source=str(args.team_file))
+    source = str(args.team_file)
+    folder = (args.out.parent if args.out is not None else Path.cwd()).resolve()
+    scenario = resolve_map_path(validate_scenario(data, source=source), folder, source)
+    try:
+        Simulation(scenario)  # the map is read and every start checked against it
+    except MresimError as exc:
+        raise MresimError(f"{source} on map {args.map}: {exc}") from None
     if args.out is None:
         print(text, end="")
     else:

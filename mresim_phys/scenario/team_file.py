@@ -21,8 +21,10 @@ from pathlib import Path
 from typing import Any
 
 from mresim_phys.errors import MresimError
+from mresim_phys.scenario.yamlfile import require_file
 
 COLUMNS = 11
+MAX_TEAM_BYTES = 1_000_000  # ~10,000 agents
 ROLES = {"basestation": "base", "explorer": "explorer", "relay": "relay"}
 ORIGINAL_TEAM: dict[str, Any] = {
     "speed": 10,
@@ -35,7 +37,14 @@ ORIGINAL_TEAM: dict[str, Any] = {
 def read_team_file(path: Path, map_image: str, strategy: str = "frontier") -> dict[str, Any]:
     """The scenario mapping of the team in ``path`` on ``map_image``; MresimError naming the
     file and line when a line does not follow the original's format."""
+    require_file(path, "Team file", MresimError)
     try:
+        if path.stat().st_size > MAX_TEAM_BYTES:
+            raise MresimError(
+                f"Team file {path} is {path.stat().st_size:,} bytes; the original's team files"
+                f" are a line per agent (at most {MAX_TEAM_BYTES:,} bytes here). Is it the"
+                " right file?"
+            )
         text = path.read_text(encoding="utf-8", errors="replace")
     except OSError as exc:
         raise MresimError(f"{path}: cannot read the team file ({exc.strerror or exc})") from None
