@@ -1,0 +1,45 @@
+"""The ``mresim`` command's first moments (output edge): signals before the heavy imports.
+
+Importing the simulator (numpy, numba, pymunk, scipy, ...) takes seconds. A Ctrl-C or a
+SIGTERM in those seconds would print a ``KeyboardInterrupt`` traceback or end the process
+silently with -15. Here, before anything heavy is imported, SIGTERM is turned into an
+exception, and either signal ends the command with one line on stderr and the shell's
+status (130 for SIGINT, 143 for SIGTERM). Once a run starts, ``output.signals`` takes both
+signals over for its own clean stop, and gives this handler back afterwards.
+"""
+
+from __future__ import annotations
+
+import signal
+import sys
+from collections.abc import Sequence
+from types import FrameType
+
+
+class Terminated(BaseException):
+    """SIGTERM arrived outside a run's own handling (raised by the handler below)."""
+
+
+def _terminate(signum: int, frame: FrameType | None) -> None:
+    raise Terminated
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Entry point of the ``mresim`` console script: :func:`mresim_phys.cli.main`, with
+    SIGINT and SIGTERM answered by a line and exit 130 / 143 from the very start."""
+    if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
+        signal.signal(signal.SIGTERM, _terminate)
+    try:
+        from mresim_phys.cli import main as cli_main
+
+        return cli_main(argv)
+    except KeyboardInterrupt:
+        print("mresim: interrupted", file=sys.stderr)
+        return 128 + signal.SIGINT
+    except Terminated:
+        print("mresim: terminated (SIGTERM)", file=sys.stderr)
+        return 128 + signal.SIGTERM
+
+
+if __name__ == "__main__":
+    sys.exit(main())
