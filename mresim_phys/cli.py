@@ -29,6 +29,7 @@ from mresim_phys.output.session import INTERRUPTED, Outcome, run_session
 from mresim_phys.output.signals import StopRequest, stop_on_signals
 from mresim_phys.render.layers import GLOBAL_LAYERS, ROBOT_LAYERS
 from mresim_phys.run_args import (
+    check_video_folder,
     comma_separated,
     draw_plots,
     non_negative_int,
@@ -261,6 +262,7 @@ def run_command(args: argparse.Namespace) -> int:
             render=render_overrides(args),
             **simulation_overrides(args),
         )
+        check_video_folder(sim.scenario, args.scenario)
         out_dir = args.out or default_run_dir(sim.scenario)
         plotted: list[bool] = []
 

@@ -12,8 +12,10 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeVar
 
+from mresim_phys.errors import ScenarioError
 from mresim_phys.output.plots import plot_runs, plotting_available
 from mresim_phys.output.session import Outcome
+from mresim_phys.scenario.schema import Scenario
 from mresim_phys.sim import Simulation
 
 T = TypeVar("T")
@@ -34,6 +36,20 @@ def render_overrides(args: argparse.Namespace) -> dict[str, Any]:
     if getattr(args, "no_plots", False):
         given["plots"] = False
     return {k: v for k, v in given.items() if v is not None}
+
+
+def check_video_folder(scenario: Scenario, source: Path) -> None:
+    """An explicit video path's folder must exist: mresim creates only its default folder
+    (``videos/``), never one a path names (``/nonexistent_dir/x.mp4`` made a folder at /)."""
+    video = scenario.render.video
+    if not isinstance(video, str):
+        return
+    folder = Path(video).expanduser().parent
+    if not folder.is_dir():
+        raise ScenarioError(
+            f"{source}: render.video (or --video): the folder {folder} of {video} does not exist"
+            " or is not a folder. Create it first, or give a path in an existing folder."
+        )
 
 
 def simulation_overrides(args: argparse.Namespace) -> dict[str, Any]:

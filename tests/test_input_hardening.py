@@ -202,3 +202,16 @@ def test_a_signal_while_mresim_starts_exits_with_a_line(
     assert process.returncode == status, err
     assert "Traceback" not in err and err.strip().startswith("mresim:"), err
     assert not (tmp_path / "o" / "summary.json").exists()
+
+
+def test_a_video_path_in_a_missing_folder_is_refused_and_no_folder_made(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = scenario(tmp_path)
+    video = tmp_path / "nowhere" / "deeper" / "x.mp4"
+    args = ["run", str(path), "--steps", "2", "--out", str(tmp_path / "o"), "--quiet"]
+    refused([*args, "--video", str(video)], capsys, "hard.yaml", "render.video", "nowhere")
+    assert not (tmp_path / "nowhere").exists() and not (tmp_path / "o").exists()
+    path = scenario(tmp_path, render={"video": str(video)})
+    refused(args, capsys, "render.video")
+    assert not (tmp_path / "nowhere").exists()
