@@ -172,7 +172,7 @@ def mutate(draw: Callable[..., Any], data: dict[str, Any]) -> None:
     """One random change to ``data`` at a random path (in place)."""
     path = draw(st.sampled_from(list(paths(data))))
     parent, key = parent_of(data, path), path[-1]
-    ops = ["set", "set", "delete", "unknown", "scale", "section", "edge", "edge", "edge"]
+    ops = ["set", "set", "delete", "unknown", "scale", "section", "edge", "edge", "edge", "late"]
     op = draw(st.sampled_from(ops))
     if op == "set":
         parent[key] = draw(VALUES)
@@ -184,6 +184,13 @@ def mutate(draw: Callable[..., Any], data: dict[str, Any]) -> None:
         parent[key] = parent[key] * draw(st.sampled_from(SCALES))
     elif op == "edge" and isinstance(parent[key], (int, float)):  # often valid, yet extreme
         parent[key] = draw(st.sampled_from(EDGES))
+    elif op == "late":  # an event after the step cap, or a door under a cell long
+        if draw(st.booleans()):
+            steps = data.get("steps")
+            cap = steps if isinstance(steps, int) and not isinstance(steps, bool) else 40
+            data["events"] = [{"step": cap + 1, "fail": "A"}]
+        else:
+            data["doors"] = [{"name": "d", "between": [[30, 30], [30, 30.5]]}]
     elif op == "section":
         data[draw(st.sampled_from(list(data)))] = draw(LEAVES)
 
@@ -191,7 +198,8 @@ def mutate(draw: Callable[..., Any], data: dict[str, Any]) -> None:
 def mutate_text(draw: Callable[..., Any], text: str) -> str:
     """One random change to the YAML text: a duplicated line, deep nesting, noise, a cut."""
     lines = text.splitlines()
-    op = draw(st.sampled_from(["duplicate", "duplicate", "nest", "noise", "cut", "tab"]))
+    ops = ["duplicate", "duplicate", "nest", "noise", "cut", "tab", "bomb", "loop", "binary"]
+    op = draw(st.sampled_from(ops))
     at = draw(st.integers(0, max(len(lines) - 1, 0)))
     if op == "duplicate":  # a key line given twice (at any depth) or a list item repeated
         lines.insert(at, lines[at])
@@ -204,6 +212,21 @@ def mutate_text(draw: Callable[..., Any], text: str) -> str:
         return text[:place] + char + text[place:]
     elif op == "cut":
         return text[: draw(st.integers(0, len(text)))]
+    elif op == "bomb":  # a billion laughs: 10^levels values through aliases
+        levels = draw(st.integers(2, 9))
+        lines += ["l0: &l0 [{name: a, start: [1, 1]}]"]
+        lines += [f"l{i}: &l{i} [" + ", ".join([f"*l{i - 1}"] * 10) + "]" for i in range(1, levels)]
+        key = draw(st.sampled_from(["robots", "events", "bomb", "doors"]))
+        lines = [line for line in lines if not line.startswith(f"{key}:")] + [
+            f"{key}: *l{levels - 1}"
+        ]
+    elif op == "loop":  # an alias inside its own value
+        lines.append(draw(st.sampled_from(["loop: &a [1, *a]", "loop: &a {k: *a}"])))
+    elif op == "binary":  # a !!binary value where text or a number belongs
+        key = draw(st.sampled_from(["name", "seed", "steps"]))
+        lines = [
+            f"{key}: !!binary aGVsbG8=" if line.startswith(f"{key}:") else line for line in lines
+        ]
     else:
         lines[at] = "\t" + lines[at]
     return "\n".join(lines) + "\n"
