@@ -28,9 +28,10 @@ from mresim_phys.metrics import RobotRecord, StepRecord
 from mresim_phys.output.runlog import RunLog
 from mresim_phys.render import LayerSpec, parse_layers
 from mresim_phys.snapshot import Snapshot
+from mresim_phys.viewer.guard import is_local
 from mresim_phys.viewer.protocol import ProtocolError, layer_spec, parse_message
 from mresim_phys.viewer.replaysource import ReplaySource
-from mresim_phys.viewer.server import ViewerServer, is_local
+from mresim_phys.viewer.server import ViewerServer
 from mresim_phys.viewer.timeline import Timeline
 
 MakeScenario = Callable[..., Path]
@@ -211,7 +212,7 @@ def middleware_status(server: ViewerServer, remote: str) -> int:
 
         return web.Response(text="ok")
 
-    response = asyncio.run(server._local_only(request, handler))
+    response = asyncio.run(server._guarded(request, handler))
     return int(response.status)
 
 

@@ -4,8 +4,8 @@
 scenario as ``mresim run`` does (same outputs, same bytes) with the page attached
 (``livesource``): the run waits for a page, and once it ends the viewer replays the run
 folder it wrote until Ctrl-C. Both print the page's URL and open a browser only with
-``--open``. Bad input (no run log, a damaged one, a port in use, a remote host without
-``--allow-remote``) is a MresimError: one paragraph, exit 2.
+``--open``. Bad input (no run log, a damaged one, a port in use, a malformed
+``--allow-host``) is a MresimError: one paragraph, exit 2.
 """
 
 from __future__ import annotations
@@ -23,16 +23,17 @@ from mresim_phys.output.signals import StopRequest, stop_on_signals
 from mresim_phys.run_args import draw_plots, render_overrides, simulation_overrides, summary_line
 from mresim_phys.sim import Simulation
 from mresim_phys.viewer.frames import FrameMaker
+from mresim_phys.viewer.guard import is_local
 from mresim_phys.viewer.livesource import LiveSource, ViewerStop
 from mresim_phys.viewer.replaysource import ReplaySource
-from mresim_phys.viewer.server import ViewerServer, is_local
+from mresim_phys.viewer.server import ViewerServer
 
 DEFAULT_HOST, DEFAULT_PORT = "127.0.0.1", 8765
-VIEW_FLAGS = ("host", "port", "open", "allow_remote")
+VIEW_FLAGS = ("host", "port", "open", "allow_remote", "allow_host")
 
 
 def add_server_flags(parser: argparse.ArgumentParser) -> None:
-    """--host, --port, --open, --allow-remote."""
+    """--host, --port, --open, --allow-remote, --allow-host."""
     parser.add_argument("--host", help=f"address to serve on (default {DEFAULT_HOST})")
     parser.add_argument(
         "--port", type=int, help=f"port to serve on (default {DEFAULT_PORT}; 0: any free port)"
@@ -42,6 +43,13 @@ def add_server_flags(parser: argparse.ArgumentParser) -> None:
         "--allow-remote",
         action="store_true",
         help="serve clients on other machines too (refused by default)",
+    )
+    parser.add_argument(
+        "--allow-host",
+        action="append",
+        metavar="NAME[:PORT]",
+        help="also accept this name in a request's Host and Origin (repeatable; e.g. the"
+        " name of a proxy in front of the viewer); by default only the served address",
     )
 
 
@@ -70,7 +78,10 @@ def server_for(source: LiveSource | ReplaySource, args: argparse.Namespace) -> V
         raise MresimError(f"--port {port}: a port is 0 (any free port) to 65535")
     if not args.allow_remote and not is_local(host) and host != "localhost":
         print(f"viewer: serving on {host}, but only this machine may connect (--allow-remote)")
-    return ViewerServer(source, host, port, args.allow_remote)
+    try:
+        return ViewerServer(source, host, port, args.allow_remote, args.allow_host or ())
+    except ValueError as exc:  # a malformed --allow-host
+        raise MresimError(str(exc)) from None
 
 
 def announce(server: ViewerServer, what: str, args: argparse.Namespace) -> None:

@@ -8,8 +8,9 @@ writer task (frames go out in order) and a worker that serves only its newest fr
 request (a page scrubbing fast never waits for frames it no longer wants). Replay frames
 are rendered in a worker thread; live ones in the simulation's thread (``livesource``).
 
-Clients from other machines are refused (403) unless ``allow_remote``; a WebSocket
-opened by a page of another site (its ``Origin`` is not this server) is refused too.
+Every request passes the guard first (``guard``: 403 for another machine unless
+``allow_remote``, a ``Host`` that does not name this viewer, an ``Origin`` of another
+site).
 """
 
 from __future__ import annotations
@@ -18,19 +19,19 @@ import asyncio
 import concurrent.futures
 import contextlib
 import errno
-import ipaddress
 import itertools
 import json
 import logging
 import threading
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
-from urllib.parse import urlsplit
 
 from aiohttp import WSMsgType, web
 
 from mresim_phys.errors import MresimError
+from mresim_phys.viewer.guard import Guard, Where
 from mresim_phys.viewer.livesource import LiveSource, Want
 from mresim_phys.viewer.protocol import Message, ProtocolError, parse_message
 from mresim_phys.viewer.replaysource import ReplaySource
@@ -38,25 +39,6 @@ from mresim_phys.viewer.replaysource import ReplaySource
 STATIC = Path(__file__).parent / "static"
 Source = LiveSource | ReplaySource
 log = logging.getLogger(__name__)
-
-
-def is_local(address: str | None) -> bool:
-    """Whether a peer address is this machine's loopback (127.0.0.0/8, ::1)."""
-    if not address:
-        return False
-    try:
-        ip = ipaddress.ip_address(address.split("%")[0])
-    except ValueError:
-        return False
-    if isinstance(ip, ipaddress.IPv6Address) and ip.ipv4_mapped is not None:
-        ip = ip.ipv4_mapped
-    return ip.is_loopback
-
-
-def same_origin(request: web.Request) -> bool:
-    """Whether a request has no Origin header or one naming this server's host and port."""
-    origin = request.headers.get("Origin")
-    return origin is None or urlsplit(origin).netloc == request.host
 
 
 @dataclass
@@ -70,10 +52,20 @@ class Page:
 
 
 class ViewerServer:
-    """Serve ``source`` at ``host:port`` (0: any free port) from a background thread."""
+    """Serve ``source`` at ``host:port`` (0: any free port) from a background thread.
 
-    def __init__(self, source: Source, host: str, port: int, allow_remote: bool = False) -> None:
+    ``allow_hosts``: further names a ``Host`` or ``Origin`` may give (``--allow-host``)."""
+
+    def __init__(
+        self,
+        source: Source,
+        host: str,
+        port: int,
+        allow_remote: bool = False,
+        allow_hosts: Sequence[str] = (),
+    ) -> None:
         self.source, self.host, self.port, self.allow_remote = source, host, port, allow_remote
+        self.guard = Guard(host, allow_hosts, allow_remote)
         self.pages: dict[int, Page] = {}
         self._ids = itertools.count(1)
         self._loop: asyncio.AbstractEventLoop | None = None
@@ -88,7 +80,7 @@ class ViewerServer:
 
     def app(self) -> web.Application:
         """The aiohttp application."""
-        app = web.Application(middlewares=[self._local_only])
+        app = web.Application(middlewares=[self._guarded])
         app.router.add_get("/", self._index)
         app.router.add_get("/ws", self._websocket)
         app.router.add_static("/static/", STATIC)
@@ -159,10 +151,16 @@ class ViewerServer:
             self._loop.call_soon_threadsafe(page.out.put_nowait, ({"type": "reload"}, None))
 
     @web.middleware
-    async def _local_only(self, request: web.Request, handler: Any) -> web.StreamResponse:
-        if not self.allow_remote and not is_local(request.remote):
-            text = "mresim viewer: only this machine may connect (start it with --allow-remote)."
-            return web.Response(status=403, text=text)
+    async def _guarded(self, request: web.Request, handler: Any) -> web.StreamResponse:
+        """Refuse (403) what the guard refuses, before any handler runs."""
+        refusal = self.guard.refusal(
+            request.headers.getall("Host", []),
+            request.headers.getall("Origin", []),
+            Where(request.remote, local_address(request), self.port),
+        )
+        if refusal is not None:
+            log.info("viewer: %s %s refused: %s", request.method, request.path, refusal)
+            return web.Response(status=403, text=refusal)
         response: web.StreamResponse = await handler(request)
         return response
 
@@ -170,8 +168,6 @@ class ViewerServer:
         return web.FileResponse(STATIC / "index.html", headers={"Cache-Control": "no-store"})
 
     async def _websocket(self, request: web.Request) -> web.StreamResponse:
-        if not same_origin(request):
-            return web.Response(status=403, text="mresim viewer: a page of another site.")
         ws = web.WebSocketResponse(heartbeat=30.0, max_msg_size=1 << 20)
         await ws.prepare(request)
         number, page = next(self._ids), Page(ws)
@@ -238,6 +234,13 @@ class ViewerServer:
                     loop.call_soon_threadsafe(page.out.put_nowait, (header, png))
 
                 source.request(number, Want(message.layers, deliver, message.known))
+
+
+def local_address(request: web.Request) -> str | None:
+    """The address a request's connection arrived at (None if unknown)."""
+    transport = request.transport
+    name = transport.get_extra_info("sockname") if transport is not None else None
+    return str(name[0]) if isinstance(name, tuple) and name else None
 
 
 def bind_error(host: str, port: int, exc: OSError) -> str:
