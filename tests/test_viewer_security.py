@@ -8,18 +8,26 @@ big, binary, not JSON, NaN, wrong types) are answered with an error and change n
 
 from __future__ import annotations
 
+import asyncio
+import json
 import socket
-from collections.abc import Iterator
+import time
+from collections.abc import Callable, Iterator
 from pathlib import Path
+from typing import Any
 
+import aiohttp
 import pytest
 from conftest import write_scenario
+from test_viewer_live import LAYERS, frames, next_frame, viewed_run
 
 from mresim_phys.cli import main
 from mresim_phys.viewer.guard import Allowed, Guard, Where
+from mresim_phys.viewer.protocol import MAX_DEPTH, MAX_FRAME, MAX_MESSAGE, ProtocolError, decode
 from mresim_phys.viewer.replaysource import ReplaySource
-from mresim_phys.viewer.server import ViewerServer
+from mresim_phys.viewer.server import QUEUED_ERRORS, Page, ViewerServer
 
+MakeScenario = Callable[..., Path]
 UPGRADE = (
     "Upgrade: websocket\r\nConnection: Upgrade\r\n"
     "Sec-WebSocket-Key: dGhlIHNhbXBsZSBub25jZQ==\r\nSec-WebSocket-Version: 13\r\n"
@@ -144,3 +152,145 @@ def test_a_malformed_allow_host_is_a_user_error(
     assert code == 2 and "--allow-host 'x/y'" in err and len(err.strip().splitlines()) == 1
     code = main(["run", str(run), "--allow-host", "viewer.lan"])
     assert code == 2 and "--allow-host only applies with --view" in capsys.readouterr().err
+
+
+# --- messages -------------------------------------------------------------------------
+
+DEEP = "[" * 100_000 + "]" * 100_000
+BAD_MESSAGES: list[tuple[str | bytes, str]] = [
+    (DEEP, "nests at most"),
+    ("[" * (MAX_DEPTH + 1) + "]" * (MAX_DEPTH + 1), "nests at most"),
+    ('{"op": "frame", "layers": {"team": ' + "[" * 50 + "]" * 50 + "}}", "nests at most"),
+    ("x" * (MAX_MESSAGE + 1), "at most"),
+    ("not json", "must be JSON"),
+    ('{"op": "frame"', "must be JSON"),
+    (b"\x00\x01binary", "not binary"),
+    ('{"op": "speed", "value": NaN}', "NaN is not a JSON number"),
+    ('{"op": "speed", "value": 1e400}', "too large"),
+    ('{"op": "frame", "n": ' + "9" * 5000 + "}", "must be JSON"),
+    ('{"op": "frame", "n": 1.5, "layers": {}}', "whole number"),
+    ('{"op": "frame", "n": "1", "layers": {}}', "whole number"),
+    ('{"op": "frame", "n": 0, "layers": {"robots": {"' + "Z" * 5000 + '": []}}}', "no agent"),
+    ('{"op": "speed", "value": 1e9}', "speed must be"),
+    ('{"op": "speed", "value": true}', "speed must be"),
+    ('{"op": "launch"}', "needs 'op'"),
+    ('{"op": ["play"]}', "needs 'op'"),
+    ("[]", "needs 'op'"),
+    ('"play"', "needs 'op'"),
+    ("null", "needs 'op'"),
+]
+
+
+async def answers(port: int, messages: list[tuple[str | bytes, str]]) -> list[str]:
+    """Each message's error reply; then check a good frame request is still answered."""
+    replies = []
+    url = f"ws://127.0.0.1:{port}/ws"
+    async with aiohttp.ClientSession() as session, session.ws_connect(url) as ws:
+        assert (await ws.receive_json(timeout=10))["type"] == "info"
+        for message, _ in messages:
+            await (ws.send_bytes if isinstance(message, bytes) else ws.send_str)(message)
+            reply = await ws.receive_json(timeout=10)
+            assert reply["type"] == "error"
+            replies.append(str(reply["message"]))
+        await ws.send_json({"op": "frame", "n": 3, "layers": LAYERS, "known": 0})
+        assert (await next_frame(ws))["n"] == 3
+    return replies
+
+
+def test_malformed_messages_are_answered_and_the_viewer_goes_on(port: int) -> None:
+    replies = asyncio.run(answers(port, BAD_MESSAGES))
+    for (message, expected), reply in zip(BAD_MESSAGES, replies, strict=True):
+        assert expected in reply, (str(message)[:80], reply)
+        assert len(reply) < 300  # a message's contents are not echoed back whole
+
+
+async def too_big(port: int) -> tuple[int | None, int]:
+    """Send a message past the socket's limit: its close code, then a new page's frame."""
+    async with aiohttp.ClientSession() as session:
+        async with session.ws_connect(f"ws://127.0.0.1:{port}/ws") as ws:
+            await ws.receive_json(timeout=10)
+            await ws.send_str(" " * (MAX_FRAME + 1))
+            while (await ws.receive(timeout=10)).type not in (
+                aiohttp.WSMsgType.CLOSE,
+                aiohttp.WSMsgType.CLOSED,
+            ):
+                pass
+            code = ws.close_code
+        async with session.ws_connect(f"ws://127.0.0.1:{port}/ws") as ws:
+            await ws.receive_json(timeout=10)
+            await ws.send_json({"op": "frame", "n": 5, "layers": LAYERS, "known": 0})
+            return code, int((await next_frame(ws))["n"])
+
+
+def test_a_message_past_the_limit_closes_only_its_socket(port: int) -> None:
+    assert asyncio.run(too_big(port)) == (1009, 5)
+
+
+def test_decode_bounds_the_message() -> None:
+    assert decode('{"op": "frame", "layers": {"robots": {"A": ["path"]}}}')["op"] == "frame"
+    assert decode('["[[[[[[[[[[[[[[[[[[[[", "\\"[[[[[[[[[[[[[["]') == [
+        "[" * 20,
+        '"' + "[" * 14,
+    ]  # brackets inside strings do not count
+    for bad in (DEEP, '{"a": -Infinity}', "[1e999]"):
+        with pytest.raises(ProtocolError):
+            decode(bad)
+
+
+def test_a_page_that_never_reads_does_not_grow_its_queue(source: ReplaySource) -> None:
+    server = ViewerServer(source, "127.0.0.1", 0)
+
+    async def flood() -> int:
+        page = Page(ws=None)  # type: ignore[arg-type]
+        for _ in range(1000):
+            server._refuse(page, "bad")
+        return page.out.qsize()
+
+    assert asyncio.run(flood()) == QUEUED_ERRORS
+
+
+# --- a live run ---------------------------------------------------------------------------
+
+
+async def refused_then_driven(url: str) -> dict[str, Any]:
+    """Try to reach the run as a page of another site would, then drive it as a page of
+    this viewer: bad messages first, then play to the end."""
+    hostport = url.removeprefix("ws://").removesuffix("/ws")
+    port = int(hostport.rsplit(":", 1)[1])
+    foreign = [
+        upgrade_status(
+            port, f"Host: evil.example:{port}\r\nOrigin: http://evil.example:{port}\r\n"
+        ),
+        upgrade_status(port, f"Host: {hostport}\r\nOrigin: http://evil.example\r\n"),
+    ]
+    origin = {"Origin": f"http://{hostport}"}
+    async with aiohttp.ClientSession() as session, session.ws_connect(url, headers=origin) as ws:
+        assert (await ws.receive_json(timeout=30))["mode"] == "live"
+        await ws.send_json({"op": "pause"})
+        for message in (DEEP, '{"op": "speed", "value": NaN}', '{"op": "stop", "x": [[['):
+            await ws.send_str(message)
+            assert (await ws.receive_json(timeout=30))["type"] == "error"
+        await ws.send_json({"op": "speed", "value": 1e-300})  # one step in 1e300 s
+        await ws.send_json({"op": "play"})
+        await asyncio.sleep(0.5)
+        await ws.send_json({"op": "speed", "value": 0})  # applies at once
+        last = await frames(ws, 1)
+        while not last[0]["finished"]:
+            last = await frames(ws, 1)
+    return {"foreign": foreign, "last": last[0]}
+
+
+def test_a_live_run_refuses_other_sites_and_survives_bad_messages(
+    scenario_file: MakeScenario, tmp_path: Path
+) -> None:
+    path = scenario_file(steps=300, stop={"all_done": False, "stalled_for": None})
+    out = tmp_path / "viewed"
+    with viewed_run(path, out) as (url, child):
+        started = time.monotonic()
+        seen = asyncio.run(refused_then_driven(url))
+        took = time.monotonic() - started
+        assert child.poll() is None  # still serving the finished run
+    assert seen["foreign"] == [403, 403]
+    assert seen["last"]["step"] == 300 and took < 60
+    summary = json.loads((out / "summary.json").read_text())
+    assert summary["stop_reason"] == "steps"  # no stop reached it

@@ -184,12 +184,13 @@ class LiveSource:
         return self.stop.requested or (c.playing and c.started) or c.steps > 0
 
     def _pace(self) -> None:
-        """Hold the step rate to the page's speed (released early by any command)."""
-        speed = self.controls.speed
-        if speed > 0 and self.controls.playing:
-            due = self._last + 1.0 / speed
-            while (left := due - time.perf_counter()) > 0 and self.controls.playing:
-                self.cond.wait(min(left, WAIT_S))
+        """Hold the step rate to the page's speed: a new speed applies at once (a very
+        slow one is not waited out), pause or stop ends the wait."""
+        while self.controls.playing and not self.stop.requested and self.controls.speed > 0:
+            left = self._last + 1.0 / self.controls.speed - time.perf_counter()
+            if left <= 0:
+                break
+            self.cond.wait(min(left, WAIT_S))
         self._last = time.perf_counter()
 
     def _serve(self) -> None:

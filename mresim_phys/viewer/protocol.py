@@ -14,10 +14,19 @@ replay's step count and timeline), then for each frame a JSON header (``type: fr
 step, the agents' hover rows, new timeline entries, play state) followed by one binary
 message: the PNG. ``{"type": "reload"}`` says the source changed (a live run ended and
 its log is now replayed); ``{"type": "error"}`` answers a malformed message.
+
+Bounds (:func:`decode`): a text message is at most :data:`MAX_MESSAGE` characters of JSON
+nested at most :data:`MAX_DEPTH` deep, without ``NaN`` or ``Infinity``; anything else
+is answered with an error message and changes nothing. A message of more than
+:data:`MAX_FRAME` bytes closes the socket (WebSocket code 1009), as aiohttp does.
 """
 
 from __future__ import annotations
 
+import json
+import math
+import re
+import reprlib
 from dataclasses import dataclass
 from typing import Any
 
@@ -25,6 +34,13 @@ from mresim_phys.render.layers import DEFAULT_ROBOT, GLOBAL_LAYERS, ROBOT_LAYERS
 
 OPS = ("frame", "play", "pause", "step", "stop", "speed")
 MAX_SPEED = 10_000.0  # steps per second
+MAX_MESSAGE = 1 << 18  # characters of a text message (a layer set for ~1000 agents)
+MAX_FRAME = 1 << 20  # bytes of any WebSocket message; larger ones close the socket
+MAX_DEPTH = 8  # nesting of a message's JSON (a frame request nests 4 deep)
+STRINGS = re.compile(r'"(?:[^"\\]|\\.)*"', re.DOTALL)
+BRACKETS = re.compile(r"[\[\]{}]")
+SHOWN = reprlib.Repr()
+SHOWN.maxstring = SHOWN.maxother = SHOWN.maxlong = 40
 
 
 class ProtocolError(ValueError):
@@ -42,6 +58,50 @@ class Message:
     value: float = 0.0
 
 
+def too_deep(text: str, limit: int = MAX_DEPTH) -> bool:
+    """Whether the arrays and objects of JSON ``text`` nest more than ``limit`` deep
+    (brackets inside strings do not count)."""
+    if text.count("[") + text.count("{") <= limit:
+        return False
+    depth = 0
+    for bracket in BRACKETS.finditer(STRINGS.sub("", text)):
+        depth += 1 if bracket.group() in "[{" else -1
+        if depth > limit:
+            return True
+    return False
+
+
+def finite(text: str) -> float:
+    """A JSON number with a fraction or exponent; ProtocolError if it overflows to inf."""
+    value = float(text)
+    if not math.isfinite(value):
+        raise ProtocolError(f"the number {text[:40]} is too large")
+    return value
+
+
+def not_a_number(text: str) -> float:
+    """``NaN``, ``Infinity`` and ``-Infinity`` are not JSON: refused."""
+    raise ProtocolError(f"{text} is not a JSON number")
+
+
+def decode(text: str) -> Any:
+    """A page's text message as JSON, within the bounds; ProtocolError if it is not."""
+    if len(text) > MAX_MESSAGE:
+        raise ProtocolError(
+            f"a message is at most {MAX_MESSAGE} characters of JSON; this one has {len(text)}"
+        )
+    if too_deep(text):
+        raise ProtocolError(f"a message's JSON nests at most {MAX_DEPTH} arrays or objects deep")
+    try:
+        return json.loads(text, parse_float=finite, parse_constant=not_a_number)
+    except RecursionError:  # the depth check above should make this unreachable
+        raise ProtocolError("a message's JSON nests too deep") from None
+    except ProtocolError:
+        raise
+    except ValueError as exc:
+        raise ProtocolError(f"a message must be JSON: {str(exc)[:100]}") from None
+
+
 def layer_spec(data: Any, names: list[str]) -> LayerSpec:
     """The layer set of a page's ``layers`` object; ProtocolError if malformed."""
     if not isinstance(data, dict) or not isinstance(data.get("team", []), list):
@@ -52,7 +112,7 @@ def layer_spec(data: Any, names: list[str]) -> LayerSpec:
         raise ProtocolError("layers.robots must map agent names to lists of layers")
     unknown = sorted(set(robots) - set(names))
     if unknown:
-        raise ProtocolError(f"layers.robots: no agent {unknown[0]!r} in this run")
+        raise ProtocolError(f"layers.robots: no agent {SHOWN.repr(unknown[0])} in this run")
     per_robot = {str(k): frozenset(str(x) for x in v) for k, v in robots.items()}
     try:
         return LayerSpec(team, DEFAULT_ROBOT, per_robot)
@@ -64,7 +124,7 @@ def whole(data: dict[str, Any], key: str) -> int:
     """A non-negative integer field (0 if absent)."""
     value = data.get(key, 0)
     if isinstance(value, bool) or not isinstance(value, int) or value < 0:
-        raise ProtocolError(f"{key!r} must be a whole number >= 0, not {value!r}")
+        raise ProtocolError(f"{key!r} must be a whole number >= 0, not {SHOWN.repr(value)}")
     return value
 
 

@@ -10,7 +10,8 @@ are rendered in a worker thread; live ones in the simulation's thread (``livesou
 
 Every request passes the guard first (``guard``: 403 for another machine unless
 ``allow_remote``, a ``Host`` that does not name this viewer, an ``Origin`` of another
-site).
+site). A malformed message (``protocol.decode``: too big, too deep, not JSON, wrong
+fields) is answered with an error message, logged, and changes nothing.
 """
 
 from __future__ import annotations
@@ -20,7 +21,6 @@ import concurrent.futures
 import contextlib
 import errno
 import itertools
-import json
 import logging
 import threading
 from collections.abc import Sequence
@@ -33,10 +33,11 @@ from aiohttp import WSMsgType, web
 from mresim_phys.errors import MresimError
 from mresim_phys.viewer.guard import Guard, Where
 from mresim_phys.viewer.livesource import LiveSource, Want
-from mresim_phys.viewer.protocol import Message, ProtocolError, parse_message
+from mresim_phys.viewer.protocol import MAX_FRAME, Message, ProtocolError, decode, parse_message
 from mresim_phys.viewer.replaysource import ReplaySource
 
 STATIC = Path(__file__).parent / "static"
+QUEUED_ERRORS = 16  # error replies queued for one page at most; more are only logged
 Source = LiveSource | ReplaySource
 log = logging.getLogger(__name__)
 
@@ -168,7 +169,7 @@ class ViewerServer:
         return web.FileResponse(STATIC / "index.html", headers={"Cache-Control": "no-store"})
 
     async def _websocket(self, request: web.Request) -> web.StreamResponse:
-        ws = web.WebSocketResponse(heartbeat=30.0, max_msg_size=1 << 20)
+        ws = web.WebSocketResponse(heartbeat=30.0, max_msg_size=MAX_FRAME)
         await ws.prepare(request)
         number, page = next(self._ids), Page(ws)
         self.pages[number] = page
@@ -192,18 +193,28 @@ class ViewerServer:
     async def _read(self, page: Page) -> None:
         """Read the page's messages: controls at once, frame requests through the worker."""
         async for msg in page.ws:
-            if msg.type != WSMsgType.TEXT:
+            if msg.type == WSMsgType.ERROR:  # e.g. a message past MAX_FRAME: aiohttp closes
+                log.info("viewer: a page's socket failed: %s", msg.data)
                 continue
             try:
-                message = parse_message(json.loads(msg.data), self.source.names)
-            except (ValueError, ProtocolError) as exc:
-                await page.out.put(({"type": "error", "message": str(exc)}, None))
+                if msg.type != WSMsgType.TEXT:
+                    raise ProtocolError("the viewer takes JSON text messages, not binary ones")
+                message = parse_message(decode(msg.data), self.source.names)
+            except ValueError as exc:  # ProtocolError, or a check that failed on its own
+                self._refuse(page, str(exc))
                 continue
             if message.op == "frame":
                 page.pending = message
                 page.wake.set()
             elif isinstance(self.source, LiveSource):
                 self.source.command(message.op, message.value)
+
+    def _refuse(self, page: Page, why: str) -> None:
+        """Answer a malformed message with an error message (only log it if the page has
+        left many unread), so a client that never reads cannot grow the queue."""
+        log.info("viewer: a malformed message: %s", why)
+        if page.out.qsize() < QUEUED_ERRORS:
+            page.out.put_nowait(({"type": "error", "message": why}, None))
 
     async def _writer(self, page: Page) -> None:
         """Send the page's queued messages in order (a header, then its PNG)."""
