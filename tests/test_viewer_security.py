@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import asyncio
 import json
+import logging
 import socket
 import time
 from collections.abc import Callable, Iterator
@@ -98,7 +99,8 @@ def test_this_viewers_own_names_are_accepted(port: int) -> None:
 
 def test_a_foreign_origin_is_refused(port: int) -> None:
     host = f"Host: 127.0.0.1:{port}\r\n"
-    for origin in [*FOREIGN_ORIGINS, f"http://evil.example:{port}", f"http://[::1]:{port + 1}"]:
+    others = [f"http://evil.example:{port}", f"http://[::1]:{port + 1}", f"https://[::1]:{port}"]
+    for origin in [*FOREIGN_ORIGINS, *others]:
         for path in PATHS:
             headers = host + f"Origin: {origin}\r\n" + (UPGRADE if path == "/ws" else "")
             status, body = ask(port, path, headers)
@@ -114,6 +116,17 @@ def test_clients_without_host_or_origin_are_served(port: int) -> None:
         conn.sendall(b"GET / HTTP/1.0\r\n\r\n")
         assert conn.recv(100).startswith(b"HTTP/1.0 200")
     assert upgrade_status(port, f"Host: 127.0.0.1:{port}\r\n") == 101
+
+
+def test_a_request_aiohttp_cannot_parse_is_one_log_line(
+    port: int, caplog: pytest.LogCaptureFixture
+) -> None:
+    """aiohttp logs a client's malformed request (400) as an error with a traceback: the
+    viewer makes it an info line, so a stray request prints nothing by default."""
+    with caplog.at_level(logging.INFO):
+        assert ask(port, "/", "")[0] == 400  # HTTP/1.1 without a Host
+    told = [r for r in caplog.records if "Missing 'Host'" in r.getMessage()]
+    assert told and all(r.levelno == logging.INFO and not r.exc_info for r in told)
 
 
 def test_allow_host_accepts_the_names_given(source: ReplaySource) -> None:

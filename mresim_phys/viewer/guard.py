@@ -11,8 +11,9 @@ with 403 and a one-paragraph body:
   rebinding: a page of another site whose name later resolves to 127.0.0.1 sends its own
   name as ``Host``;
 * an ``Origin`` header, when present, names a page of this viewer (the same names as
-  ``Host``). Browsers send it with WebSocket upgrades and with every request that can
-  change state; a client that sends none (curl, a script) is not a page of another site.
+  ``Host``, with ``http://``; ``https://`` only for an allowed name, e.g. a proxy's).
+  Browsers send it with WebSocket upgrades and with every request that can change
+  state; a client that sends none (curl, a script) is not a page of another site.
 
 Typical use: ``Guard("127.0.0.1", ["viewer.lan"]).refusal(hosts, origins, where)``.
 """
@@ -89,6 +90,15 @@ class Allowed:
         return cls(*parts)
 
 
+@dataclass(frozen=True)
+class Where:
+    """A connection: the client's address, the address and port it arrived at."""
+
+    remote: str | None
+    local: str | None
+    port: int
+
+
 class Guard:
     """The server's checks, for a server bound to ``host`` with names allowed by the user."""
 
@@ -101,7 +111,8 @@ class Guard:
 
     def accepts(self, value: str, port: int, local: str | None, scheme: str = "http") -> bool:
         """Whether ``value`` (a ``Host`` header, or an ``Origin``'s host) names this viewer
-        serving on ``port``; ``local`` is the address the connection arrived at."""
+        serving on ``port``; ``local`` is the address the connection arrived at. The
+        viewer serves plain HTTP, so only an allowed name (a proxy's) may come as https."""
         parts = split_host(value)
         if parts is None:
             return False
@@ -110,7 +121,7 @@ class Guard:
         if any(a.name == name and a.port in (None, asked) for a in self.allowed):
             return True
         own = name in self.names or (local is not None and name == canonical(local))
-        return own and asked == port
+        return own and asked == port and scheme == "http"
 
     def origin_accepted(self, origin: str, port: int, local: str | None) -> bool:
         """Whether an ``Origin`` header names a page of this viewer (``null`` does not)."""
@@ -139,15 +150,6 @@ class Guard:
                 f" (Origin {shown(', '.join(origins))})."
             )
         return None
-
-
-@dataclass(frozen=True)
-class Where:
-    """A connection: the client's address, the address and port it arrived at."""
-
-    remote: str | None
-    local: str | None
-    port: int
 
 
 def shown(text: str) -> str:

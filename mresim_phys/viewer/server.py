@@ -29,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from aiohttp import WSMsgType, web
+from aiohttp.http_exceptions import HttpProcessingError
 
 from mresim_phys.errors import MresimError
 from mresim_phys.viewer.guard import Guard, Where
@@ -40,6 +41,24 @@ STATIC = Path(__file__).parent / "static"
 QUEUED_ERRORS = 16  # error replies queued for one page at most; more are only logged
 Source = LiveSource | ReplaySource
 log = logging.getLogger(__name__)
+
+
+class ClientMistakes(logging.Filter):
+    """aiohttp logs a request it cannot parse (a 400: the client's mistake, e.g. no
+    ``Host``) as an error with a traceback; this makes it one info line. Errors of the
+    server itself (500) stay errors."""
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        exc = record.exc_info[1] if record.exc_info else None
+        if isinstance(exc, HttpProcessingError) and 400 <= exc.code < 500:
+            record.msg = f"{record.getMessage()}: {exc.code} {exc.message}"
+            record.args, record.exc_info, record.exc_text = (), None, None
+            record.levelno, record.levelname = logging.INFO, "INFO"
+        return True
+
+
+http_log = logging.getLogger(__name__ + ".http")
+http_log.addFilter(ClientMistakes())
 
 
 @dataclass
@@ -93,7 +112,7 @@ class ViewerServer:
         The server's event loop lives in its own thread from the start (binding included),
         so a caller that runs an event loop of its own (a notebook, Playwright's sync API)
         can start it too."""
-        self._runner = runner = web.AppRunner(self.app(), access_log=None)
+        self._runner = runner = web.AppRunner(self.app(), access_log=None, logger=http_log)
         self._loop = loop = asyncio.new_event_loop()
         bound: concurrent.futures.Future[None] = concurrent.futures.Future()
         self._thread = threading.Thread(
