@@ -118,6 +118,14 @@ def test_clients_without_host_or_origin_are_served(port: int) -> None:
     assert upgrade_status(port, f"Host: 127.0.0.1:{port}\r\n") == 101
 
 
+def test_only_the_pages_own_files_are_served(port: int) -> None:
+    host = f"Host: 127.0.0.1:{port}\r\n"
+    for name in ("index.html", "viewer.js", "viewer.css"):
+        assert ask(port, f"/static/{name}", host)[0] == 200
+    for path in ("/static/" + "a" * 300, "/static/..%2fserver.py", "/static/", "/static/a/b"):
+        assert ask(port, path, host)[0] == 404, path  # a name past 255 bytes was a 500
+
+
 def test_a_request_aiohttp_cannot_parse_is_one_log_line(
     port: int, caplog: pytest.LogCaptureFixture
 ) -> None:

@@ -38,6 +38,7 @@ from mresim_phys.viewer.protocol import MAX_FRAME, Message, ProtocolError, decod
 from mresim_phys.viewer.replaysource import ReplaySource
 
 STATIC = Path(__file__).parent / "static"
+ASSETS = frozenset(path.name for path in STATIC.iterdir() if path.is_file())
 QUEUED_ERRORS = 16  # error replies queued for one page at most; more are only logged
 Source = LiveSource | ReplaySource
 log = logging.getLogger(__name__)
@@ -103,7 +104,7 @@ class ViewerServer:
         app = web.Application(middlewares=[self._guarded])
         app.router.add_get("/", self._index)
         app.router.add_get("/ws", self._websocket)
-        app.router.add_static("/static/", STATIC)
+        app.router.add_get("/static/{name}", self._asset)
         return app
 
     def start(self) -> str:
@@ -186,6 +187,14 @@ class ViewerServer:
 
     async def _index(self, request: web.Request) -> web.StreamResponse:
         return web.FileResponse(STATIC / "index.html", headers={"Cache-Control": "no-store"})
+
+    async def _asset(self, request: web.Request) -> web.StreamResponse:
+        """One of the page's files, by name; no other path reaches the file system (aiohttp's
+        static route answered 500 to a name longer than the file system allows)."""
+        name = request.match_info["name"]
+        if name not in ASSETS:
+            raise web.HTTPNotFound(text="mresim viewer: no such file.")
+        return web.FileResponse(STATIC / name)
 
     async def _websocket(self, request: web.Request) -> web.StreamResponse:
         ws = web.WebSocketResponse(heartbeat=30.0, max_msg_size=MAX_FRAME)
