@@ -4,7 +4,8 @@
 ``frames`` (snapshots drawn by the video's renderer, as PNG), ``timeline`` (chart series
 and event marks), ``replaysource`` (any logged step, through in-memory keyframes),
 ``livesource`` (a running simulation paused, stepped and stopped from the page),
-``protocol`` (the WebSocket messages), ``server`` (aiohttp, this machine only by
-default), ``command`` (the command-line glue) and ``static/`` (the page: plain HTML, JS
+``protocol`` (the WebSocket messages, bounded), ``guard`` (who may connect: the client's
+address, ``Host``, ``Origin``), ``server`` (aiohttp, this machine only by default),
+``command`` (the command-line glue) and ``static/`` (the page: plain HTML, JS
 and CSS served by the package).
 """
