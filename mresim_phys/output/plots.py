@@ -6,7 +6,8 @@ non-interactive Agg backend: ``exploration.png`` (explored and known-at-base vs
 step, with the 50, 90 and 95 % levels), ``distance.png`` (per-robot distance vs step) and
 ``links.png`` (linked pairs and alive robots vs step); failures (dotted) and blackouts
 (dash-dotted, from start to end, shaded between) are vertical lines on the exploration
-and links figures. Several runs share each figure, one colour per run. matplotlib and
+and links figures. Several runs share each figure, one colour per run; each PNG is
+written whole or not at all (``output.files``: WriteError when it cannot be). matplotlib and
 pandas are the optional ``plot`` extra (``pip install -e ".[plot]"``); without them
 plotting is skipped with a message.
 """
@@ -19,7 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from mresim_phys.errors import MresimError
-from mresim_phys.output.files import atomic_path
+from mresim_phys.output.files import atomic_path, make_parent
 from mresim_phys.output.rundata import RunEvent, read_metrics, run_events, run_label
 
 FIGURE_SIZE = (8.0, 4.5)
@@ -57,7 +58,7 @@ def plot_runs(run_dirs: list[Path], out_dir: Path) -> list[Path]:
     for run_dir in run_dirs:
         df = read_metrics(run_dir)
         runs.append(PlottedRun(run_label(run_dir), df, run_events(run_dir, df)))
-    out_dir.mkdir(parents=True, exist_ok=True)
+    make_parent(out_dir / "exploration.png")
     return [
         draw_exploration(runs, out_dir / "exploration.png"),
         draw_distance(runs, out_dir / "distance.png"),
@@ -81,11 +82,13 @@ def save(fig: Any, ax: Any, path: Path) -> Path:
     """Add the legend, write the PNG, free the figure."""
     import matplotlib.pyplot as plt
 
-    ax.legend(loc="best", fontsize="small")
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp)
-    plt.close(fig)
+    try:
+        ax.legend(loc="best", fontsize="small")
+        fig.tight_layout()
+        with atomic_path(path) as tmp:
+            fig.savefig(tmp)
+    finally:
+        plt.close(fig)
     return path
 
 

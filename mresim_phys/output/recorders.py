@@ -12,7 +12,6 @@ scenario and seed give a byte-identical file.
 from __future__ import annotations
 
 import csv
-import os
 from collections.abc import Callable, Sequence
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Protocol
@@ -24,8 +23,8 @@ from mresim_phys.build import region_probe, run_rules
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.errors import ScenarioError
 from mresim_phys.metrics import CommTotals, Milestones, StepRecord, csv_header
-from mresim_phys.output.files import temp_sibling, write_json_atomic, write_text_atomic
-from mresim_phys.output.runlog import RunLogWriter
+from mresim_phys.output.files import PendingFile, write_json_atomic, write_text_atomic
+from mresim_phys.output.logwriter import RunLogWriter
 from mresim_phys.output.video import VideoRecorder, default_video_path, write_png
 from mresim_phys.render import LayerSpec, Renderer, frame_scale, parse_layers
 from mresim_phys.scenario.schema import RenderSpec, Scenario
@@ -48,6 +47,10 @@ class Recorder(Protocol):
         """Flush and release files."""
         ...
 
+    def discard(self) -> None:
+        """The run failed: release files, keeping nothing unfinished under a final name."""
+        ...
+
 
 def default_run_dir(scenario: Scenario) -> Path:
     """``runs/<name>/seed-<seed>`` under the current folder."""
@@ -64,7 +67,8 @@ class RunWriter:
 
     Every file appears whole or not at all (``output.files``): ``scenario.yaml`` and
     ``summary.json`` through a temporary sibling, ``metrics.csv`` under a temporary name
-    renamed at :meth:`close`.
+    renamed at :meth:`close` (a row that cannot be written raises WriteError and deletes
+    it).
     """
 
     def __init__(self, out_dir: Path, scenario: Scenario) -> None:
@@ -72,8 +76,7 @@ class RunWriter:
         out_dir.mkdir(parents=True, exist_ok=True)
         write_text_atomic(out_dir / "scenario.yaml", scenario_yaml(scenario))
         self.path = out_dir / "metrics.csv"
-        self._partial = temp_sibling(self.path)
-        self._file = self._partial.open("w", newline="", encoding="utf-8")
+        self._file = PendingFile(self.path)
         self._csv = csv.writer(self._file, lineterminator="\n")
         rules = run_rules(scenario)  # a world that changes: 'stale'; paired faults: robustness
         names = [r.name for r in scenario.robots]
@@ -84,10 +87,13 @@ class RunWriter:
         self._csv.writerow(record.csv_row())
 
     def close(self) -> None:
-        """Close ``metrics.csv`` and give it its name (idempotent)."""
-        if not self._file.closed:
-            self._file.close()
-            os.replace(self._partial, self.path)
+        """Close ``metrics.csv`` and give it its name (idempotent; WriteError if a row
+        could not be written)."""
+        self._file.commit()
+
+    def discard(self) -> None:
+        """Close and delete the unfinished ``metrics.csv``."""
+        self._file.discard()
 
     def write_summary(self, summary: dict[str, Any]) -> Path:
         """Write ``summary.json`` and return its path."""
@@ -138,6 +144,10 @@ class MetricsRecorder:
         """Close metrics.csv."""
         self.writer.close()
 
+    def discard(self) -> None:
+        """Delete the unfinished metrics.csv."""
+        self.writer.discard()
+
 
 class LogRecorder:
     """The run log (every snapshot field, as map deltas and JSON lines) for replay."""
@@ -159,6 +169,11 @@ class LogRecorder:
         """Flush the last chunk."""
         if self.writer is not None:
             self.writer.close()
+
+    def discard(self) -> None:
+        """Release the log's files; it keeps ``closed: false`` and the chunks it committed."""
+        if self.writer is not None:
+            self.writer.abandon()
 
 
 class FrameRecorder:
@@ -204,6 +219,11 @@ class FrameRecorder:
             self.video.close()
         if self.final_png and self.last is not None:
             self._png("final.png", self.renderer.render(self.last))
+
+    def discard(self) -> None:
+        """Delete the unfinished video; write no final picture."""
+        if self.video is not None:
+            self.video.discard()
 
     def _png(self, name: str, frame: np.ndarray) -> None:
         path = self.png_dir / name
@@ -273,9 +293,9 @@ def make_recorders(sim: Simulation, out_dir: Path) -> tuple[RunWriter, list[Reco
     frames = run_frames(sim, out_dir)  # first: it checks the layers
     try:
         writer = RunWriter(out_dir, scenario)
-    except OSError:
+    except BaseException:
         if frames is not None:
-            frames.close()
+            frames.discard()
         raise
     recorders: list[Recorder] = [MetricsRecorder(writer)]
     if spec.log:

@@ -22,6 +22,7 @@ from pathlib import Path
 import yaml
 
 from mresim_phys.errors import MresimError
+from mresim_phys.output.files import WriteError, cause_of
 
 RUN_FILES = ("summary.json", "scenario.yaml")  # what marks a folder as a run folder
 
@@ -98,12 +99,15 @@ class StagedRun:
     """A run folder written at ``folder`` (a temporary sibling) and moved onto ``target``."""
 
     def __init__(self, target: Path, name: str, overwrite: bool = False) -> None:
-        """Check ``target`` (MresimError if refused) and create the temporary folder."""
+        """Check ``target`` (MresimError if refused) and create the temporary folder
+        (WriteError naming ``target`` if that fails)."""
         self.target = Path(target)
         check_target(self.target, name, overwrite)
-        self.target.parent.mkdir(parents=True, exist_ok=True)
         self.folder = fresh_sibling(self.target, "tmp")
-        self.folder.mkdir()
+        try:
+            self.folder.mkdir(parents=True)
+        except OSError as exc:
+            raise WriteError(self.target, f"cannot create its folder ({cause_of(exc)})") from exc
 
     def commit(self) -> Path:
         """Move the written folder onto the target, replacing what was there; the target."""

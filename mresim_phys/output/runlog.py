@@ -1,16 +1,16 @@
 """Run logs (output edge): write every snapshot of a run, replay it without re-simulating.
 
-:class:`RunLogWriter` streams every step's :class:`~mresim_phys.snapshot.Snapshot` into a
-``log/`` folder, every field of it as :mod:`~mresim_phys.output.logformat` says: one JSON
-line per step (``steps.jsonl``: poses, states, goals, distances, links, events, the
-world's version); grids (beliefs, safe space, skeletons, and the truth when the world
-changed) as deltas since the previous logged step and paths and rendezvous points in
-compressed chunks of ``chunk_steps`` steps (``deltas-NNNNN.npz``); static data
-(``meta.json``, read back and checked by ``output.logmeta``; ``truth.npz``) once.
-:class:`RunLog` opens a log; :class:`Replay` rebuilds
-every snapshot in order, equal to the live one field by field, with each step's metrics
-recomputed by the live code (``metrics.measure_step``); :func:`recompute_metrics` gives
-the rows of ``metrics.csv`` from the log alone. Layout: ``docs/run-log-format.md``.
+:class:`RunLogWriter` (``output.logwriter``) streams every step's
+:class:`~mresim_phys.snapshot.Snapshot` into a ``log/`` folder, every field of it as
+:mod:`~mresim_phys.output.logformat` says: one JSON line per step (``steps.jsonl``: poses,
+states, goals, distances, links, events, the world's version); grids (beliefs, safe space,
+skeletons, and the truth when the world changed) as deltas since the previous logged step
+and paths and rendezvous points in compressed chunks of ``chunk_steps`` steps
+(``deltas-NNNNN.npz``); static data (``meta.json``, read back and checked by
+``output.logmeta``; ``truth.npz``) once. :class:`RunLog` opens a log; :class:`Replay`
+rebuilds every snapshot in order, equal to the live one field by field, with each step's
+metrics recomputed by the live code (``metrics.measure_step``); :func:`recompute_metrics`
+gives the rows of ``metrics.csv`` from the log alone. Layout: ``docs/run-log-format.md``.
 """
 
 from __future__ import annotations
@@ -28,161 +28,36 @@ from mresim_phys.knowledge.coverage import Coverage
 from mresim_phys.knowledge.latest import LatestCoverage
 from mresim_phys.knowledge.robustness import FailureWatch, robot_states
 from mresim_phys.metrics import RobotRecord, StepRecord, measure_step, update_known_at_base
-from mresim_phys.output.files import write_json_atomic
 from mresim_phys.output.logformat import (
     AGENT_LINE,
-    FORMAT,
     SNAPSHOT_LINE,
     STATIC_AGENT,
     TRUTH,
-    VERSION,
     WORLD_GRIDS,
     Chunk,
     Track,
-    chunk_arrays,
     decode_line,
-    encode_line,
-    new_parts,
-    point,
 )
 from mresim_phys.output.logmeta import META, damaged, read_meta
-from mresim_phys.output.logworld import MovablesTrack, movable_meta
+from mresim_phys.output.logworld import MovablesTrack
+from mresim_phys.output.logwriter import STEPS, TRUTH_FILE, RunLogWriter, chunk_file, flat_cells
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
 from mresim_phys.types import FREE, BeliefGrid, BoolGrid, IntArray
 from mresim_phys.world.maps import connected_to, free_components_mask, seed_cells
 from mresim_phys.world.terrain import TerrainGrid
 
-TRUTH_FILE, STEPS = "truth.npz", "steps.jsonl"
-
-
-def chunk_file(index: int) -> str:
-    """File name of delta chunk ``index`` (logged steps index*K .. index*K + K-1)."""
-    return f"deltas-{index:05d}.npz"
-
-
-def new_meta(
-    first: Snapshot, name: str, seed: int, chunk_steps: int, faults: bool = False
-) -> dict[str, Any]:
-    """meta.json of a log about to get its first step (``fault_columns``: the run had
-    faults, so its metrics.csv has the robustness columns; only written when true)."""
-    meta: dict[str, Any] = {
-        "format": FORMAT,
-        "version": VERSION,
-        "name": name,
-        "seed": seed,
-        "shape": list(first.truth.shape),
-        "resolution": first.resolution,
-        "chunk_steps": chunk_steps,
-        "agents": [encode_line(STATIC_AGENT, a) for a in first.agents],
-        "starts": [point(a.position) for a in first.robots],
-        "movables": [movable_meta(m) for m in first.movables],
-        "beliefs": "latest" if first.latest else "grow",
-        "steps": 0,
-        "closed": False,
-    }
-    if faults:
-        meta["fault_columns"] = True
-    return meta
-
-
-def flat_cells(grid: np.ndarray) -> np.ndarray:
-    """A flat uint8 copy of a bool or uint8 grid."""
-    cells: np.ndarray = np.ascontiguousarray(grid).reshape(-1).view(np.uint8).copy()
-    return cells
-
-
-class RunLogWriter:
-    """Streams a run's snapshots into ``log_dir``; ``first`` (step 0) is logged at once."""
-
-    def __init__(
-        self,
-        log_dir: Path,
-        first: Snapshot,
-        *,
-        name: str,
-        seed: int,
-        chunk_steps: int = 100,
-        faults: bool = False,
-    ) -> None:
-        if chunk_steps < 1:
-            raise ValueError(f"chunk_steps must be at least 1, not {chunk_steps}")
-        cells = first.truth.size
-        if cells >= 2**31:
-            raise ValueError(f"a {first.truth.shape} grid is too large for int32 cell indices")
-        self.log_dir, self.chunk_steps = Path(log_dir), chunk_steps
-        self.log_dir.mkdir(parents=True, exist_ok=True)
-        for stale in self.log_dir.glob("deltas-*.npz"):
-            stale.unlink()
-        self.meta = new_meta(first, name, seed, chunk_steps, faults)
-        truth = np.packbits(first.truth, axis=None)
-        statics: dict[str, Any] = {"occupied": truth}
-        if first.terrain is not None:
-            statics["terrain"] = first.terrain
-        if first.prior is not None:
-            statics["prior"] = first.prior
-        if first.hazards is not None:
-            statics["hazards"] = first.hazards
-        np.savez_compressed(self.log_dir / TRUTH_FILE, **statics)
-        self._tracks = [Track(cells) for _ in first.agents]
-        self._truth = flat_cells(np.asarray(first.truth, dtype=bool))
-        self._world = {g.name: np.zeros(cells, np.uint8) for g in WORLD_GRIDS}
-        self._movables = MovablesTrack(first.movables)
-        self._version = first.world_version
-        self._lines: list[str] = []
-        self._parts = new_parts()
-        self._last_step: int | None = None
-        self._steps = (self.log_dir / STEPS).open("w", encoding="utf-8")
-        self._closed = False
-        write_json_atomic(self.log_dir / META, self.meta)
-        self.write(first)
-
-    def write(self, snap: Snapshot) -> None:
-        """Log one step (steps must come in increasing order)."""
-        if self._last_step is not None and snap.step <= self._last_step:
-            raise ValueError(f"step {snap.step} logged after step {self._last_step}")
-        changed = snap.world_version != self._version
-        TRUTH.write(self._truth, snap.truth if changed else None, self._parts)
-        self._version = snap.world_version
-        for grid in WORLD_GRIDS:
-            grid.write(self._world[grid.name], getattr(snap, grid.name), self._parts)
-        for track, agent in zip(self._tracks, snap.agents, strict=True):
-            track.write(agent, self._parts)
-        line = encode_line(SNAPSHOT_LINE, snap)
-        line["agents"] = [encode_line(AGENT_LINE, a) for a in snap.agents]
-        moved = self._movables.write(snap.movables)
-        if moved:
-            line["moved"] = moved
-        self._lines.append(json.dumps(line, separators=(",", ":")))
-        self._last_step = snap.step
-        if len(self._lines) == self.chunk_steps:
-            self._flush()
-
-    def _flush(self) -> None:
-        """Save the pending chunk, append its lines, then commit the step count in meta.json."""
-        if not self._lines:
-            return
-        index = self.meta["steps"] // self.chunk_steps
-        arrays: dict[str, Any] = chunk_arrays(self._parts)
-        np.savez_compressed(self.log_dir / chunk_file(index), **arrays)
-        self._steps.write("\n".join(self._lines) + "\n")
-        self._steps.flush()
-        self.meta["steps"] += len(self._lines)
-        write_json_atomic(self.log_dir / META, self.meta)
-        self._lines, self._parts = [], new_parts()
-
-    def close(self) -> None:
-        """Flush the last chunk and mark the log closed (idempotent)."""
-        if not self._closed:
-            self._flush()
-            self._steps.close()
-            self.meta["closed"], self._closed = True, True
-            write_json_atomic(self.log_dir / META, self.meta)
-
-    def __enter__(self) -> RunLogWriter:
-        return self
-
-    def __exit__(self, *exc: object) -> None:
-        self.close()
+__all__ = [
+    "STEPS",
+    "TRUTH_FILE",
+    "Replay",
+    "RunLog",
+    "RunLogWriter",
+    "chunk_file",
+    "reachable_from",
+    "read_static",
+    "read_truth",
+    "recompute_metrics",
+]
 
 
 class RunLog:

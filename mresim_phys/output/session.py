@@ -10,10 +10,16 @@ at the end (``output.rundir``), so a reused output folder never mixes two runs. 
 SIGTERM (``output.signals``) stop the run at the end of the current step: every recorder
 is closed, ``final.png`` and ``summary.json`` (``stop_reason`` ``"interrupted"`` and the
 ``signal``) are written and the folder is moved into place, as for a finished run.
+
+A run that fails (a file that cannot be written, a full disk: ``output.files``; or any
+error) discards its recorders (the unfinished video is deleted) and its temporary folder;
+``<out>`` keeps what it held. A WriteError names the file under its final name
+(``<out>/metrics.csv``, not the temporary folder's).
 """
 
 from __future__ import annotations
 
+import contextlib
 import signal
 import time
 from collections.abc import Callable
@@ -21,6 +27,7 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 
 from mresim_phys.metrics import StepRecord
+from mresim_phys.output.files import WriteError
 from mresim_phys.output.recorders import Recorder, SnapshotSource, make_recorders, summarise
 from mresim_phys.output.robustness import check_paired, run_robustness, write_robustness
 from mresim_phys.output.rundir import StagedRun
@@ -87,10 +94,23 @@ def run_session(
         if finish is not None:
             finish(staged.folder)
         staged.commit()
+    except WriteError as exc:
+        staged.discard()
+        raise exc.moved(staged.folder, staged.target, abandoned(staged.target)) from exc
     except BaseException:
         staged.discard()
         raise
     return replace(outcome, out_dir=Path(out_dir))
+
+
+def abandoned(out_dir: Path) -> str:
+    """What a WriteError of a run adds: what became of the run and what to do."""
+    return (
+        f"The run stopped: {out_dir} still holds what it held before (an earlier run, or"
+        " nothing), no file is left half-written, files already finished (a video) are"
+        " kept. Free some space on that disk, or give another --out or --video PATH, and"
+        " run again."
+    )
 
 
 def record_run(
@@ -106,8 +126,10 @@ def record_run(
         step_until_stopped(sim, recorders, on_step, stop)
     except KeyboardInterrupt:  # no handler of ours was installed (not the main thread, ...)
         stop.signum = stop.signum or int(signal.SIGINT)
-    finally:
-        close_all(recorders)
+    except BaseException:
+        discard_all(recorders)
+        raise
+    close_all(recorders)
     elapsed = time.perf_counter() - started
     natural = sim.stop_reason()
     reason = natural if natural is not None else INTERRUPTED
@@ -124,15 +146,20 @@ def record_run(
 
 
 def close_all(recorders: list[Recorder]) -> None:
-    """Close every recorder, even when one fails; then raise the first failure."""
-    failure: Exception | None = None
-    for recorder in recorders:
+    """Close every recorder; if one fails, discard the ones after it and raise."""
+    for n, recorder in enumerate(recorders):
         try:
             recorder.close()
-        except Exception as exc:
-            failure = failure or exc
-    if failure is not None:
-        raise failure
+        except BaseException:
+            discard_all(recorders[n + 1 :])
+            raise
+
+
+def discard_all(recorders: list[Recorder]) -> None:
+    """The run failed: discard every recorder (their own failures would only hide it)."""
+    for recorder in recorders:
+        with contextlib.suppress(Exception):
+            recorder.discard()
 
 
 def step_until_stopped(

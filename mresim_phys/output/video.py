@@ -9,11 +9,17 @@ machine with a free core the simulation steps on while the last frame is encoded
 ships no H.264 encoder; re-encode an mp4v file with an external ffmpeg if a browser needs
 H.264. Frames go to a temporary sibling of the video file (``output.files``), renamed onto
 its name at :meth:`VideoRecorder.close`, so a video file is always a finished one.
+
+OpenCV's encoder reports no write errors (a full disk only logs a warning per frame and
+leaves a file without its index), so :meth:`VideoRecorder.close` reads the finished file
+back and counts its frames: a file without all of them is deleted and the failure raised
+as a WriteError with its cause (:func:`~mresim_phys.output.files.probe_cause`). While a
+recorder is open, OpenCV logs errors only (``quiet_opencv``), so a failing encoder does not
+print a warning per frame.
 """
 
 from __future__ import annotations
 
-import os
 import queue
 import threading
 from pathlib import Path
@@ -23,7 +29,15 @@ import cv2
 import numpy as np
 
 from mresim_phys.errors import MresimError
-from mresim_phys.output.files import atomic_path, temp_sibling
+from mresim_phys.output.files import (
+    WriteError,
+    atomic_path,
+    commit_file,
+    discard_file,
+    make_parent,
+    probe_cause,
+    temp_sibling,
+)
 
 FOURCC = {".mp4": "mp4v", ".webm": "VP80", ".avi": "MJPG"}
 QUEUED_FRAMES = 4  # frames waiting for the background encoder (~1.4 MB each at 800x600)
@@ -34,28 +48,57 @@ def default_video_path(name: str, seed: int) -> Path:
     return Path("videos") / f"{name}-seed{seed}.mp4"
 
 
-def _make_parent(path: Path) -> None:
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise MresimError(f"cannot create the folder for {path}: {exc.strerror or exc}") from exc
+class _QuietOpenCV:
+    """OpenCV logs errors only while any recorder is open; its level comes back after."""
+
+    def __init__(self) -> None:
+        self._lock = threading.Lock()
+        self._users = 0
+        self._level = 0
+
+    def enter(self) -> None:
+        with self._lock:
+            if self._users == 0:
+                self._level = cv2.utils.logging.getLogLevel()
+                cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
+            self._users += 1
+
+    def leave(self) -> None:
+        with self._lock:
+            self._users -= 1
+            if self._users == 0:
+                cv2.utils.logging.setLogLevel(self._level)
+
+
+quiet_opencv = _QuietOpenCV()
 
 
 def write_png(path: Path, frame: np.ndarray) -> None:
     """Write one frame as an image (format from the extension, normally ``.png``).
 
     Raises:
-        MresimError: If the folder cannot be created or OpenCV cannot write the file.
+        MresimError: If OpenCV knows no writer for the extension.
+        WriteError: If the folder cannot be created or the file cannot be written.
     """
     path = Path(path)
-    _make_parent(path)
+    make_parent(path)
     with atomic_path(path) as tmp:
         try:
             ok = cv2.imwrite(str(tmp), frame)
         except cv2.error as exc:
             raise MresimError(f"cannot write image {path}: {exc.msg or exc}") from exc
         if not ok:
-            raise MresimError(f"cannot write image {path} (unwritable path or unknown extension)")
+            cause = probe_cause(path.parent) or "OpenCV could not write it"
+            raise WriteError(path, cause)
+
+
+def frames_in(path: Path) -> int:
+    """How many frames the video file ``path`` holds, as its index says (0: unreadable)."""
+    capture = cv2.VideoCapture(str(path))
+    try:
+        return int(capture.get(cv2.CAP_PROP_FRAME_COUNT)) if capture.isOpened() else 0
+    finally:
+        capture.release()
 
 
 class VideoRecorder:
@@ -95,24 +138,24 @@ class VideoRecorder:
         if fps <= 0 or min(self.frame_size) <= 0:
             raise MresimError(f"video {self.path}: fps and frame size must be positive")
         self.fourcc = fourcc or FOURCC[suffix]
-        _make_parent(self.path)
+        make_parent(self.path)
         self.partial = temp_sibling(self.path)  # renamed onto path by close()
         code = cv2.VideoWriter.fourcc(*self.fourcc)
-        self._writer: cv2.VideoWriter | None = cv2.VideoWriter(
-            str(self.partial), code, self.fps, self.frame_size
-        )
-        if not self._writer.isOpened() or self.path.is_dir():
-            self._writer.release()
-            self._writer = None
-            self.partial.unlink(missing_ok=True)
-            raise MresimError(
-                f"cannot open video {self.path} with codec {self.fourcc!r}: the path may be "
-                "unwritable, or the codec is missing from this OpenCV build (H.264 is not "
-                "available in opencv-python-headless); use .mp4 (mp4v) or .webm (VP8)"
+        self._failure: str | None = None
+        quiet_opencv.enter()
+        try:
+            self._writer: cv2.VideoWriter | None = cv2.VideoWriter(
+                str(self.partial), code, self.fps, self.frame_size
             )
+        except BaseException:
+            quiet_opencv.leave()
+            raise
+        if not self._writer.isOpened() or self.path.is_dir():
+            self._release(self._writer)
+            self._writer = None
+            raise self._open_error()
         self._queue: queue.Queue[np.ndarray | None] | None = None
         self._encoder: threading.Thread | None = None
-        self._failure: str | None = None
         if background:
             self._queue = queue.Queue(QUEUED_FRAMES)
             self._encoder = threading.Thread(
@@ -155,24 +198,64 @@ class VideoRecorder:
         if self._failure is not None:
             raise MresimError(f"video {self.path}: encoding failed: {self._failure}")
 
-    def close(self) -> None:
-        """Encode the queued frames, finish the file and give it its name (idempotent).
+    def _open_error(self) -> MresimError:
+        """Why the writer did not open: a cause writing there shows, else the codec."""
+        cause = None if self.path.is_dir() else probe_cause(self.path.parent)
+        if cause is not None:
+            return WriteError(self.path, cause)
+        return MresimError(
+            f"cannot open video {self.path} with codec {self.fourcc!r}: the path may be "
+            "unwritable, or the codec is missing from this OpenCV build (H.264 is not "
+            "available in opencv-python-headless); use .mp4 (mp4v) or .webm (VP8)"
+        )
 
-        Raises:
-            MresimError: If encoding a frame failed (the unfinished file is deleted).
-        """
+    def _release(self, writer: cv2.VideoWriter) -> None:
+        """Release the writer (the file is then as complete as it gets)."""
+        try:
+            writer.release()
+        except cv2.error as exc:  # reported by close
+            self._failure = self._failure or exc.msg or str(exc)
+        finally:
+            quiet_opencv.leave()
+
+    def _stop(self) -> bool:
+        """Mark the recorder closed, let the encoder finish the queued frames and release
+        the writer; False if the recorder was closed already."""
         writer, self._writer = self._writer, None
         if writer is None:
-            return
+            return False
         if self._queue is not None and self._encoder is not None:
             self._queue.put(None)
             self._encoder.join()
-        writer.release()
+        self._release(writer)
+        return True
+
+    def close(self) -> None:
+        """Encode the queued frames, finish the file, check it holds every frame and give it
+        its name (idempotent).
+
+        Raises:
+            MresimError: If encoding a frame failed (the unfinished file is deleted).
+            WriteError: If the file lacks frames (a full disk, a file size limit: OpenCV
+                reports nothing) or cannot be renamed; it is deleted.
+        """
+        if not self._stop():
+            return
         if self._failure is not None:
-            self.partial.unlink(missing_ok=True)
+            discard_file(self.partial)
             self._raise_failure()
-        if self.partial.exists():
-            os.replace(self.partial, self.path)
+        found = frames_in(self.partial) if self.frames_written else 0
+        if found != self.frames_written:
+            cause = probe_cause(self.path.parent)  # before deleting: that frees space
+            discard_file(self.partial)
+            written = f"{found} of the {self.frames_written} frames can be read back"
+            raise WriteError(self.path, cause or f"the encoder failed silently ({written})")
+        commit_file(self.partial, self.path)
+
+    def discard(self) -> None:
+        """Stop and delete the unfinished file: nothing appears under ``path`` (idempotent)."""
+        if self._stop():
+            discard_file(self.partial)
 
     def __enter__(self) -> VideoRecorder:
         return self
