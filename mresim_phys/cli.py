@@ -22,6 +22,7 @@ from tqdm import tqdm
 from mresim_phys.errors import MresimError
 from mresim_phys.metrics import StepRecord
 from mresim_phys.output.bench import PRESETS, run_bench
+from mresim_phys.output.files import write_text_atomic
 from mresim_phys.output.plots import plot_runs
 from mresim_phys.output.recorders import default_run_dir
 from mresim_phys.output.replay import replay_run
@@ -324,7 +325,7 @@ def import_team_command(args: argparse.Namespace) -> int:
     if args.out is None:
         print(text, end="")
     else:
-        args.out.write_text(text, encoding="utf-8")
+        write_text_atomic(args.out, text)
         print(f"{args.out}: {len(data['robots'])} robots from {args.team_file}")
     return 0
 

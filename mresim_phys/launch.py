@@ -29,6 +29,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     SIGINT and SIGTERM answered by a line and exit 130 / 143 from the very start."""
     if signal.getsignal(signal.SIGTERM) is signal.SIG_DFL:
         signal.signal(signal.SIGTERM, _terminate)
+    if hasattr(signal, "SIGXFSZ"):  # past `ulimit -f`, a write fails with a message (EFBIG)
+        signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # instead of killing with a core dump
     try:
         from mresim_phys.cli import main as cli_main
 

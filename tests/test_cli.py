@@ -386,6 +386,7 @@ def test_outputs_are_written_under_temporary_names_and_renamed(
     scenario_file: MakeScenario, tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
     video = tmp_path / "videos" / "v.mp4"
+    video.parent.mkdir()  # a folder a video path names must exist
     out = tmp_path / "out"
     assert quiet_run(capsys, scenario_file(steps=3), out, "--video", str(video))[0] == 0
     assert [p.name for p in video.parent.iterdir()] == ["v.mp4"]

@@ -67,6 +67,7 @@ def test_a_killed_run_leaves_the_previous_run_whole(tmp_path: Path) -> None:
     before = {"name": "interrupt-trial", "steps": 5, "marker": "the previous run"}
     (out / "summary.json").write_text(json.dumps(before))
     video = tmp_path / "videos" / "v.mp4"
+    video.parent.mkdir()  # a folder a video path names must exist
     flags = ["--out", out, "--quiet", "--no-plots", "--video", video]
     process = subprocess.Popen(trials.mresim("run", scenario, *flags))
     deadline = time.monotonic() + trials.STARTUP_TIMEOUT_S
