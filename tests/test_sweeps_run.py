@@ -199,3 +199,14 @@ def test_dask_local_cluster_of_processes_from_the_command_line(tmp_path: Path) -
         assert main(["sweep", str(study), "--out", str(tmp_path / out), "--quiet", *flag]) == 0
     pd.testing.assert_frame_equal(tables(tmp_path / "dask")[0], tables(tmp_path / "pool")[0])
     pd.testing.assert_frame_equal(tables(tmp_path / "dask")[1], tables(tmp_path / "pool")[1])
+
+
+def test_video_for_a_minus_before_a_string_axis_is_a_clear_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    study = write_study(tmp_path, axes={"team.strategy": ["frontier", "random_walk"]})
+    out = tmp_path / "out"
+    code = main(["sweep", str(study), "--out", str(out), "--video-for", "-strategy == 1"])
+    err = capsys.readouterr().err
+    assert code == 2 and "--video-for '-strategy == 1'" in err and "not a number" in err
+    assert "Traceback" not in err and err.count("\n") == 1 and not out.exists()
