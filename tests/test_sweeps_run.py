@@ -112,10 +112,10 @@ def test_a_failing_run_is_recorded_and_the_sweep_goes_on(
     assert sorted(p.name for p in (out / "runs").iterdir()) == ["a000-s0000", "a000-s0001"]
     assert main(["sweep", str(study), "--out", str(out), "--workers", "1"]) == 1
     summary = capsys.readouterr().out
-    assert "2 done, 2 failed (ran 0 now" in summary and str(log) in summary
+    assert "2 done, 2 failed, 0 lost (ran 0 now" in summary and str(log) in summary
     assert main(["compare", str(out), "--metric", "final_explored"]) == 0
     report = (out / "compare" / "report.md").read_text(encoding="utf-8")
-    failed_part = report.split("## Failed runs", 1)[1]
+    failed_part = report.split("## Failed and lost runs", 1)[1]
     assert "a001-s0000" in failed_part and "a001-s0001" in failed_part
     assert (
         "| strategy=random_walk | 2 | " in report
