@@ -97,3 +97,16 @@ def test_two_sweeps_started_together_run_each_run_once(tmp_path: Path) -> None:
     lines = (out / "manifest.jsonl").read_text(encoding="utf-8").splitlines()
     ids = [json.loads(line)["run_id"] for line in lines]
     assert sorted(ids) == ["a000-s0000", "a000-s0001", "a000-s0002"]
+
+
+def test_a_sweep_that_is_beginning_is_named_too(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The holder is named even while its folder has no sweep.json yet (the folder would
+    otherwise be refused as one that holds no sweep)."""
+    study, out = write_study(tmp_path), tmp_path / "out"
+    (out / "runs").mkdir(parents=True)
+    with SweepLock(out):
+        code = main(["sweep", str(study), "--out", str(out), "--workers", "1"])
+    err = capsys.readouterr().err
+    assert code == 2 and "is being written by another `mresim sweep`" in err

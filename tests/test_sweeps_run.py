@@ -182,7 +182,7 @@ def test_more_seeds_carry_on_and_changed_runs_are_refused(
     assert main(args) == 0
     write_study(tmp_path, seeds=2, steps=5)
     assert main(args) == 0
-    assert "2 runs, 2 done, 0 failed (ran 1 now" in capsys.readouterr().out
+    assert "2 runs, 2 done, 0 failed, 0 lost (ran 1 now" in capsys.readouterr().out
     assert len(pd.read_parquet(out / "runs.parquet")) == 2
     write_study(tmp_path, seeds=2, steps=6)
     assert main(args) == 2

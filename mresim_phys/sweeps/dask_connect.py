@@ -34,8 +34,13 @@ class NoScheduler(MresimError):
 
 
 def refuse(address: str, what: str) -> NoScheduler:
-    """The one-paragraph message for ``--dask address``."""
-    return NoScheduler(f"--dask {address}: {what}.{ADVICE}")
+    """The one-paragraph message for ``--dask address`` where no scheduler answers."""
+    return NoScheduler(f"--dask {address}: no Dask scheduler answered: {what}.{ADVICE}")
+
+
+def malformed(address: str, what: str) -> NoScheduler:
+    """The one-paragraph message for a ``--dask`` address of the wrong form."""
+    return NoScheduler(f"--dask {address!r}: {what}.{ADVICE}")
 
 
 def host_port(address: str) -> tuple[str, int]:
@@ -46,7 +51,7 @@ def host_port(address: str) -> tuple[str, int]:
     except ValueError:
         host, port = None, None
     if not host or port is None:
-        raise refuse(address, "expected tcp://HOST:PORT, e.g. tcp://127.0.0.1:8786")
+        raise malformed(address, "expected tcp://HOST:PORT, e.g. tcp://127.0.0.1:8786")
     return host, port
 
 
@@ -61,14 +66,13 @@ def probe(address: str, timeout: float) -> None:
     except TimeoutError:
         raise refuse(
             address,
-            f"something accepts connections there but sent no Dask greeting within {timeout:g} s"
-            " (a silent listener, or an HTTP server such as the Dask dashboard: a Dask"
-            " scheduler greets at once)",
+            f"something accepts connections there but sent no Dask greeting within"
+            f" {timeout:g} s (a silent listener, or an HTTP server such as the Dask dashboard?"
+            " a Dask scheduler greets at once)",
         ) from None
     except OSError as exc:
-        raise refuse(
-            address, f"cannot connect ({type(exc).__name__}: {exc.strerror or exc})"
-        ) from None
+        why = f"{type(exc).__name__}: {exc.strerror or exc}"
+        raise refuse(address, f"cannot connect to {host}:{port} ({why})") from None
     (length,) = struct.unpack("<Q", head) if len(head) == 8 else (0,)
     if not 0 < length <= GREETING_MAX:
         raise refuse(
@@ -93,7 +97,7 @@ def connect(client_class: Any, address: str, timeout: float | None = None) -> An
     ``timeout`` seconds (default CONNECT_TIMEOUT)."""
     timeout = CONNECT_TIMEOUT if timeout is None else timeout
     if "://" not in address:
-        raise refuse(
+        raise malformed(
             address,
             "expected a scheduler address such as tcp://host:8786, or local:N to start a"
             " local cluster of N workers",
@@ -105,6 +109,5 @@ def connect(client_class: Any, address: str, timeout: float | None = None) -> An
     except Exception as exc:  # any failure of a client we cannot vouch for is the address's
         detail = " ".join(str(exc).split())[:200]
         raise refuse(
-            address,
-            f"no Dask scheduler answered within {timeout:g} s ({type(exc).__name__}: {detail})",
+            address, f"none within {timeout:g} s ({type(exc).__name__}: {detail})"
         ) from None

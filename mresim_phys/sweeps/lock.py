@@ -82,6 +82,13 @@ class SweepLock:
         self.created = True
         return self
 
+    def check(self) -> None:
+        """SweepLocked if a live sweep holds the lock (a lock file there taken and let go
+        again; nothing is created)."""
+        if self.path.is_file():
+            self.acquire()
+            self.release()
+
     def flock(self, fd: int) -> bool:
         """flock ``fd``; False if this file system cannot; SweepLocked if held."""
         try:

@@ -101,12 +101,12 @@ def open_sweep(
     folder = Path(folder)
     check_folder(folder, info["study"], info["runs"])
     folder.mkdir(parents=True, exist_ok=True)
-    (folder / RUNS).mkdir(exist_ok=True)
     old = read_info(folder / SWEEP_FILE) if (folder / SWEEP_FILE).is_file() else {}
-    write_text_atomic(folder / STUDY_COPY, study_text)
-    write_json_atomic(
+    write_json_atomic(  # first: a folder with anything else is a sweep's
         folder / SWEEP_FILE, {**info, "runs": {**old.get("runs", {}), **info["runs"]}}
     )
+    write_text_atomic(folder / STUDY_COPY, study_text)
+    (folder / RUNS).mkdir(exist_ok=True)
     wait_for_writers(folder, notify)
     clean_leftovers(folder)
     records = read_records(folder / MANIFEST)
@@ -128,7 +128,7 @@ def check_folder(folder: Path, name: str, hashes: dict[str, str]) -> None:
         raise StudyError(f"{folder} is a file; give --out a folder for the sweep.")
     info_path = folder / SWEEP_FILE
     if not info_path.is_file():
-        if any(p.name != LOCK_FILE for p in folder.iterdir()):
+        if any(not ours(p.name) for p in folder.iterdir()):
             raise StudyError(
                 f"{folder} is not empty and holds no sweep ({SWEEP_FILE} is missing), so the"
                 f" sweep of {name!r} will not write there. Give another --out."
@@ -152,6 +152,12 @@ def check_folder(folder: Path, name: str, hashes: dict[str, str]) -> None:
             " folder to start over; more seeds, values added at the end of the first axis or"
             " scenarios added at the end carry on in the same folder."
         )
+
+
+def ours(name: str) -> bool:
+    """Whether a file of a folder without sweep.json is a sweep's first (the lock, or the
+    temporary file of sweep.json of a sweep killed as it began)."""
+    return name == LOCK_FILE or name.startswith(f".{Path(SWEEP_FILE).stem}.tmp-")
 
 
 def read_info(path: Path) -> dict[str, Any]:

@@ -25,7 +25,7 @@ from mresim_phys.sweeps.expand import RunSpec, expand_runs, fingerprints
 from mresim_phys.sweeps.lock import SweepLock
 from mresim_phys.sweeps.manifest import Manifest, check_folder, clean_leftovers, open_sweep
 from mresim_phys.sweeps.select import run_names, selector
-from mresim_phys.sweeps.study import Study
+from mresim_phys.sweeps.study import Study, StudyError
 from mresim_phys.sweeps.tables import write_runs, write_steps
 from mresim_phys.sweeps.worker import FAILED, LOST, VIDEOS
 
@@ -112,7 +112,11 @@ def run_sweep(
     """Run every missing run of ``study`` into ``options.out`` and write its tables."""
     runs = with_videos(expand_runs(study, study_path), options.video_for, options.out)
     hashes = fingerprints(runs)
-    check_folder(options.out, study.name, hashes)
+    try:
+        check_folder(options.out, study.name, hashes)
+    except StudyError:
+        SweepLock(options.out).check()  # a sweep that is writing the folder: say so
+        raise
     backend = options.backend or make_backend(options.workers, options.dask)
     try:
         options.out.mkdir(parents=True, exist_ok=True)
