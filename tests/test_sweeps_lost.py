@@ -16,6 +16,7 @@ import pytest
 import yaml
 
 from mresim_phys.cli import main
+from mresim_phys.output.files import WriteError
 from mresim_phys.sweeps import worker
 from mresim_phys.sweeps.executors import BackendLost
 from mresim_phys.sweeps.expand import RunSpec
@@ -90,6 +91,13 @@ def test_a_full_disk_is_lost_and_a_bug_is_failed(
     record = worker.run_task(spec, str(tmp_path / "out"))
     assert record["status"] == "lost" and "No space left" in record["error"]
     assert not (tmp_path / "out" / "inflight" / f"{spec.run_id}.json").exists()
+
+    def written(spec: RunSpec, sweep: Path) -> None:
+        raise WriteError(sweep / "metrics.csv", "No space left on device")
+
+    monkeypatch.setattr(worker, "simulate", written)
+    record = worker.run_task(spec, str(tmp_path / "out"))
+    assert record["status"] == "lost" and "cannot write" in record["error"]
 
     def bug(spec: RunSpec, sweep: Path) -> None:
         raise ZeroDivisionError("a strategy's bug")

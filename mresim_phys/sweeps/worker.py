@@ -6,9 +6,9 @@ sibling folder, renamed into ``<sweep>/runs/<run_id>`` when complete) and return
 result record. While it runs, its marker ``<sweep>/inflight/<run_id>.json`` names the
 process (``sweeps/inflight.py``). A run that raises leaves no run folder; its traceback
 goes to ``<sweep>/errors/<run_id>.log`` and the result says ``failed`` (the run's own
-error: a bug in a strategy, say), or ``lost`` when the machine failed it (an ``OSError``
-such as a full disk, or ``MemoryError``): lost runs are run again on resume. The sweep
-goes on either way.
+error: a bug in a strategy, say), or ``lost`` when the machine failed it (a full disk:
+``OSError`` or ``output.files.WriteError``; ``MemoryError``): lost runs are run again on
+resume. The sweep goes on either way.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ import traceback
 from pathlib import Path
 from typing import Any
 
-from mresim_phys.output.files import write_text_atomic
+from mresim_phys.output.files import WriteError, write_text_atomic
 from mresim_phys.output.session import run_session
 from mresim_phys.output.signals import StopRequest
 from mresim_phys.sim import Simulation
@@ -31,7 +31,7 @@ ERRORS = "errors"
 VIDEOS = "videos"
 DONE, FAILED, LOST = "done", "failed", "lost"
 STATUSES = (DONE, FAILED, LOST)
-OUTSIDE = (OSError, MemoryError)  # errors of the machine, not of the run
+OUTSIDE = (OSError, WriteError, MemoryError)  # errors of the machine, not of the run
 
 
 def run_folder(sweep: Path, run_id: str) -> Path:
@@ -64,7 +64,7 @@ def write_log(spec: RunSpec, sweep: Path, exc: Exception) -> str | None:
     disk may be full)."""
     log = error_log(sweep, spec.run_id)
     text = f"run {spec.run_id} ({spec.label}, seed {spec.seed}) failed:\n"
-    with contextlib.suppress(OSError):
+    with contextlib.suppress(OSError, WriteError):
         log.parent.mkdir(parents=True, exist_ok=True)
         write_text_atomic(log, text + "".join(traceback.format_exception(exc)))
         return str(log)
