@@ -112,10 +112,10 @@ def test_a_failing_run_is_recorded_and_the_sweep_goes_on(
     assert sorted(p.name for p in (out / "runs").iterdir()) == ["a000-s0000", "a000-s0001"]
     assert main(["sweep", str(study), "--out", str(out), "--workers", "1"]) == 1
     summary = capsys.readouterr().out
-    assert "2 done, 2 failed (ran 0 now" in summary and str(log) in summary
+    assert "2 done, 2 failed, 0 lost (ran 0 now" in summary and str(log) in summary
     assert main(["compare", str(out), "--metric", "final_explored"]) == 0
     report = (out / "compare" / "report.md").read_text(encoding="utf-8")
-    failed_part = report.split("## Failed runs", 1)[1]
+    failed_part = report.split("## Failed and lost runs", 1)[1]
     assert "a001-s0000" in failed_part and "a001-s0001" in failed_part
     assert (
         "| strategy=random_walk | 2 | " in report
@@ -182,7 +182,7 @@ def test_more_seeds_carry_on_and_changed_runs_are_refused(
     assert main(args) == 0
     write_study(tmp_path, seeds=2, steps=5)
     assert main(args) == 0
-    assert "2 runs, 2 done, 0 failed (ran 1 now" in capsys.readouterr().out
+    assert "2 runs, 2 done, 0 failed, 0 lost (ran 1 now" in capsys.readouterr().out
     assert len(pd.read_parquet(out / "runs.parquet")) == 2
     write_study(tmp_path, seeds=2, steps=6)
     assert main(args) == 2
@@ -199,3 +199,14 @@ def test_dask_local_cluster_of_processes_from_the_command_line(tmp_path: Path) -
         assert main(["sweep", str(study), "--out", str(tmp_path / out), "--quiet", *flag]) == 0
     pd.testing.assert_frame_equal(tables(tmp_path / "dask")[0], tables(tmp_path / "pool")[0])
     pd.testing.assert_frame_equal(tables(tmp_path / "dask")[1], tables(tmp_path / "pool")[1])
+
+
+def test_video_for_a_minus_before_a_string_axis_is_a_clear_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    study = write_study(tmp_path, axes={"team.strategy": ["frontier", "random_walk"]})
+    out = tmp_path / "out"
+    code = main(["sweep", str(study), "--out", str(out), "--video-for", "-strategy == 1"])
+    err = capsys.readouterr().err
+    assert code == 2 and "--video-for '-strategy == 1'" in err and "not a number" in err
+    assert "Traceback" not in err and err.count("\n") == 1 and not out.exists()

@@ -69,6 +69,11 @@ def add_backend_flags(parser: argparse.ArgumentParser) -> None:
         " tcp://host:8786 joins a running scheduler",
     )
     parser.add_argument("--out", type=Path, help="sweep folder (default sweeps/<study name>)")
+    parser.add_argument(
+        "--retry-failed",
+        action="store_true",
+        help="run the runs that failed of their own error again (lost runs always run again)",
+    )
     parser.add_argument("--verbose", action="store_true", help="print each run as it starts/ends")
     parser.add_argument("--quiet", action="store_true", help="no progress bar or summary")
 
@@ -138,7 +143,8 @@ def add_sweep_parsers(commands: argparse._SubParsersAction[argparse.ArgumentPars
 
 
 def sweep_command(args: argparse.Namespace) -> int:
-    """``mresim sweep``: run every missing run of a study; exit 1 if runs failed."""
+    """``mresim sweep``: run every missing run of a study; exit 1 if runs failed or were
+    lost."""
     require_extra(args.dask is not None)
     from mresim_phys.sweeps.study import load_study
 
@@ -148,17 +154,23 @@ def sweep_command(args: argparse.Namespace) -> int:
 
 
 def sweep_and_report(study: Study, path: Path, text: str, args: argparse.Namespace) -> int:
-    """Run the sweep, print its summary; 1 if some runs failed."""
+    """Run the sweep, print its summary; 1 if some runs failed or were lost."""
     from mresim_phys.sweeps.runner import SweepOptions, run_sweep
 
     out = args.out or Path("sweeps") / study.name
     options = SweepOptions(
-        out, args.workers, args.dask, getattr(args, "video_for", None), args.verbose, args.quiet
+        out,
+        args.workers,
+        args.dask,
+        getattr(args, "video_for", None),
+        args.verbose,
+        args.quiet,
+        retry_failed=args.retry_failed,
     )
     result = run_sweep(study, path, text, options)
     if not args.quiet:
         print(result.summary())
-    return 1 if result.failed else 0
+    return 0 if result.complete else 1
 
 
 def compare_command(args: argparse.Namespace) -> int:

@@ -10,8 +10,6 @@ computes each metric's figures (``sweeps/stats.py``), draws the figures
 from __future__ import annotations
 
 import difflib
-import json
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -24,10 +22,10 @@ from mresim_phys.sweeps.figures import (
     plot_degradation,
     plot_distribution,
 )
-from mresim_phys.sweeps.manifest import SWEEP_FILE
 from mresim_phys.sweeps.report import Section, write_reports
 from mresim_phys.sweeps.stats import Grouping, arm_groups, compare_metric
-from mresim_phys.sweeps.tables import RUNS_TABLE, STEPS_TABLE
+from mresim_phys.sweeps.sweep_input import Sweep, damaged, need, numbers, read_sweep
+from mresim_phys.sweeps.tables import RUNS_TABLE
 
 DEFAULT_METRICS = (
     "steps_to_explored_90",
@@ -36,45 +34,6 @@ DEFAULT_METRICS = (
     "auc_known_at_base",
     "final_explored",
 )
-
-
-@dataclass
-class Sweep:
-    """A finished sweep's tables and record."""
-
-    folder: Path
-    runs: pd.DataFrame
-    steps: pd.DataFrame
-    info: dict[str, Any] = field(default_factory=dict)
-
-    @property
-    def title(self) -> str:
-        """The study's name and the folder."""
-        return f"{self.info.get('study', self.folder.name)} ({self.folder})"
-
-    @property
-    def axes(self) -> list[str]:
-        """The swept columns (``scenario`` too when the study has several)."""
-        axes = list(self.info.get("axes", []))
-        return (["scenario"] if self.runs["scenario"].nunique() > 1 else []) + axes
-
-
-def read_sweep(folder: Path) -> Sweep:
-    """The sweep in ``folder``; MresimError if it is none (or its tables are damaged)."""
-    folder = Path(folder)
-    paths = [folder / SWEEP_FILE, folder / RUNS_TABLE, folder / STEPS_TABLE]
-    missing = [p.name for p in paths if not p.is_file()]
-    if missing:
-        raise MresimError(
-            f"{folder} is not a finished sweep folder (missing {', '.join(missing)}); give the"
-            " --out folder of `mresim sweep` (re-run the sweep to finish it)."
-        )
-    try:
-        info = json.loads(paths[0].read_text(encoding="utf-8"))
-        runs, steps = pd.read_parquet(paths[1]), pd.read_parquet(paths[2])
-    except (OSError, ValueError) as exc:
-        raise MresimError(f"{folder}: cannot read the sweep's tables ({exc}).") from None
-    return Sweep(folder, runs, steps, info)
 
 
 def resolve_column(name: str, columns: list[str], what: str) -> str:
@@ -141,6 +100,27 @@ def run_compare(
     sweep = read_sweep(folder)
     out = Path(out) if out is not None else sweep.folder / "compare"
     grouping = grouping_for(sweep, by, reference)
+    chosen = choose_metrics(sweep, metrics)
+    try:
+        sections = [Section(m, *compare_metric(sweep.runs, m, grouping)) for m in chosen]
+        figures = plot_curves(sweep.runs, sweep.steps, grouping, out, svg)
+        figures += plot_distribution(sweep.runs, chosen[0], grouping, out, svg)
+        fault = fault_axis(sweep.axes)
+        if fault is not None:
+            figures += plot_degradation(sweep.runs, chosen[0], fault, grouping, out, svg)
+    except (KeyError, ValueError, TypeError, IndexError) as exc:  # values of other kinds
+        detail = " ".join(str(exc).split())[:200]
+        raise damaged(
+            sweep.folder / RUNS_TABLE,
+            f"its values (or steps.parquet's) are not what `mresim sweep` writes"
+            f" ({type(exc).__name__}: {detail})",
+        ) from None
+    pictures = [p for p in figures if p.suffix == ".png"]
+    return [*figures, *write_reports(out, sweep.runs, grouping, sections, pictures, sweep.title)]
+
+
+def choose_metrics(sweep: Sweep, metrics: list[str] | None) -> list[str]:
+    """The ``--metric`` columns (default: those of DEFAULT_METRICS the sweep has), checked."""
     numeric = [
         c
         for c in sweep.runs.columns
@@ -151,11 +131,19 @@ def run_compare(
         for m in metrics or DEFAULT_METRICS
         if metrics or m in numeric
     ]
-    sections = [Section(m, *compare_metric(sweep.runs, m, grouping)) for m in chosen]
-    figures = plot_curves(sweep.runs, sweep.steps, grouping, out, svg)
-    figures += plot_distribution(sweep.runs, chosen[0], grouping, out, svg)
-    fault = fault_axis(sweep.axes)
-    if fault is not None:
-        figures += plot_degradation(sweep.runs, chosen[0], fault, grouping, out, svg)
-    pictures = [p for p in figures if p.suffix == ".png"]
-    return [*figures, *write_reports(out, sweep.runs, grouping, sections, pictures, sweep.title)]
+    path = sweep.folder / RUNS_TABLE
+    if not chosen:
+        raise damaged(
+            path,
+            f"none of the default metrics ({', '.join(DEFAULT_METRICS)}) is a column of numbers;"
+            " name one with --metric",
+        )
+    if any(m.startswith("steps_to_") for m in chosen):
+        need(
+            path,
+            sweep.runs,
+            ["steps"],
+            "steps_to_ metrics need it: a threshold never reached counts as steps + 1",
+        )
+        numbers(path, sweep.runs, ["steps"])
+    return chosen

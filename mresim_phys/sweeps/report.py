@@ -3,8 +3,10 @@
 One table per metric: each arm's done runs, mean, median, 95 % CI, thresholds not reached
 and failed runs (an arm whose runs all failed is there too);
 then the paired differences against the reference arm (pairs, mean and median
-difference, Wilcoxon W and p, rank-biserial effect size); then every failed run with its
-error and log. Numbers are shown with four significant digits.
+difference, Wilcoxon W and p, rank-biserial effect size); then every failed or lost run
+(lost: its worker, disk or connection failed; ``mresim sweep`` runs it again) with its
+error and log. The opening paragraph counts done, failed and lost runs and the runs run
+again after a lost or failed attempt. Numbers are shown with four significant digits.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ import pandas as pd
 
 from mresim_phys.output.files import write_text_atomic
 from mresim_phys.sweeps.stats import ArmFigures, Grouping, Paired
-from mresim_phys.sweeps.worker import FAILED
+from mresim_phys.sweeps.worker import DONE, FAILED, LOST
 
 ARM_HEAD = ["arm", "runs", "mean", "median", "95 % CI", "not reached", "failed"]
 PAIR_HEAD = ["arm", "pairs", "mean diff", "median diff", "Wilcoxon W", "p", "effect size r"]
@@ -77,9 +79,41 @@ def pair_table(section: Section) -> Table:
 
 
 def failed_table(runs: pd.DataFrame) -> Table:
-    """Rows listing every failed run."""
-    failed = runs[runs["status"] == FAILED]
-    return [[r.run_id, r.label, str(r.seed), str(r.error), str(r.log)] for r in failed.itertuples()]
+    """Rows listing every run that is not done (failed or lost)."""
+    failed = runs[runs["status"] != DONE]
+    return [
+        [
+            shown(r.run_id),
+            shown(r.label),
+            shown(r.seed),
+            shown(r.status),
+            shown(r.error),
+            shown(r.log),
+        ]
+        for r in failed.itertuples()
+    ]
+
+
+def shown(value: object) -> str:
+    """A table cell's text ('-' for a missing value).
+
+    >>> shown(None), shown(float("nan")), shown(3)
+    ('-', '-', '3')
+    """
+    return "-" if value is None or value != value else str(value)
+
+
+def counts(runs: pd.DataFrame) -> str:
+    """``12 runs, 10 done, 1 failed, 1 lost`` (and the runs run again)."""
+    status = runs["status"]
+    text = (
+        f"{len(runs)} runs, {int((status == DONE).sum())} done,"
+        f" {int((status == FAILED).sum())} failed, {int((status == LOST).sum())} lost"
+    )
+    if "attempt" in runs.columns:
+        again = int((pd.to_numeric(runs["attempt"], errors="coerce") > 1).sum())
+        text += f" ({again} run again after a lost or failed attempt)" if again else ""
+    return text
 
 
 def markdown_table(head: list[str], rows: Table) -> list[str]:
@@ -108,7 +142,7 @@ def blocks(
         ("h1", f"Sweep {title}"),
         (
             "p",
-            f"{len(runs)} runs, {len(runs) - len(failed)} done, {len(failed)} failed;"
+            f"{counts(runs)};"
             f" arms by {', '.join(grouping.by)};"
             f" reference arm {grouping.label(grouping.reference)};"
             f" pairs share {', '.join(grouping.pair_keys)} (common random numbers).",
@@ -119,9 +153,9 @@ def blocks(
         if section.pairs:
             out += [("p", f"Paired differences (arm - reference) of {section.metric}:")]
             out += [("table", (PAIR_HEAD, pair_table(section)))]
-    out += [("h2", "Failed runs")]
+    out += [("h2", "Failed and lost runs")]
     out += (
-        [("table", (["run", "arm", "seed", "error", "log"], failed))]
+        [("table", (["run", "arm", "seed", "status", "error", "log"], failed))]
         if failed
         else [("p", "None.")]
     )

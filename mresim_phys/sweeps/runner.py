@@ -1,29 +1,33 @@
 """Sweeps (sweeps, the run loop): expand a study, run what is missing, write the tables.
 
-:func:`run_sweep` checks every arm first (nothing runs if one is wrong), opens or resumes
-the sweep folder (``sweeps/manifest.py``), runs the missing runs on a local process pool
-or a Dask cluster (``sweeps/executors.py``) under one progress bar (runs done, failed,
-ETA; with ``verbose`` a line as each run starts and ends), notes each finished run in the
-manifest as it ends, and writes ``runs.parquet`` and ``steps.parquet`` of every finished
-run (``sweeps/tables.py``).
+:func:`run_sweep` checks every arm first (nothing runs if one is wrong), locks the sweep
+folder (``sweeps/lock.py``: one sweep writes a folder at a time), opens or resumes it
+(``sweeps/manifest.py``), runs the missing and lost runs (and the failed ones with
+``retry_failed``) on a local process pool or a Dask cluster (``sweeps/executors.py``)
+under one progress bar (runs done, failed, lost, ETA; with ``verbose`` a line as each run
+starts and ends), notes each finished run in the manifest as it ends, and writes
+``runs.parquet`` and ``steps.parquet`` of every finished run (``sweeps/tables.py``).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import sys
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from tqdm import tqdm
 
-from mresim_phys.sweeps.executors import Backend, execute, make_backend
+from mresim_phys.sweeps.executors import Backend, BackendLost, execute, make_backend
 from mresim_phys.sweeps.expand import RunSpec, expand_runs, fingerprints
-from mresim_phys.sweeps.manifest import Manifest, check_folder, open_sweep
+from mresim_phys.sweeps.lock import SweepLock
+from mresim_phys.sweeps.manifest import Manifest, check_folder, clean_leftovers, open_sweep
 from mresim_phys.sweeps.select import run_names, selector
-from mresim_phys.sweeps.study import Study
+from mresim_phys.sweeps.study import Study, StudyError
 from mresim_phys.sweeps.tables import write_runs, write_steps
-from mresim_phys.sweeps.worker import FAILED, VIDEOS
+from mresim_phys.sweeps.worker import FAILED, LOST, VIDEOS
 
 
 @dataclass(frozen=True)
@@ -37,6 +41,7 @@ class SweepOptions:
     verbose: bool = False
     quiet: bool = False
     backend: Backend | None = None  # a backend made by the caller (it closes it itself)
+    retry_failed: bool = False  # run the runs that failed of their own error again
 
 
 @dataclass
@@ -48,21 +53,45 @@ class SweepResult:
     manifest: Manifest
     ran: int
     backend: str
+    reran: int = 0  # runs run again (lost or failed before)
+    lost_workers: int = 0
+    stopped: str | None = None  # why the sweep stopped before its end
 
     @property
     def failed(self) -> list[dict[str, Any]]:
         """Records of the failed runs."""
         return self.manifest.failed()
 
+    @property
+    def lost(self) -> list[dict[str, Any]]:
+        """Records of the lost runs."""
+        return self.manifest.lost()
+
+    @property
+    def complete(self) -> bool:
+        """Whether every run is done."""
+        return not self.failed and not self.lost and self.stopped is None
+
     def summary(self) -> str:
         """The lines printed at the end."""
-        done = len(self.manifest.records) - len(self.failed)
+        failed, lost = self.failed, self.lost
+        done = len(self.manifest.records) - len(failed) - len(lost)
+        again = f"; re-ran {self.reran}" if self.reran else ""
         lines = [
-            f"sweep {self.folder}: {len(self.runs)} runs, {done} done, {len(self.failed)} failed"
-            f" (ran {self.ran} now on {self.backend}) -> {self.folder / 'runs.parquet'},"
-            f" {self.folder / 'steps.parquet'}"
+            f"sweep {self.folder}: {len(self.runs)} runs, {done} done, {len(failed)} failed,"
+            f" {len(lost)} lost (ran {self.ran} now on {self.backend}{again}) ->"
+            f" {self.folder / 'runs.parquet'}, {self.folder / 'steps.parquet'}"
         ]
-        lines += [f"  failed {r['run_id']}: {r['error']} (log {r['log']})" for r in self.failed]
+        if self.lost_workers:
+            lines.append(f"  lost {self.lost_workers} worker(s) mid-run; their runs are lost")
+        lines += [f"  failed {r['run_id']}: {r.get('error')} (log {r.get('log')})" for r in failed]
+        lines += [f"  lost {r['run_id']}: {r.get('error')}" for r in lost]
+        if self.stopped:
+            lines.append(f"  stopped: {self.stopped}")
+        if lost or self.stopped:
+            lines.append("  run the same command again to run the lost and missing runs")
+        if failed:
+            lines.append("  add --retry-failed to run the failed runs again")
         return "\n".join(lines)
 
 
@@ -83,24 +112,47 @@ def run_sweep(
     """Run every missing run of ``study`` into ``options.out`` and write its tables."""
     runs = with_videos(expand_runs(study, study_path), options.video_for, options.out)
     hashes = fingerprints(runs)
-    check_folder(options.out, study.name, hashes)
+    try:
+        check_folder(options.out, study.name, hashes)
+    except StudyError:
+        SweepLock(options.out).check()  # a sweep that is writing the folder: say so
+        raise
     backend = options.backend or make_backend(options.workers, options.dask)
     try:
-        info = {
-            "study": study.name,
-            "runs": hashes,
-            "axes": list(study.axes),
-            "reference": study.reference,
-        }
-        manifest = open_sweep(options.out, info, runs, study_text)
-        todo = manifest.todo(runs)
-        run_all(todo, runs, manifest, backend, options)
+        options.out.mkdir(parents=True, exist_ok=True)
+        with SweepLock(options.out):
+            return locked_sweep(study, study_text, runs, hashes, backend, options)
     finally:
         if options.backend is None:
             backend.close()
+
+
+def locked_sweep(
+    study: Study,
+    study_text: str,
+    runs: list[RunSpec],
+    hashes: dict[str, str],
+    backend: Backend,
+    options: SweepOptions,
+) -> SweepResult:
+    """The sweep, its folder locked."""
+    info = {"study": study.name, "runs": hashes, "axes": list(study.axes)}
+    info["reference"] = study.reference
+    manifest = open_sweep(options.out, info, runs, study_text, say(options))
+    todo = manifest.todo(runs, options.retry_failed)
+    reran = sum(r.run_id in manifest.records for r in todo)
+    ran, stopped = run_all(todo, runs, manifest, backend, options)
+    clean_leftovers(options.out)  # of workers that died in this sweep
     write_runs(options.out, runs, manifest.records)
     write_steps(options.out, runs, manifest.records)
-    return SweepResult(options.out, runs, manifest, len(todo), backend.name)
+    result = SweepResult(options.out, runs, manifest, ran, backend.name, reran)
+    result.lost_workers, result.stopped = backend.lost_workers, stopped
+    return result
+
+
+def say(options: SweepOptions) -> Callable[[str], None]:
+    """Where the sweep's notes go: stderr (nowhere with ``quiet``)."""
+    return (lambda text: None) if options.quiet else (lambda text: print(text, file=sys.stderr))
 
 
 def run_all(
@@ -109,9 +161,10 @@ def run_all(
     manifest: Manifest,
     backend: Backend,
     options: SweepOptions,
-) -> None:
-    """Run ``todo`` under one progress bar, noting each finished run in ``manifest``."""
-    failed = len(manifest.failed())
+) -> tuple[int, str | None]:
+    """Run ``todo`` under one progress bar, noting each finished run in ``manifest``; how
+    many finished, and why the backend could not go on (None: it ran them all)."""
+    counts = {FAILED: len(manifest.failed()), LOST: len(manifest.lost()), "ran": 0}
     with tqdm(
         total=len(runs),
         initial=len(runs) - len(todo),
@@ -119,19 +172,27 @@ def run_all(
         desc="sweep",
         disable=options.quiet,
     ) as bar:
-        bar.set_postfix(failed=failed)
+        bar.set_postfix(failed=counts[FAILED], lost=counts[LOST])
 
         def started(spec: RunSpec) -> None:
             if options.verbose:
                 bar.write(f"start {spec.run_id}: {spec.label}, seed {spec.seed}")
 
         def finished(spec: RunSpec, record: dict[str, Any]) -> None:
-            nonlocal failed
+            before = manifest.records.get(spec.run_id, {}).get("status")
             manifest.add(record)
-            failed += record["status"] == FAILED
+            counts[FAILED] += (record["status"] == FAILED) - (before == FAILED)
+            counts[LOST] += (record["status"] == LOST) - (before == LOST)
+            counts["ran"] += 1
             bar.update(1)
-            bar.set_postfix(failed=failed)
+            bar.set_postfix(failed=counts[FAILED], lost=counts[LOST])
             if options.verbose:
-                bar.write(f"{record['status']} {spec.run_id} in {record['run_time_s']:.1f} s")
+                took = record.get("run_time_s")
+                time = f" in {took:.1f} s" if isinstance(took, (int, float)) else ""
+                bar.write(f"{record['status']} {spec.run_id}{time}")
 
-        execute(todo, str(options.out), backend, started, finished)
+        try:
+            execute(todo, str(options.out), backend, started, finished)
+        except BackendLost as exc:
+            return counts["ran"], str(exc)
+    return counts["ran"], None

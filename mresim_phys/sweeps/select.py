@@ -43,6 +43,9 @@ def parse_selection(text: str) -> ast.expr:
         tree = ast.parse(text, mode="eval").body
     except SyntaxError as exc:
         raise MresimError(f"--video-for {text!r}: not an expression ({exc.msg}).") from None
+    except (ValueError, RecursionError, MemoryError) as exc:  # null bytes; nested too deep
+        why = str(exc) or "nested too deep"
+        raise MresimError(f"--video-for {text!r}: not an expression ({why}).") from None
     allowed = (
         ast.Compare,
         ast.BoolOp,
@@ -80,7 +83,7 @@ def evaluate(node: ast.expr, names: Mapping[str, Any], text: str) -> Any:
         return [evaluate(e, names, text) for e in node.elts]
     if isinstance(node, ast.UnaryOp):
         value = evaluate(node.operand, names, text)
-        return (not value) if isinstance(node.op, ast.Not) else -value
+        return (not value) if isinstance(node.op, ast.Not) else negative(value, node, text)
     if isinstance(node, ast.BoolOp):
         values = [bool(evaluate(v, names, text)) for v in node.values]
         return all(values) if isinstance(node.op, ast.And) else any(values)
@@ -95,6 +98,17 @@ def evaluate(node: ast.expr, names: Mapping[str, Any], text: str) -> Any:
             return False
         left = right
     return True
+
+
+def negative(value: Any, node: ast.UnaryOp, text: str) -> Any:
+    """``-value``; MresimError unless ``value`` is a number."""
+    if isinstance(value, (int, float)) and not isinstance(value, bool):
+        return -value
+    raise MresimError(
+        f"--video-for {text!r}: {ast.unparse(node)!r} puts a minus before {value!r}, which is"
+        " not a number (a minus applies to numbers only, e.g. 'seed > -1'); compare string"
+        " axes with == or in, e.g. \"strategy == 'frontier'\"."
+    )
 
 
 def selector(text: str | None) -> Callable[[Mapping[str, Any]], bool]:

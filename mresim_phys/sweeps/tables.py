@@ -2,8 +2,9 @@
 
 ``runs.parquet`` has one row per run, failed runs included: ``run_id``, ``arm``,
 ``label``, ``scenario``, one column per axis (named by its path, e.g. ``team.strategy``),
-``seed``, ``status``, ``error`` and ``log`` (failed runs), ``run_time_s`` (the worker's
-wall time), then the run's summary figures (``summary.json`` flattened:
+``seed``, ``status`` (done, failed or lost), ``error`` and ``log`` (failed and lost runs),
+``run_time_s`` (the worker's wall time), ``attempt`` (1, or more for a run run again after
+a lost or failed attempt), then the run's summary figures (``summary.json`` flattened:
 ``steps_to_explored_90`` for ``steps_to_explored["0.9"]``, the ``communication`` block's
 fields, ``failed_robots`` (the
 summary's ``failures``, counted), the robustness figures) and, for paired runs,
@@ -84,6 +85,7 @@ def run_row(sweep: Path, spec: RunSpec, record: dict[str, Any]) -> dict[str, Any
         "error": record.get("error"),
         "log": record.get("log"),
         "run_time_s": record.get("run_time_s"),
+        "attempt": record.get("attempt", 1),
     }
     folder = run_folder(sweep, spec.run_id)
     if record["status"] == DONE:

@@ -3,27 +3,35 @@
 :func:`run_task` builds the run's scenario from its plain data, runs it with the same
 session as ``mresim run`` (``output/session.py``: every file written into a temporary
 sibling folder, renamed into ``<sweep>/runs/<run_id>`` when complete) and returns a small
-result record. A run that raises leaves no run folder; its traceback goes to
-``<sweep>/errors/<run_id>.log`` and the result says ``failed``, so the sweep goes on.
+result record. While it runs, its marker ``<sweep>/inflight/<run_id>.json`` names the
+process (``sweeps/inflight.py``). A run that raises leaves no run folder; its traceback
+goes to ``<sweep>/errors/<run_id>.log`` and the result says ``failed`` (the run's own
+error: a bug in a strategy, say), or ``lost`` when the machine failed it (a full disk:
+``OSError`` or ``output.files.WriteError``; ``MemoryError``): lost runs are run again on
+resume. The sweep goes on either way.
 """
 
 from __future__ import annotations
 
+import contextlib
 import time
 import traceback
 from pathlib import Path
 from typing import Any
 
-from mresim_phys.output.files import write_text_atomic
+from mresim_phys.output.files import WriteError, write_text_atomic
 from mresim_phys.output.session import run_session
 from mresim_phys.output.signals import StopRequest
 from mresim_phys.sim import Simulation
 from mresim_phys.sweeps.expand import RunSpec
+from mresim_phys.sweeps.inflight import in_flight
 
 RUNS = "runs"
 ERRORS = "errors"
 VIDEOS = "videos"
-DONE, FAILED = "done", "failed"
+DONE, FAILED, LOST = "done", "failed", "lost"
+STATUSES = (DONE, FAILED, LOST)
+OUTSIDE = (OSError, WriteError, MemoryError)  # errors of the machine, not of the run
 
 
 def run_folder(sweep: Path, run_id: str) -> Path:
@@ -41,15 +49,26 @@ def run_task(spec: RunSpec, sweep: str) -> dict[str, Any]:
     that fails: its traceback is written to ``sweep``/errors/<run_id>.log)."""
     started = time.perf_counter()
     try:
-        simulate(spec, Path(sweep))
+        with in_flight(Path(sweep), spec.run_id):
+            simulate(spec, Path(sweep))
     except Exception as exc:
-        log = error_log(Path(sweep), spec.run_id)
-        log.parent.mkdir(parents=True, exist_ok=True)
-        text = f"run {spec.run_id} ({spec.label}, seed {spec.seed}) failed:\n"
-        write_text_atomic(log, text + "".join(traceback.format_exception(exc)))
+        status = LOST if isinstance(exc, OUTSIDE) else FAILED
+        log = write_log(spec, Path(sweep), exc)
         message = " ".join(str(exc).split())[:300] or type(exc).__name__
-        return result(spec, FAILED, started, f"{type(exc).__name__}: {message}", str(log))
+        return result(spec, status, started, f"{type(exc).__name__}: {message}", log)
     return result(spec, DONE, started)
+
+
+def write_log(spec: RunSpec, sweep: Path, exc: Exception) -> str | None:
+    """Write the traceback of a failed run; its path (None if it cannot be written: the
+    disk may be full)."""
+    log = error_log(sweep, spec.run_id)
+    text = f"run {spec.run_id} ({spec.label}, seed {spec.seed}) failed:\n"
+    with contextlib.suppress(OSError, WriteError):
+        log.parent.mkdir(parents=True, exist_ok=True)
+        write_text_atomic(log, text + "".join(traceback.format_exception(exc)))
+        return str(log)
+    return None
 
 
 def simulate(spec: RunSpec, sweep: Path) -> None:
