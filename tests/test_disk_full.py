@@ -211,3 +211,33 @@ def test_a_stream_that_cannot_be_committed_never_pretends_it_was(
             pending.commit()
     assert [p.name for p in tmp_path.iterdir()] == ["rows.csv"]
     assert (tmp_path / "rows.csv").read_text() == "earlier\n"
+
+
+def test_a_manifest_line_that_cannot_be_written_leaves_no_half_line(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A full disk while noting a run: a WriteError naming the manifest, the file as it was
+    (no partial line for the next record to join), and the next record read back."""
+    import errno
+    import os as os_module
+
+    from mresim_phys.output.files import WriteError
+    from mresim_phys.sweeps import manifest as manifest_module
+
+    book = manifest_module.Manifest(tmp_path, {})
+    record = {"run_id": "r1", "status": "done", "attempt": 1}
+    book.add(record)
+    before = (tmp_path / manifest_module.MANIFEST).read_bytes()
+    real_fsync = os_module.fsync
+
+    def full(fd: int) -> None:
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(manifest_module.os, "fsync", full)
+    with pytest.raises(WriteError, match=r"manifest.*No space left on device"):
+        book.add({**record, "run_id": "r2"})
+    monkeypatch.setattr(manifest_module.os, "fsync", real_fsync)
+    assert (tmp_path / manifest_module.MANIFEST).read_bytes() == before
+    book.add({**record, "run_id": "r3"})
+    lines = (tmp_path / manifest_module.MANIFEST).read_text().splitlines()
+    assert [json.loads(line)["run_id"] for line in lines] == ["r1", "r3"]

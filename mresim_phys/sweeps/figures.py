@@ -25,6 +25,7 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from mresim_phys.output.files import atomic_path
 from mresim_phys.sweeps.stats import Grouping, arm_groups, metric_values
 
 CURVES = ("explored", "known_at_base")
@@ -34,9 +35,12 @@ def save(fig: Any, out: Path, name: str, svg: bool) -> list[Path]:
     """Write ``fig`` as ``name``.png (and .svg); close it; the paths."""
     out.mkdir(parents=True, exist_ok=True)
     paths = [out / f"{name}.png"] + ([out / f"{name}.svg"] if svg else [])
-    for path in paths:
-        fig.savefig(path, dpi=110, bbox_inches="tight")
-    plt.close(fig)
+    try:
+        for path in paths:  # whole or not at all: a full disk leaves no half a figure
+            with atomic_path(path) as tmp:
+                fig.savefig(tmp, dpi=110, bbox_inches="tight", format=path.suffix[1:])
+    finally:
+        plt.close(fig)
     return paths
 
 

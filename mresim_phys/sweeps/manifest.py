@@ -24,13 +24,14 @@ holding another study, or a run id whose scenario data changed, is refused.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
 
-from mresim_phys.output.files import write_json_atomic, write_text_atomic
+from mresim_phys.output.files import WriteError, cause_of, write_json_atomic, write_text_atomic
 from mresim_phys.output.rundir import remove
 from mresim_phys.sweeps.expand import RunSpec
 from mresim_phys.sweeps.inflight import wait_for_writers, writers
@@ -67,10 +68,19 @@ class Manifest:
             before = self.records.get(record["run_id"])
             record = {**record, "attempt": attempt(before) + 1 if before else 1}
         self.records[record["run_id"]] = record
-        with (self.folder / MANIFEST).open("a", encoding="utf-8") as file:
-            file.write(json.dumps(record) + "\n")
-            file.flush()
-            os.fsync(file.fileno())
+        path = self.folder / MANIFEST
+        try:
+            with path.open("ab", buffering=0) as file:  # unbuffered: one write, or none
+                end = file.seek(0, os.SEEK_END)
+                try:
+                    file.write((json.dumps(record) + "\n").encode("utf-8"))
+                    os.fsync(file.fileno())
+                except OSError:
+                    with contextlib.suppress(OSError):  # no half line for the next to join
+                        file.truncate(end)
+                    raise
+        except OSError as exc:
+            raise WriteError(path, cause_of(exc)) from exc
 
     def failed(self) -> list[dict[str, Any]]:
         """The records of failed runs."""
