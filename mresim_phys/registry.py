@@ -5,12 +5,19 @@ A registry is filled at import time by a class decorator (the class's own
 point group, and resolves ``"package.module:ClassName"`` references for one-off
 user classes. :meth:`Registry.make` builds a plugin from its parameters. Unknown
 names raise :class:`~mresim_phys.errors.UnknownPluginError` listing the close matches.
+
+A registry given its :class:`~mresim_phys.plugin.Family` takes only classes of that
+family: a ``module:Class`` reference or an entry point naming a class of another family
+(a strategy given as a planner) is an :class:`UnknownPluginError` saying which family was
+expected and, when it is one, which family the class belongs to. A ``module:Class``
+reference imports that module, running its code: a file that names one is code.
 """
 
 from __future__ import annotations
 
 import difflib
 import importlib
+import weakref
 from collections.abc import Mapping
 from importlib.metadata import entry_points
 from typing import Any, Generic, TypeVar
@@ -18,29 +25,64 @@ from typing import Any, Generic, TypeVar
 from pydantic import BaseModel
 
 from mresim_phys.errors import UnknownPluginError
+from mresim_phys.plugin import Family
 
 T = TypeVar("T")
+REGISTRIES: weakref.WeakSet[Registry[Any]] = weakref.WeakSet()  # to name a class's family
+
+
+def with_article(noun: str) -> str:
+    """``noun`` after 'a' or 'an'.
+
+    >>> with_article("event"), with_article("planner")
+    ('an event', 'a planner')
+    """
+    return f"{'an' if noun[:1] in 'aeiou' else 'a'} {noun}"
 
 
 class Registry(Generic[T]):
     """Name -> plugin class, with entry-point discovery and ``module:Class`` references."""
 
-    def __init__(self, kind: str, entry_point_group: str) -> None:
+    def __init__(self, kind: str, entry_point_group: str, family: Family | None = None) -> None:
         self.kind = kind
         self.entry_point_group = entry_point_group
+        self.family = family  # None: any class is taken
         self._classes: dict[str, type[T]] = {}
         self._broken: dict[str, str] = {}  # entry points that failed to load: why
         self._discovered = False
+        REGISTRIES.add(self)
 
     def register(self, cls: type[T]) -> type[T]:
-        """Class decorator adding ``cls`` under its ``name``; a duplicate name is an error."""
+        """Class decorator adding ``cls`` under its ``name``; a duplicate name or a class of
+        another family is an error."""
         name = getattr(cls, "name", None)
         if not isinstance(name, str) or not name:
             raise ValueError(f"a {self.kind} class needs a 'name' class attribute (its YAML key)")
         if name in self._classes and self._classes[name] is not cls:
             raise ValueError(f"{self.kind} {name!r} is already registered")
+        problem = self.misfit(cls, name)
+        if problem:
+            raise ValueError(problem)
         self._classes[name] = cls
         return cls
+
+    def fits(self, cls: type) -> bool:
+        """Whether ``cls`` belongs to this registry's family (a registry without one: no)."""
+        return self.family is not None and not self.family.misfits(cls)
+
+    def misfit(self, cls: type, shown: str) -> str:
+        """Why ``cls`` (given as ``shown``) is not of this family, one paragraph ('' if it is)."""
+        problems = self.family.misfits(cls) if self.family is not None else []
+        if self.family is None or not problems:
+            return ""
+        other = next((r.kind for r in REGISTRIES if r is not self and r.fits(cls)), None)
+        kind = with_article(self.kind)
+        which = f"it is {with_article(other)}, not {kind}" if other else f"it is not {kind}"
+        return (
+            f"{self.kind} {shown!r} cannot be used: {which} ({'; '.join(problems)})."
+            f" {kind.capitalize()} class has {self.family.rule()}; see"
+            " docs/writing-a-strategy.md."
+        )
 
     def params_model(self, name: str) -> type[BaseModel] | None:
         """The pydantic ``Params`` model of plugin ``name`` (None if it has none usable)."""
@@ -95,6 +137,9 @@ class Registry(Generic[T]):
             raise UnknownPluginError(
                 self._bad_reference(reference, f"module {module_name!r} has {found} class {attr!r}")
             )
+        problem = self.misfit(cls, reference)
+        if problem:
+            raise UnknownPluginError(problem)
         return cls
 
     def _bad_reference(self, reference: str, problem: str) -> str:
@@ -112,9 +157,22 @@ class Registry(Generic[T]):
             if ep.name in self._classes:
                 continue
             try:
-                self._classes[ep.name] = ep.load()
+                cls = ep.load()
             except Exception as exc:  # a broken third-party package must not stop the rest
                 self._broken[ep.name] = (
                     f"{self.kind} {ep.name!r} (entry point {ep.value!r}) cannot be loaded:"
                     f" {type(exc).__name__}: {exc}. Reinstall or fix the package providing it."
                 )
+                continue
+            problem = self._entry_point_problem(f"{ep.name} (entry point {ep.value})", cls)
+            if problem:
+                self._broken[ep.name] = problem
+            else:
+                self._classes[ep.name] = cls
+
+    def _entry_point_problem(self, shown: str, loaded: Any) -> str:
+        """Why what an entry point loaded is no class of this family ('' if it is one)."""
+        if not isinstance(loaded, type):
+            kind = type(loaded).__name__
+            return f"{self.kind} {shown!r} cannot be used: it is a {kind}, not a class."
+        return self.misfit(loaded, shown)

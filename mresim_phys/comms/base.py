@@ -18,7 +18,7 @@ from typing import ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
-from mresim_phys.plugin import PluginParams
+from mresim_phys.plugin import Family, PluginParams
 from mresim_phys.registry import Registry
 from mresim_phys.types import FloatArray, IntArray
 from mresim_phys.world.space import World
@@ -74,7 +74,9 @@ class CommModel(Protocol):
         ...
 
 
-COMM_MODELS: Registry[CommModel] = Registry("communication model", "mresim_phys.comm_models")
+COMM_MODELS: Registry[CommModel] = Registry(
+    "communication model", "mresim_phys.comm_models", Family(CommModel, CommParams)
+)
 
 
 def pair_distances(positions: FloatArray) -> FloatArray:

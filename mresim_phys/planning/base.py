@@ -29,7 +29,7 @@ from pydantic import Field
 
 from mresim_phys.planning.fields import snap_to_passable
 from mresim_phys.planning.smoothing import smooth_path
-from mresim_phys.plugin import Plugin, PluginParams
+from mresim_phys.plugin import Family, Plugin, PluginParams
 from mresim_phys.registry import Registry
 from mresim_phys.types import BoolGrid, FloatArray
 
@@ -74,7 +74,9 @@ class Planner(Protocol):
         ...
 
 
-PLANNERS: Registry[Planner] = Registry("planner", "mresim_phys.planners")
+PLANNERS: Registry[Planner] = Registry(
+    "planner", "mresim_phys.planners", Family(Planner, PlannerParams)
+)
 
 
 def no_path() -> FloatArray:

@@ -42,7 +42,7 @@ from mresim_phys.planning.fields import (
 )
 from mresim_phys.planning.grid import Box, bbox, remember_window
 from mresim_phys.planning.topological import TopologicalPlanner
-from mresim_phys.plugin import PluginParams
+from mresim_phys.plugin import Family, PluginParams
 from mresim_phys.registry import Registry
 from mresim_phys.types import FREE, BeliefGrid, FloatArray
 
@@ -129,7 +129,9 @@ class Strategy(Protocol):
         ...
 
 
-STRATEGIES: Registry[Strategy] = Registry("strategy", "mresim_phys.strategies")
+STRATEGIES: Registry[Strategy] = Registry(
+    "strategy", "mresim_phys.strategies", Family(Strategy, StrategyParams)
+)
 
 
 @runtime_checkable

@@ -19,7 +19,7 @@ from typing import ClassVar, Literal, Protocol, runtime_checkable
 import numpy as np
 from pydantic import Field, model_validator
 
-from mresim_phys.plugin import Plugin, PluginParams
+from mresim_phys.plugin import Family, Plugin, PluginParams
 from mresim_phys.registry import Registry
 from mresim_phys.types import BoolGrid
 from mresim_phys.world.debris import Crush
@@ -118,7 +118,7 @@ class Event(Protocol):
         ...
 
 
-EVENTS: Registry[Event] = Registry("event", "mresim_phys.events")
+EVENTS: Registry[Event] = Registry("event", "mresim_phys.events", Family(Event, EventParams))
 
 
 class FailParams(EventParams):
