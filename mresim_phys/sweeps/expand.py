@@ -29,7 +29,7 @@ from mresim_phys.scenario.schema import Scenario
 from mresim_phys.sweeps.axes import COUNT, apply_axis, shown
 from mresim_phys.sweeps.failures import with_failures
 from mresim_phys.sweeps.placement import resize_team
-from mresim_phys.sweeps.study import FAILURES, MAX_RUNS, Study, StudyError, flatten_axes
+from mresim_phys.sweeps.study import FAILURES, Study, StudyError, flatten_axes
 
 SWEEP_RENDER = {"plots": False, "video": False}  # a sweep's runs: metrics, summary, run log
 
@@ -140,11 +140,9 @@ def run_id(arm: int, seed: int) -> str:
 
 
 def expand_runs(study: Study, study_path: Path) -> list[RunSpec]:
-    """Every run of the study: arms x seeds, arm by arm; checked before anything runs."""
+    """Every run of the study: arms x seeds, arm by arm; checked before anything runs (the
+    study itself holds at most ``MAX_RUNS`` runs: they were counted when it was read)."""
     arms = expand_arms(study, study_path)
-    total = len(arms) * len(study.seed_list)
-    if total > MAX_RUNS:
-        raise StudyError(f"{study_path}: the study makes {total} runs, more than {MAX_RUNS}.")
     return [make_run(study, arm, seed, study_path) for arm in arms for seed in study.seed_list]
 
 
