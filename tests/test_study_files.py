@@ -197,3 +197,34 @@ def test_zip_may_repeat_a_value_in_different_combinations(tmp_path: Path) -> Non
     axes = {"team.strategy": ["frontier", "frontier"], "team.speed": [2, 3]}
     path = write_study(tmp_path, axes=axes, mode="zip", reference={"team.speed": 3})
     assert load_study(path).run_count == 4
+
+
+@pytest.mark.parametrize(
+    ("flags", "fragment"),
+    [
+        (["--strategies", "frontier,frontier"], "--strategies gives frontier more than once"),
+        (["--strategies", "frontier,random_walk,frontier"], "--strategies gives frontier"),
+        (["--failures", "0,1,1"], "--failures gives 1 more than once"),
+    ],
+)
+def test_robustness_refuses_a_strategy_or_count_given_twice(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], flags: list[str], fragment: str
+) -> None:
+    capsys.readouterr()
+    out = tmp_path / "out"
+    code = main(["robustness", str(QUICKSTART), *flags, "--seeds", "1", "--out", str(out)])
+    err = capsys.readouterr().err
+    assert code == 2 and err.startswith(f"mresim: error: mresim robustness {QUICKSTART}"), err
+    assert fragment in err and not out.exists()
+
+
+def test_robustness_names_its_study_within_the_name_rule(tmp_path: Path) -> None:
+    from mresim_phys.sweeps.robustness import robustness_study
+
+    data = yaml.safe_load(QUICKSTART.read_text(encoding="utf-8"))
+    data["map"]["image"] = str(REPO / "maps" / "small_rooms.png")
+    for name, expected in [("q" * 64, "q" * 53 + "-robustness"), ("../x", "scenario-robustness")]:
+        path = tmp_path / "scenario.yaml"
+        path.write_text(yaml.safe_dump({**data, "name": name}), encoding="utf-8")
+        study, _ = robustness_study(path, ["frontier"], [0, 1], 2)
+        assert study["name"] == expected
