@@ -207,6 +207,8 @@ def render() -> str:
         "",
         *numbers_paragraph(),
         "",
+        *plugins_paragraph(),
+        "",
     ]
     for title, model in SECTIONS:
         head = [f"## {title}", ""] if title else []
@@ -247,6 +249,26 @@ def numbers_paragraph() -> list[str]:
         f"it is over {MAX_YAML_BYTES // 2**20} MB or not a regular file, and before any value",
         f"is built when its aliases (`*name`) would add over {MAX_ALIAS_VALUES:,} values",
         "once expanded (an alias bomb) or an alias refers to a value holding it (a loop).",
+    ]
+
+
+def plugins_paragraph() -> list[str]:
+    """What a ``package.module:Class`` reference does: it imports, so it runs, code."""
+    bases = ", ".join(
+        f"{r.kind}: `{r.family.params.__name__}`"
+        for r in (STRATEGIES, PLANNERS, COMM_MODELS)
+        if r.family is not None
+    )
+    return [
+        "Plugins (`strategy`, `planner`, `communication.model`) are chosen by a registered",
+        "name or by `package.module:ClassName`. **A `module:Class` reference imports that",
+        "module, which runs its code** with your rights, in `mresim run` and `validate`, in",
+        "every worker process of a sweep and on every Dask worker: a scenario or study file",
+        "that names one is code, so run only such files from people you trust. The class",
+        "must be of the field's family: its `Params` subclasses the family's params model",
+        f"({bases})",
+        "and it has the family's methods (docs/writing-a-strategy.md); a class of another",
+        "family (a strategy given as a planner) is refused when the file is read.",
     ]
 
 

@@ -14,7 +14,8 @@ A study file is untrusted input: its ``name`` names the sweep folder, so it foll
 scenario's name rule (it cannot leave ``sweeps/``); its numbers are numbers (no ``true``,
 no ``'20'``); and the runs it makes are counted from the axes alone, before anything is
 built, so a study of a billion runs is refused at once (:data:`MAX_RUNS`). Two arms that
-would be the same run (a value given twice) are refused too.
+would be the same run (a value given twice) are refused too, and so is a ``reference``
+that names no axis or no value of its axis.
 """
 
 from __future__ import annotations
