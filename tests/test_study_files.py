@@ -228,3 +228,50 @@ def test_robustness_names_its_study_within_the_name_rule(tmp_path: Path) -> None
         path.write_text(yaml.safe_dump({**data, "name": name}), encoding="utf-8")
         study, _ = robustness_study(path, ["frontier"], [0, 1], 2)
         assert study["name"] == expected
+
+
+# --- what the study reads --------------------------------------------------------------------
+
+
+def bomb(levels: int = 9) -> str:
+    """A flow list whose aliases expand to 10 ** (levels + 1) values."""
+    parts = ["&a0 [x, x, x, x, x, x, x, x, x, x]"]
+    parts += [f"&a{i} [{', '.join([f'*a{i - 1}'] * 10)}]" for i in range(1, levels + 1)]
+    return f"[{', '.join(parts)}]"
+
+
+@pytest.mark.parametrize(
+    "place", ["axes: {team.speed: BOMB}", "overrides: {x: BOMB}", "seeds: BOMB"]
+)
+def test_an_alias_bomb_in_a_study_is_refused_at_once(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], place: str
+) -> None:
+    lines = {"name": "name: bomb", "scenarios": f"scenarios: [{QUICKSTART}]", "seeds": "seeds: 1"}
+    lines[place.split(":")[0]] = place.replace("BOMB", bomb())
+    path = tmp_path / "study.yaml"
+    path.write_text("\n".join(lines.values()) + "\n", encoding="utf-8")
+    started = time.perf_counter()
+    code, err = sweep(capsys, path, "--out", tmp_path / "out")
+    assert code == 2 and err.startswith(f"mresim: error: Study file {path}"), err
+    assert "aliases" in err and time.perf_counter() - started < 2.0
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_study_override_does_not_hide_a_base_scenarios_own_wrong_value(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    base = yaml.safe_load(QUICKSTART.read_text(encoding="utf-8"))
+    base["map"]["image"] = str(REPO / "maps" / "small_rooms.png")
+    scenario = tmp_path / "base.yaml"
+    scenario.write_text(yaml.safe_dump({**base, "steps": -5}), encoding="utf-8")
+    path = write_study(tmp_path, scenarios=["base.yaml"], steps=10)  # the study caps steps
+    code, err = sweep(capsys, path, "--out", tmp_path / "out")
+    assert code == 2 and refused(err, path, "scenarios:", f"{scenario}", "steps"), err
+
+
+def test_an_override_that_runs_into_a_number_names_the_study_and_overrides(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = write_study(tmp_path, overrides={"team.speed.max": 3})
+    code, err = sweep(capsys, path, "--out", tmp_path / "out")
+    assert code == 2 and refused(err, path, "overrides:", "team.speed is 3, not a section"), err

@@ -22,7 +22,12 @@ from typing import Any
 
 from mresim_phys.build import build_setup
 from mresim_phys.errors import MresimError
-from mresim_phys.scenario.load import resolve_map_path, resolve_mask_paths, validate_scenario
+from mresim_phys.scenario.load import (
+    check_own_values,
+    resolve_map_path,
+    resolve_mask_paths,
+    validate_scenario,
+)
 from mresim_phys.scenario.overrides import apply_overrides
 from mresim_phys.scenario.readers import read_yaml_mapping
 from mresim_phys.scenario.schema import Scenario
@@ -82,16 +87,21 @@ def combinations(study: Study) -> list[dict[str, Any]]:
 
 
 def base_data(study: Study, path: Path, study_path: Path) -> dict[str, Any]:
-    """A base scenario's YAML data with the study's fixed overrides and step cap."""
+    """A base scenario's YAML data with the study's fixed overrides and step cap (the file's
+    own values checked first: an override replaces a wrong value, it does not excuse it)."""
     try:
         data = read_yaml_mapping(path)
+        check_own_values(data, str(path))
     except MresimError as exc:
         raise StudyError(f"{study_path}: scenarios: {exc}") from None
     fixed = {"simulation.threads": 1, **flatten_axes(study.overrides)}  # one core per run
     if study.steps is not None:
         fixed["steps"] = study.steps
-    for key, value in fixed.items():
-        data = apply_axis(data, key, value, str(path))
+    try:
+        for key, value in fixed.items():
+            data = apply_axis(data, key, value, str(path))
+    except MresimError as exc:
+        raise StudyError(f"{study_path}: overrides: {exc}") from None
     return apply_overrides(data, {"render": SWEEP_RENDER}, str(path))
 
 
