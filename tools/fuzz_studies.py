@@ -337,7 +337,10 @@ class Checker:
         self.process = self.context.Process(target=serve, args=(child, str(self.folder)))
         self.process.start()
         child.close()
-        kind, detail = self.conn.recv() if self.conn.poll(600) else ("error", "no answer")
+        try:
+            kind, detail = self.conn.recv() if self.conn.poll(600) else ("error", "no answer")
+        except (EOFError, OSError) as exc:
+            kind, detail = "error", f"it died ({exc!r}, exit {self.process.exitcode})"
         if kind != "ready":
             self.close(kill=True)
             raise RuntimeError(f"the checking process did not start: {detail}")
