@@ -275,3 +275,24 @@ def test_an_override_that_runs_into_a_number_names_the_study_and_overrides(
     path = write_study(tmp_path, overrides={"team.speed.max": 3})
     code, err = sweep(capsys, path, "--out", tmp_path / "out")
     assert code == 2 and refused(err, path, "overrides:", "team.speed is 3, not a section"), err
+
+
+AXIS_MISTAKES: list[Any] = [
+    pytest.param({"robots.A.strategy": [None, "random_walk"]}, "robots[0].strategy", id="null"),
+    pytest.param({"robots.Z.speed": [None]}, "names robot 'Z'", id="null-unknown-robot"),
+    pytest.param(
+        {"team.strategy.params": [None]}, "team.strategy is 'frontier', not a section", id="text"
+    ),
+    pytest.param({"robots.count": [10**9]}, "room for at most", id="a-billion-robots"),
+]
+
+
+@pytest.mark.parametrize(("axes", "fragment"), AXIS_MISTAKES)
+def test_an_axis_that_cannot_apply_is_refused_with_its_arm_at_once(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], axes: dict[str, Any], fragment: str
+) -> None:
+    path = write_study(tmp_path, axes=axes)
+    started = time.perf_counter()
+    code, err = sweep(capsys, path, "--out", tmp_path / "out")
+    assert code == 2 and refused(err, path, "arm 0", fragment), err
+    assert time.perf_counter() - started < 2.0

@@ -40,7 +40,7 @@ def apply_axis(data: dict[str, Any], path: str, value: Any, source: str) -> dict
     if list_at is not None:
         return set_in_list(data, parts, list_at, value, source)
     if value is None:
-        return set_null(data, parts)
+        return set_null(data, parts, path, source)
     return apply_overrides(data, {path: value}, source)
 
 
@@ -57,12 +57,17 @@ def first_list(data: Mapping[str, Any], parts: list[str], path: str, source: str
         if isinstance(node, list):
             return None  # robots by name: the overrides' rules
         if isinstance(node, (bool, int, float)):
-            where = ".".join(parts[: k + 1])
-            raise StudyError(
-                f"{source}: axis {path!r}: {where} is {node!r}, not a section, so it has no"
-                f" field {parts[k + 1]!r}. Check the path against docs/scenario-reference.md."
-            )
+            raise not_a_section(path, parts, k, node, source)
     return None
+
+
+def not_a_section(path: str, parts: list[str], k: int, node: Any, source: str) -> StudyError:
+    """The error of a path running into ``node`` (no section) at ``parts[k]``."""
+    where = ".".join(parts[: k + 1])
+    return StudyError(
+        f"{source}: axis {path!r}: {where} is {node!r}, not a section, so it has no"
+        f" field {parts[k + 1]!r}. Check the path against docs/scenario-reference.md."
+    )
 
 
 def schema_list(parts: list[str]) -> int | None:
@@ -107,21 +112,38 @@ def set_in_list(
     return result
 
 
-def set_null(data: dict[str, Any], parts: list[str]) -> dict[str, Any]:
+def set_null(data: dict[str, Any], parts: list[str], path: str, source: str) -> dict[str, Any]:
     """``data`` with the field at ``parts`` set to null (and, for a team field, the robots'
-    own values of it removed, as a team override beats them)."""
+    own values of it removed, as a team override beats them; ``robots.<name>.<field>``: that
+    robot's field)."""
     result = copy.deepcopy(data)
-    node = result
-    for part in parts[:-1]:
-        child = node.get(part)
+    node, start = result, 0
+    if parts[0] == "robots" and len(parts) > 2 and isinstance(result.get("robots"), list):
+        node, start = robot_named(result["robots"], parts[1], path, source), 2
+    for k in range(start, len(parts) - 1):
+        child = node.get(parts[k])
+        if child is None:
+            child = node[parts[k]] = {}
         if not isinstance(child, dict):
-            child = node[part] = {} if child is None else child
+            raise not_a_section(path, parts, k, child, source)
         node = child
     node[parts[-1]] = None
     if parts[0] == "team" and isinstance(result.get("robots"), list):
         for robot in result["robots"]:
             drop_path(robot, parts[1:])
     return result
+
+
+def robot_named(robots: list[Any], name: str, path: str, source: str) -> dict[str, Any]:
+    """The robot called ``name``; StudyError naming the team if there is none."""
+    found = [r for r in robots if isinstance(r, dict) and r.get("name") == name]
+    if not found:
+        names = [r.get("name") for r in robots if isinstance(r, dict)]
+        raise StudyError(
+            f"{source}: axis {path!r} names robot {name!r}, which the scenario does not have;"
+            f" its robots are {names}."
+        )
+    return found[0]
 
 
 def drop_path(node: Any, parts: list[str]) -> None:

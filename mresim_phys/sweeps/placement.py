@@ -65,6 +65,12 @@ def free_names(used: set[str], wanted: int) -> list[str]:
 def new_starts(scenario: Scenario, taken: list[Point], wanted: int, source: str) -> list[Point]:
     """``wanted`` starts by the bench rule beside the first robot, apart from ``taken``."""
     occupied = load_map(scenario.map).occupied
+    rows, cols = (-(-n // SPACING) for n in occupied.shape)  # a start per SPACING square
+    if len(taken) + wanted > rows * cols:
+        raise StudyError(
+            f"{source}: robots.count: the map has room for at most {rows * cols - len(taken)}"
+            f" more robots {SPACING} cells apart, not {wanted}; sweep smaller teams."
+        )
     world = World(occupied, [])
     radius = max([scenario.team.radius, *(r.radius for r in scenario.robots)])
     origin = taken[0] if taken else point(scenario.base_station.position)
