@@ -154,7 +154,11 @@ def study_mutate(draw: Callable[..., Any], data: dict[str, Any]) -> None:
     elif op == "twice":
         twice(draw, data, axes)
     elif op == "file":
-        data["scenarios"] = [*list(data.get("scenarios") or []), draw(st.sampled_from(FILES))]
+        given = data.get("scenarios")
+        data["scenarios"] = [
+            *(given if isinstance(given, list) else []),
+            draw(st.sampled_from(FILES)),
+        ]
     else:
         axes[draw(st.sampled_from(["team.speed", "nope.field", "failures", "robots.count"]))] = (
             draw(scenarios.VALUES)
