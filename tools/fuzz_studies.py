@@ -236,8 +236,9 @@ def alias_bomb(draw: Callable[..., Any], data: dict[str, Any]) -> None:
 @st.composite
 def study_texts(draw: Callable[..., Any]) -> str:
     """A study file's text: a base study, a few changes, sometimes a text change."""
-    data = copy.deepcopy(draw(st.sampled_from(BASES)))
+    data: dict[str, Any] = draw(st.sampled_from(BASES))
     for _ in range(draw(st.integers(1, 3))):
+        data = copy.deepcopy(data)  # never change a base or a value the lists hold
         if draw(st.integers(0, 2)):
             study_mutate(draw, data)
         elif data:
