@@ -38,7 +38,7 @@ def test_generated_studies_are_accepted_or_refused_with_a_message(tmp_path: Path
     counts = tally.counts
     assert not tally.crashes, "\n\n".join(f"{text}\n{detail}" for text, detail in tally.crashes)
     assert sum(counts.values()) >= GENERATED
-    assert counts["accepted"] >= 20 and counts["rejected"] >= 100, counts
+    assert counts["accepted"] >= 10 and counts["rejected"] >= 100, counts  # both paths
 
 
 def test_the_judge_counts_an_exception_as_a_crash(
