@@ -61,6 +61,7 @@ def check_own_values(data: dict[str, Any], source: str) -> None:
     problems here (an override or a default may give them); an event the file schedules
     after its own step cap would never happen, and is refused.
     """
+    refresh_event_union()  # events registered in code since the last scenario was read
     try:
         scenario = Scenario.model_validate(data)
     except ValidationError as exc:
