@@ -2,13 +2,13 @@
 
 from __future__ import annotations
 
-import importlib.util
 import re
 import sys
 from collections.abc import Callable
 from pathlib import Path
 
 import pytest
+from tool_modules import load_tool
 
 from mresim_phys import Simulation
 
@@ -42,10 +42,7 @@ def test_strategy_example_runs(
 
 
 def test_scenario_reference_is_current() -> None:
-    spec = importlib.util.spec_from_file_location("ref", ROOT / "tools/make_scenario_reference.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
+    module = load_tool("make_scenario_reference")
     committed = (ROOT / "docs/scenario-reference.md").read_text(encoding="utf-8")
     assert committed == module.render(), "run: python tools/make_scenario_reference.py"
 

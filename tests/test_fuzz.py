@@ -10,32 +10,18 @@ step cap, a base station in a wall, robots overlapping at their starts.
 from __future__ import annotations
 
 import copy
-import importlib.util
-import sys
 from collections.abc import Callable
 from pathlib import Path
-from types import ModuleType
 from typing import Any
 
 import pytest
 import yaml
+from tool_modules import load_tool
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def load_tool() -> ModuleType:
-    """tools/fuzz_scenarios.py as a module (it is a script, not part of the package)."""
-    spec = importlib.util.spec_from_file_location(
-        "fuzz_scenarios", ROOT / "tools/fuzz_scenarios.py"
-    )
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
-
-
-fuzz = load_tool()
+fuzz = load_tool("fuzz_scenarios")
 GENERATED = 300  # files generated in the suite; tools/fuzz_scenarios.py runs more
 
 

@@ -8,28 +8,16 @@ pinned one by one in ``tests/test_study_files.py`` and ``tests/test_plugins_fami
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 from pathlib import Path
-from types import ModuleType
 
 import pytest
 import yaml
+from tool_modules import load_tool
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def load_tool() -> ModuleType:
-    """tools/fuzz_studies.py as a module (it is a script, not part of the package)."""
-    spec = importlib.util.spec_from_file_location("fuzz_studies", ROOT / "tools/fuzz_studies.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses and the child process look it up
-    spec.loader.exec_module(module)
-    return module
-
-
-fuzz = load_tool()
+fuzz = load_tool("fuzz_studies")
 GENERATED = 250  # files generated in the suite; tools/fuzz_studies.py runs more
 
 

@@ -10,25 +10,14 @@ every request naming another site.
 
 from __future__ import annotations
 
-import importlib.util
-import sys
 from pathlib import Path
-from types import ModuleType
+
+from tool_modules import load_tool
 
 ROOT = Path(__file__).resolve().parent.parent
 
 
-def load_tool() -> ModuleType:
-    """tools/fuzz_viewer.py as a module (it is a script, not part of the package)."""
-    spec = importlib.util.spec_from_file_location("fuzz_viewer", ROOT / "tools/fuzz_viewer.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up
-    spec.loader.exec_module(module)
-    return module
-
-
-fuzz = load_tool()
+fuzz = load_tool("fuzz_viewer")
 GENERATED = 300  # cases in the suite (about 20 s); tools/fuzz_viewer.py runs more
 
 

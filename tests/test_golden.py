@@ -9,20 +9,16 @@ reaches 90 % explored within its step cap.
 
 from __future__ import annotations
 
-import importlib.util
 import json
 from pathlib import Path
 
 import pytest
 import yaml
+from tool_modules import load_tool
 
 from mresim_phys.cli import main
 
-TOOL = Path(__file__).parent.parent / "tools" / "golden.py"
-spec = importlib.util.spec_from_file_location("golden", TOOL)
-assert spec is not None and spec.loader is not None
-golden = importlib.util.module_from_spec(spec)
-spec.loader.exec_module(golden)
+golden = load_tool("golden")
 
 
 def test_every_shipped_scenario_has_golden_results() -> None:

@@ -6,29 +6,23 @@ here one of each (the trial code is the tool's).
 
 from __future__ import annotations
 
-import importlib.util
 import json
 import os
 import signal
 import subprocess
-import sys
 import threading
 import time
 from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import pytest
+from tool_modules import load_tool
 
 from mresim_phys.output.session import run_session
 from mresim_phys.output.signals import StopRequest, stop_on_signals
 from mresim_phys.sim import Simulation
 
-TOOL = Path(__file__).parent.parent / "tools" / "interrupt_trials.py"
-spec = importlib.util.spec_from_file_location("interrupt_trials", TOOL)
-assert spec is not None and spec.loader is not None
-trials = importlib.util.module_from_spec(spec)
-sys.modules[spec.name] = trials  # its dataclasses look their module up
-spec.loader.exec_module(trials)
+trials = load_tool("interrupt_trials")
 
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 

@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-import importlib.util
 import math
-import sys
 from pathlib import Path
 from types import ModuleType
 
@@ -16,6 +14,7 @@ from hypothesis import strategies as st
 from hypothesis.extra.numpy import arrays
 from numpy.typing import NDArray
 from scipy import ndimage
+from tool_modules import load_tool
 
 from mresim_phys.errors import MapError
 from mresim_phys.scenario.readers import load_map
@@ -296,12 +295,7 @@ REPO = Path(__file__).resolve().parent.parent
 @pytest.fixture(scope="module")
 def make_maps() -> ModuleType:
     """The map generator script, imported from ``tools/make_maps.py``."""
-    spec = importlib.util.spec_from_file_location("make_maps", REPO / "tools" / "make_maps.py")
-    assert spec is not None and spec.loader is not None
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module  # dataclasses look their module up while executing
-    spec.loader.exec_module(module)
-    return module
+    return load_tool("make_maps")
 
 
 def generated_truth(make_maps: ModuleType, name: str) -> Grid:
