@@ -256,7 +256,8 @@ async def page_session(port: int, sent: list[str | bytes]) -> Session:
             for message in sent:
                 await (ws.send_bytes if isinstance(message, bytes) else ws.send_str)(message)
             await ws.send_json({"op": "frame", "n": SENTINEL, "layers": {}, "known": 0})
-        except ConnectionResetError:  # the server closed the socket while we still sent
+        except ConnectionError:  # the server closed the socket while we still sent (reset,
+            # or aiohttp's 'Connection lost' when the transport is already gone)
             seen.close_code = ws.close_code or 1006
             return seen
         while not seen.answered:
