@@ -10,10 +10,12 @@ signals over for its own clean stop, and gives this handler back afterwards.
 
 from __future__ import annotations
 
+import os
 import signal
 import sys
 from collections.abc import Sequence
 from types import FrameType
+from typing import NoReturn
 
 
 class Terminated(BaseException):
@@ -33,7 +35,11 @@ def main(argv: Sequence[str] | None = None) -> int:
         signal.signal(signal.SIGXFSZ, signal.SIG_IGN)  # instead of killing with a core dump
     try:
         from mresim_phys.cli import main as cli_main
-
+    except KeyboardInterrupt:
+        _leave("interrupted", 128 + signal.SIGINT)
+    except Terminated:
+        _leave("terminated (SIGTERM)", 128 + signal.SIGTERM)
+    try:
         return cli_main(argv)
     except KeyboardInterrupt:
         print("mresim: interrupted", file=sys.stderr)
@@ -41,6 +47,15 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Terminated:
         print("mresim: terminated (SIGTERM)", file=sys.stderr)
         return 128 + signal.SIGTERM
+
+
+def _leave(what: str, status: int) -> NoReturn:
+    """End the process at once while it is still importing: nothing is written yet, and a
+    KeyboardInterrupt raised inside an extension's import leaves the interpreter marked to
+    kill itself with SIGINT at exit (status -2 instead of 130), so it must not exit normally."""
+    print(f"mresim: {what} while starting", file=sys.stderr, flush=True)
+    sys.stdout.flush()
+    os._exit(status)
 
 
 if __name__ == "__main__":
