@@ -114,6 +114,11 @@ def make_parser() -> argparse.ArgumentParser:
         " folder, or to the current folder without --out)",
     )
     team.add_argument("--strategy", default="frontier", help="the team's strategy (frontier)")
+    team.add_argument(
+        "--comm",
+        default="path_loss",
+        help="the communication model (path_loss: the original's PropModel1, its default)",
+    )
     team.add_argument("--out", type=Path, help="where to write the YAML (default: stdout)")
     validate = commands.add_parser("validate", help="check a scenario without running it")
     validate.add_argument("scenario", type=Path, help="scenario YAML file")
@@ -313,7 +318,7 @@ def validate_command(args: argparse.Namespace) -> int:
 
 def import_team_command(args: argparse.Namespace) -> int:
     """``mresim import-team``: the original's team file as a scenario YAML, validated."""
-    data = read_team_file(args.team_file, args.map, args.strategy)
+    data = read_team_file(args.team_file, args.map, args.strategy, args.comm)
     text = yaml.safe_dump(data, sort_keys=False, default_flow_style=None)
     source = str(args.team_file)
     folder = (args.out.parent if args.out is not None else Path.cwd()).resolve()

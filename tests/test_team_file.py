@@ -43,11 +43,12 @@ def test_a_role_based_team_file_keeps_its_roles_parents_and_poses(tmp_path: Path
     assert (robots["Explorer1"].role, robots["Explorer1"].parent) == ("explorer", "Relay1")
     assert (robots["Relay1"].role, robots["Relay1"].parent) == ("relay", "base")
     assert robots["Relay1"].children == ("Explorer1",)
-    assert robots["Explorer1"].position == (30.0, 20.0)
+    assert robots["Explorer1"].position == (30.5, 20.5)  # the centre of pixel (30, 20)
     assert robots["Explorer1"].heading == pytest.approx(3.14159, abs=1e-5)
-    assert sim.base.position == (8.0, 30.0) and sim.base.comm_range == 20
+    assert sim.base.position == (8.5, 30.5) and sim.base.comm_range == 20
     data = yaml.safe_load(out.read_text())
     assert data["team"]["speed"] == 10 and data["robots"][0]["sensor"]["range"] == 30
+    assert sim.scenario.communication.model == "path_loss"  # the original's PropModel1
 
 
 def test_a_greedy_team_file_has_no_hierarchy(tmp_path: Path) -> None:

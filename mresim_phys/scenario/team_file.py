@@ -10,8 +10,9 @@ one robot per line with its start, heading, laser range and comm range, its role
 its parent where the team has a hierarchy (a relay's parent, and the parent of an
 explorer paired with a relay; the greedy files' "parent 1" of every explorer is not a
 hierarchy and is dropped). The original's other settings become the team defaults:
-speed 10, laser 180 degrees / 181 rays, and the body our comparisons use (radius 0.5,
-wall margin 0.5; ``docs/differences-from-original.md``).
+speed 10, laser 180 degrees / 181 rays, the body our comparisons use (radius 0.5,
+wall margin 0.5; ``docs/differences-from-original.md``) and its radio model, PropModel1
+(``path_loss`` with its defaults). Agents stand on the centres of the original's pixels.
 """
 
 from __future__ import annotations
@@ -24,6 +25,7 @@ from mresim_phys.errors import MresimError
 from mresim_phys.scenario.yamlfile import require_file
 
 COLUMNS = 11
+ORIGINAL_COMM = "path_loss"  # PropModel1, the default of the original's lastSimulatorConfig
 MAX_TEAM_BYTES = 1_000_000  # ~10,000 agents
 ROLES = {"basestation": "base", "explorer": "explorer", "relay": "relay"}
 ORIGINAL_TEAM: dict[str, Any] = {
@@ -34,7 +36,9 @@ ORIGINAL_TEAM: dict[str, Any] = {
 }
 
 
-def read_team_file(path: Path, map_image: str, strategy: str = "frontier") -> dict[str, Any]:
+def read_team_file(
+    path: Path, map_image: str, strategy: str = "frontier", comm: str = ORIGINAL_COMM
+) -> dict[str, Any]:
     """The scenario mapping of the team in ``path`` on ``map_image``; MresimError naming the
     file and line when a line does not follow the original's format."""
     require_file(path, "Team file", MresimError)
@@ -55,7 +59,7 @@ def read_team_file(path: Path, map_image: str, strategy: str = "frontier") -> di
             f"{path}: the first agent line must be the base station (role BaseStation), as in"
             " the original's team files"
         )
-    return scenario_of(path, agents, map_image, strategy)
+    return scenario_of(path, agents, map_image, strategy, comm)
 
 
 def parse_line(path: Path, number: int, line: str) -> dict[str, Any] | None:
@@ -90,8 +94,14 @@ def parse_line(path: Path, number: int, line: str) -> dict[str, Any] | None:
             "sense": sense, "comm": comm, "role": role, "parent": parent}  # fmt: skip
 
 
+def cell_centre(agent: dict[str, Any]) -> list[float]:
+    """The centre of the pixel the original places the agent on: pixel (x, y) spans
+    [x, x + 1) x [y, y + 1) in our continuous frame, as scenarios 11-13 place them."""
+    return [agent["x"] + 0.5, agent["y"] + 0.5]
+
+
 def scenario_of(
-    path: Path, agents: list[dict[str, Any]], map_image: str, strategy: str
+    path: Path, agents: list[dict[str, Any]], map_image: str, strategy: str, comm: str
 ) -> dict[str, Any]:
     """The scenario mapping of parsed agents (the base first)."""
     base, robots = agents[0], agents[1:]
@@ -101,7 +111,7 @@ def scenario_of(
     for robot in robots:
         entry: dict[str, Any] = {
             "name": robot["name"],
-            "start": [robot["x"], robot["y"]],
+            "start": cell_centre(robot),
             "heading_deg": round(math.degrees(robot["heading"]), 6),
             "sensor": {"range": robot["sense"]},
             "comm_range": robot["comm"],
@@ -113,7 +123,8 @@ def scenario_of(
     return {
         "name": path.stem.replace(" ", "_")[:64] or "team",
         "map": {"image": map_image},
-        "base_station": {"position": [base["x"], base["y"]], "comm_range": base["comm"]},
+        "base_station": {"position": cell_centre(base), "comm_range": base["comm"]},
         "team": {**ORIGINAL_TEAM, "strategy": strategy},
         "robots": entries,
+        "communication": {"model": comm},
     }
