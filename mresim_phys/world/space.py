@@ -86,6 +86,11 @@ __all__ = [
 ]
 
 NO_CIRCLES = np.zeros((0, 3))
+# cells: a moving circle that only grazes a shape (passes it at exactly its radius, as a
+# path along cells next to a wall corner does when radius + wall_margin < radius + 0.71)
+# touches without entering it; such a move is not blocked, or a robot would bump at the
+# same corner on every replan and never move again
+GRAZE = 1e-6
 
 Point = tuple[float, float]
 
@@ -405,7 +410,7 @@ class World:
         y0, y1 = min(start[1], end[1]) - radius, max(start[1], end[1]) + radius
         if box_clear(grid, circles, x0, y0, x1, y1):  # no shape near: Chipmunk finds none
             return None
-        hit = self.first_hit(start, end, radius, shape_filter)
+        hit = self.first_hit(start, end, max(radius - GRAZE, 0.0), shape_filter)
         if hit is None:
             return None
         dx, dy = end[0] - start[0], end[1] - start[1]
