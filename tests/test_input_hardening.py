@@ -215,3 +215,13 @@ def test_a_video_path_in_a_missing_folder_is_refused_and_no_folder_made(
     path = scenario(tmp_path, render={"video": str(video)})
     refused(args, capsys, "render.video")
     assert not (tmp_path / "nowhere").exists()
+
+
+def test_a_replay_video_in_a_missing_folder_is_refused_and_no_folder_made(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    run = tmp_path / "run"
+    assert main(["run", str(scenario(tmp_path)), "--steps", "2", "--out", str(run), "--quiet"]) == 0
+    video = tmp_path / "nowhere" / "x.mp4"
+    refused(["replay", str(run), "--video", str(video)], capsys, "render.video", "nowhere")
+    assert not (tmp_path / "nowhere").exists()

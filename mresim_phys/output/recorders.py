@@ -25,7 +25,12 @@ from mresim_phys.errors import ScenarioError
 from mresim_phys.metrics import CommTotals, Milestones, StepRecord, csv_header
 from mresim_phys.output.files import PendingFile, write_json_atomic, write_text_atomic
 from mresim_phys.output.logwriter import RunLogWriter
-from mresim_phys.output.video import VideoRecorder, default_video_path, write_png
+from mresim_phys.output.video import (
+    VideoRecorder,
+    chosen_video_path,
+    default_video_path,
+    write_png,
+)
 from mresim_phys.render import LayerSpec, Renderer, frame_scale, parse_layers
 from mresim_phys.scenario.schema import RenderSpec, Scenario
 from mresim_phys.snapshot import Snapshot
@@ -269,7 +274,7 @@ def video_path(spec: RenderSpec, name: str, seed: int) -> Path | None:
     """Where a run's video goes, or None for no video."""
     if spec.video is False:
         return None
-    return default_video_path(name, seed) if spec.video is True else Path(str(spec.video))
+    return default_video_path(name, seed) if spec.video is True else chosen_video_path(spec.video)
 
 
 def run_frames(sim: Simulation, out_dir: Path) -> FrameRecorder | None:

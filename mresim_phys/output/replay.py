@@ -26,6 +26,7 @@ from mresim_phys.metrics import csv_header
 from mresim_phys.output.files import atomic_path
 from mresim_phys.output.recorders import checked_layers, frame_recorder, given
 from mresim_phys.output.runlog import Replay, RunLog, recompute_metrics
+from mresim_phys.output.video import chosen_video_path
 from mresim_phys.scenario.load import validate_scenario
 from mresim_phys.scenario.readers import read_yaml_mapping
 from mresim_phys.scenario.schema import RenderSpec, Scenario
@@ -70,7 +71,7 @@ def replay_video_path(spec: RenderSpec, log: RunLog) -> Path | None:
         return None
     if spec.video is True:
         return Path("videos") / f"{log.meta['name']}-seed{log.meta['seed']}-replay.mp4"
-    return Path(str(spec.video))
+    return chosen_video_path(spec.video)
 
 
 def run_scenario(run_dir: Path) -> Scenario | None:

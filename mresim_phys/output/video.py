@@ -48,6 +48,19 @@ def default_video_path(name: str, seed: int) -> Path:
     return Path("videos") / f"{name}-seed{seed}.mp4"
 
 
+def chosen_video_path(value: str) -> Path:
+    """A video path the user gave (``render.video``, ``--video``): its folder must exist.
+    mresim creates only its own default folder, never one a path names (a typo such as
+    ``/nonexistent_dir/x.mp4`` would make a folder at the top of the file system)."""
+    path = Path(value).expanduser()
+    if not path.parent.is_dir():
+        raise MresimError(
+            f"render.video (or --video): the folder {path.parent} of {value} does not exist or"
+            " is not a folder. Create it first, or give a path in an existing folder."
+        )
+    return path
+
+
 class _QuietOpenCV:
     """OpenCV logs errors only while any recorder is open; its level comes back after."""
 
