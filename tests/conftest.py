@@ -70,3 +70,15 @@ def scenario_file(tmp_path: Path) -> Callable[..., Path]:
         return write_scenario(tmp_path, **changes)
 
     return make
+
+
+QUICKSTART = Path(__file__).resolve().parent.parent / "scenarios" / "01_quickstart.yaml"
+
+
+def write_study(folder: Path, **fields: Any) -> Path:
+    """A study of the quickstart scenario (2 seeds, 8 steps a run unless ``fields`` say
+    otherwise) written into ``folder`` as study.yaml."""
+    data = {"name": "t", "scenarios": [str(QUICKSTART)], "seeds": 2, "steps": 8, **fields}
+    path = folder / "study.yaml"
+    path.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
+    return path

@@ -2,11 +2,11 @@
 
 from __future__ import annotations
 
+from functools import partial
 from pathlib import Path
-from typing import Any
 
 import pytest
-import yaml
+from conftest import write_study
 
 from mresim_phys.cli import main
 from mresim_phys.errors import MresimError
@@ -23,12 +23,7 @@ REPO = Path(__file__).resolve().parent.parent
 QUICKSTART = REPO / "scenarios" / "01_quickstart.yaml"
 
 
-def write_study(folder: Path, **fields: Any) -> Path:
-    """A study of the quickstart scenario with ``fields``, written into ``folder``."""
-    data = {"name": "t", "scenarios": [str(QUICKSTART)], "seeds": 2, "steps": 10, **fields}
-    path = folder / "study.yaml"
-    path.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
-    return path
+write_study = partial(write_study, steps=10)  # runs of 10 steps here
 
 
 def sweep_cli(capsys: pytest.CaptureFixture[str], *args: str | Path) -> tuple[int, str]:

@@ -9,10 +9,9 @@ import socket
 import subprocess
 import sys
 from pathlib import Path
-from typing import Any
 
 import pytest
-import yaml
+from conftest import write_study
 
 from mresim_phys.cli import main
 from mresim_phys.sweeps import lock as lock_module
@@ -20,14 +19,6 @@ from mresim_phys.sweeps.lock import SweepLock, SweepLocked
 
 REPO = Path(__file__).resolve().parent.parent
 QUICKSTART = REPO / "scenarios" / "01_quickstart.yaml"
-
-
-def write_study(folder: Path, **fields: Any) -> Path:
-    """A study of the quickstart scenario (8 steps a run) written into ``folder``."""
-    data = {"name": "t", "scenarios": [str(QUICKSTART)], "seeds": 2, "steps": 8, **fields}
-    path = folder / "study.yaml"
-    path.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
-    return path
 
 
 def dead_pid() -> int:

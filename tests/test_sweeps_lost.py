@@ -13,7 +13,7 @@ from typing import Any
 
 import pandas as pd
 import pytest
-import yaml
+from conftest import write_study
 
 from mresim_phys.cli import main
 from mresim_phys.output.files import WriteError
@@ -25,14 +25,6 @@ from mresim_phys.sweeps.study import load_study
 
 REPO = Path(__file__).resolve().parent.parent
 QUICKSTART = REPO / "scenarios" / "01_quickstart.yaml"
-
-
-def write_study(folder: Path, **fields: Any) -> Path:
-    """A study of the quickstart scenario (8 steps a run) written into ``folder``."""
-    data = {"name": "t", "scenarios": [str(QUICKSTART)], "seeds": 2, "steps": 8, **fields}
-    path = folder / "study.yaml"
-    path.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
-    return path
 
 
 def manifest_lines(out: Path) -> list[dict[str, Any]]:
