@@ -189,6 +189,12 @@ JSON_VALUES = st.recursive(
 SENTINEL = 3  # the step of the frame request that closes a session (never drawn)
 KNOWN = {"info", "frame", "error", "reload"}  # the types of the server's messages
 MAX_FRAME = 1 << 20  # bytes: a larger message closes its socket (protocol.MAX_FRAME)
+# sessions every run starts with, whatever hypothesis draws: a message past the limit,
+# alone and after a valid one (the socket must close with 1009, and a new page be served)
+ANCHORS: list[list[str | bytes]] = [
+    ["x" * (MAX_FRAME + 1)],
+    ['{"op": "play"}', b"\x00" * (MAX_FRAME + 1)],
+]
 NUMBERS = st.one_of(st.sampled_from([0, 1, 5, 11, 12, 10**30, -1, 2**63]), st.integers(0, 40))
 NUMBERS = NUMBERS.filter(lambda n: n != SENTINEL)
 CONTROLS = ["play", "pause", "step", "stop", "speed", "frame", "jump", ""]
@@ -427,6 +433,9 @@ def fuzz(count: int, folder: Path, seed: int | None = 0) -> Tally:
             if cases_in(tally.counts) % CHECK_EVERY == 0:
                 still_serving(tally, server)
 
+        for too_big in ANCHORS:  # every run meets the socket's limit at least once
+            tally.counts["ws cases"] += 1
+            judge_session(tally, port, too_big)
         (hypothesis_seed(seed)(one) if seed is not None else one)()
         still_serving(tally, server)
     for error in errors.seen:
