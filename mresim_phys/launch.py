@@ -40,10 +40,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Terminated:
         _leave("terminated (SIGTERM)", 128 + signal.SIGTERM)
     try:
-        return cli_main(argv)
-    except KeyboardInterrupt:
-        print("mresim: interrupted", file=sys.stderr)
-        return 128 + signal.SIGINT
+        return cli_main(argv)  # which answers KeyboardInterrupt itself
     except Terminated:
         print("mresim: terminated (SIGTERM)", file=sys.stderr)
         return 128 + signal.SIGTERM

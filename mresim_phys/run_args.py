@@ -12,9 +12,10 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeVar
 
-from mresim_phys.errors import ScenarioError
+from mresim_phys.errors import MresimError, ScenarioError
 from mresim_phys.output.plots import plot_runs, plotting_available
 from mresim_phys.output.session import Outcome
+from mresim_phys.output.video import chosen_video_path
 from mresim_phys.scenario.schema import Scenario
 from mresim_phys.sim import Simulation
 
@@ -39,17 +40,13 @@ def render_overrides(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def check_video_folder(scenario: Scenario, source: Path) -> None:
-    """An explicit video path's folder must exist: mresim creates only its default folder
-    (``videos/``), never one a path names (``/nonexistent_dir/x.mp4`` made a folder at /)."""
-    video = scenario.render.video
-    if not isinstance(video, str):
-        return
-    folder = Path(video).expanduser().parent
-    if not folder.is_dir():
-        raise ScenarioError(
-            f"{source}: render.video (or --video): the folder {folder} of {video} does not exist"
-            " or is not a folder. Create it first, or give a path in an existing folder."
-        )
+    """Refuse, before the run starts and naming the scenario file, a video path whose folder
+    does not exist (the rule of :func:`~mresim_phys.output.video.chosen_video_path`)."""
+    if isinstance(scenario.render.video, str):
+        try:
+            chosen_video_path(scenario.render.video)
+        except MresimError as exc:
+            raise ScenarioError(f"{source}: {exc}") from None
 
 
 def simulation_overrides(args: argparse.Namespace) -> dict[str, Any]:

@@ -354,6 +354,20 @@ def fuzz(count: int, folder: Path, seed: int | None = 0) -> Tally:
     prepare(folder)
     tally = Tally()
 
+    def one(text: str) -> None:
+        tally.add(text, check_text(text, folder, sum(tally.counts.values())))
+
+    run_cases(count, seed, scenario_texts(), one)
+    return tally
+
+
+def run_cases(
+    count: int, seed: int | None, cases: st.SearchStrategy[Any], check: Callable[[Any], None]
+) -> None:
+    """``check`` each of ``count`` cases drawn from ``cases``: reproducible for a given
+    ``seed``, derandomized (the suite's fixed cases) when ``seed`` is None. The study and
+    viewer fuzzers draw through this too."""
+
     @settings(
         max_examples=count,
         deadline=None,
@@ -361,12 +375,11 @@ def fuzz(count: int, folder: Path, seed: int | None = 0) -> Tally:
         derandomize=seed is None,
         suppress_health_check=list(HealthCheck),
     )
-    @given(scenario_texts())
-    def one(text: str) -> None:
-        tally.add(text, check_text(text, folder, sum(tally.counts.values())))
+    @given(cases)
+    def one(case: Any) -> None:
+        check(case)
 
     (hypothesis_seed(seed)(one) if seed is not None else one)()
-    return tally
 
 
 def main(argv: list[str] | None = None) -> int:

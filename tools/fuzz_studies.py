@@ -38,8 +38,6 @@ from pathlib import Path
 from typing import Any
 
 import yaml
-from hypothesis import HealthCheck, given, settings
-from hypothesis import seed as hypothesis_seed
 from hypothesis import strategies as st
 
 TOOLS = Path(__file__).resolve().parent
@@ -381,19 +379,12 @@ def fuzz(count: int, folder: Path, seed: int | None = 0, limit: float = LIMIT) -
     tally = Tally()
     checker = Checker(folder, limit)
     try:
-
-        @settings(
-            max_examples=count,
-            deadline=None,
-            database=None,
-            derandomize=seed is None,
-            suppress_health_check=list(HealthCheck),
+        scenarios.run_cases(
+            count,
+            seed,
+            study_texts(),
+            lambda text: tally.add(text, checker.check(text, sum(tally.counts.values()))),
         )
-        @given(study_texts())
-        def one(text: str) -> None:
-            tally.add(text, checker.check(text, sum(tally.counts.values())))
-
-        (hypothesis_seed(seed)(one) if seed is not None else one)()
     finally:
         checker.close()
     return tally

@@ -35,9 +35,10 @@ from typing import Any
 
 import aiohttp
 import yaml
-from hypothesis import HealthCheck, given, settings
-from hypothesis import seed as hypothesis_seed
 from hypothesis import strategies as st
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))  # the scenario fuzzer's runner
+from fuzz_scenarios import run_cases
 
 ROOT = Path(__file__).resolve().parent.parent
 MAP = ROOT / "maps" / "small_rooms.png"  # 160x120, four rooms and a hall
@@ -415,14 +416,6 @@ def fuzz(count: int, folder: Path, seed: int | None = 0) -> Tally:
     with serving(run_dir, errors) as server:
         port = server.port
 
-        @settings(
-            max_examples=count,
-            deadline=None,
-            database=None,
-            derandomize=seed is None,
-            suppress_health_check=list(HealthCheck),
-        )
-        @given(cases(port))
         def one(case: tuple[str, Any]) -> None:
             kind, body = case
             tally.counts[f"{kind} cases"] += 1
@@ -436,7 +429,7 @@ def fuzz(count: int, folder: Path, seed: int | None = 0) -> Tally:
         for too_big in ANCHORS:  # every run meets the socket's limit at least once
             tally.counts["ws cases"] += 1
             judge_session(tally, port, too_big)
-        (hypothesis_seed(seed)(one) if seed is not None else one)()
+        run_cases(count, seed, cases(port), one)
         still_serving(tally, server)
     for error in errors.seen:
         tally.fail("the server's log", error)

@@ -48,9 +48,13 @@ def load_scenario(path: str | Path, **overrides: Any) -> Scenario:
     """
     source = Path(path)
     own = read_yaml_mapping(source)
-    check_own_values(own, str(source))
+    overriding = any(value is not None for value in overrides.values())
+    if overriding:  # otherwise the validation below is of the file's own values
+        check_own_values(own, str(source))
     data = apply_overrides(own, overrides, str(source))
     scenario = validate_scenario(data, str(source))
+    if not overriding:
+        check_event_steps(scenario, str(source))
     scenario = resolve_map_path(scenario, source.resolve().parent, str(source))
     return resolve_mask_paths(scenario, source.resolve().parent)
 
@@ -71,10 +75,13 @@ def check_own_values(data: dict[str, Any], source: str) -> None:
             if error["type"] != "missing" and not inherited_from_team(error, exc)
         ]
         if own:
-            count = len(own)
-            head = f"{source}: {count} problem{'s' if count > 1 else ''} in the scenario:"
-            raise ScenarioError("\n".join([head, *(f"  - {line}" for line in own)])) from None
+            raise ScenarioError(problems_text(source, own)) from None
         return
+    check_event_steps(scenario, source)
+
+
+def check_event_steps(scenario: Scenario, source: str) -> None:
+    """An event after the scenario's step cap would never happen: refused."""
     late = [(i, e.step) for i, e in enumerate(scenario.events) if e.step > scenario.steps]
     if late:
         where = ", ".join(f"events[{i}] (step {step})" for i, step in late)
@@ -266,6 +273,11 @@ def describe_errors(
         for error in exc.errors(include_url=False)
         if not inherited_from_team(error, exc)
     ]
+    return problems_text(source, lines)
+
+
+def problems_text(source: str, lines: list[str]) -> str:
+    """``source: N problems in the scenario:`` and one indented line per problem."""
     count = len(lines)
     head = f"{source}: {count} problem{'s' if count > 1 else ''} in the scenario:"
     return "\n".join([head, *(f"  - {line}" for line in lines)])

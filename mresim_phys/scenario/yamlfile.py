@@ -58,8 +58,9 @@ def require_file(path: Path, what: str, error: type[MresimError]) -> Path:
     return path
 
 
-def expanded_size(root: yaml.Node) -> int:
-    """How many values ``root`` holds once every alias is expanded (a loop: YamlSizeError).
+def expanded_size(root: yaml.Node) -> tuple[int, int]:
+    """How many values ``root`` holds once every alias is expanded, and how many distinct
+    nodes it is made of (a loop: YamlSizeError).
 
     Aliases share their node, so the count is memoised per node; the walk is iterative
     (a deeply nested document must not exhaust the stack here).
@@ -84,7 +85,7 @@ def expanded_size(root: yaml.Node) -> int:
             if id(child) in open_nodes:
                 raise YamlSizeError(_loop_message(child))
             stack.append((child, False))
-    return sizes[id(root)]
+    return sizes[id(root)], len(sizes)
 
 
 def _children(node: yaml.Node) -> list[yaml.Node]:
@@ -103,20 +104,10 @@ def _loop_message(node: yaml.Node) -> str:
     )
 
 
-def _distinct_nodes(root: yaml.Node) -> int:
-    seen: set[int] = set()
-    stack = [root]
-    while stack:
-        node = stack.pop()
-        if id(node) not in seen:
-            seen.add(id(node))
-            stack.extend(_children(node))
-    return len(seen)
-
-
 def check_alias_expansion(root: yaml.Node) -> None:
     """Refuse a document whose aliases add more than :data:`MAX_ALIAS_VALUES` values."""
-    added = expanded_size(root) - _distinct_nodes(root)
+    expanded, distinct = expanded_size(root)
+    added = expanded - distinct
     if added > MAX_ALIAS_VALUES:
         raise YamlSizeError(
             f"its aliases (*name) expand to {added:,} more values, over the limit of"
