@@ -14,6 +14,7 @@ from mresim_phys.agents import Agent, Robot
 from mresim_phys.knowledge.teammates import presumed_lost
 from mresim_phys.snapshot import AgentSnapshot, bool_view, points_or_none, read_only
 from mresim_phys.strategies import RobotView
+from mresim_phys.strategies.relax import CORNER
 
 
 def robot_view(
@@ -36,7 +37,7 @@ def robot_view(
         heading=robot.heading,
         belief=belief,
         radius=robot.radius,
-        clearance=robot.radius + robot.body.wall_margin,
+        clearance=clearance_of(robot),
         speed=robot.speed,
         sensor_range=robot.laser.range,
         role=robot.role,
@@ -59,7 +60,18 @@ def robot_view(
         parent=robot.parent,
         children=robot.children,
         hops=robot.hops,
+        escaping=robot.escape_from is not None,
     )
+
+
+def clearance_of(robot: Robot) -> float:
+    """What its planner keeps from known walls: radius + wall margin, and at least
+    ``relax.CORNER`` beyond the radius while it escapes a collision that taught it nothing."""
+    assert robot.body is not None
+    clearance = robot.radius + robot.body.wall_margin
+    if robot.escape_from is not None:
+        clearance = max(clearance, robot.radius + CORNER)
+    return clearance
 
 
 def agent_snapshot(agent: Agent, lost: frozenset[str] = frozenset()) -> AgentSnapshot:

@@ -46,6 +46,9 @@ def empty_belief(shape: tuple[int, int]) -> tuple[BeliefGrid, BoolGrid]:
     return np.full(shape, UNKNOWN, dtype=np.uint8), np.zeros(shape, dtype=bool)
 
 
+ESCAPED = 1.0  # cells from where a bump taught it nothing: it plans as usual again
+
+
 @dataclass
 class Agent:
     """Anything that communicates: a robot or the base station."""
@@ -110,6 +113,7 @@ class Robot(Agent):
     decision: Decision | None = None
     terrain: TerrainGrid | None = None  # known terrain factors (knowledge/terrain.py); None: none
     prior: BeliefGrid | None = None  # the map it knew before the mission (knowledge/prior.py)
+    escape_from: tuple[float, float] | None = None  # where a bump taught its map nothing
 
     @property
     def alive(self) -> bool:
@@ -240,3 +244,6 @@ class Robot(Agent):
         self.distance += math.hypot(dx, dy)
         self.heading = math.atan2(dy, dx)
         self.position = point
+        away = self.escape_from
+        if away is not None and math.hypot(point[0] - away[0], point[1] - away[1]) > ESCAPED:
+            self.escape_from = None

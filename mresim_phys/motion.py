@@ -177,12 +177,15 @@ def pop_point(robot: Robot) -> None:
 
 
 def stop_with_error(robot: Robot, contact: tuple[float, float]) -> None:
-    """The move was invalid: error flag, forget the path, remember the obstacle."""
+    """The move was invalid: error flag, forget the path, remember the obstacle; if its map
+    held that obstacle already, the robot plans wide of corners until it has moved away
+    (``strategies/relax.py``)."""
     direction = np.array([math.cos(robot.heading), math.sin(robot.heading)])
     dx, dy = contact[0] - robot.position[0], contact[1] - robot.position[1]
     if math.hypot(dx, dy) > EPS:
         direction = np.array([dx, dy]) / math.hypot(dx, dy)
-    mark_bump(robot.belief, contact, direction)
+    if not mark_bump(robot.belief, contact, direction):
+        robot.escape_from = robot.position
     robot.status = "error"
     robot.path = robot.path[:0]
     robot.reached_goal = False

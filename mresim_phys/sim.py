@@ -60,7 +60,7 @@ from mresim_phys.snapshot import (
     Snapshot,
     read_only,
 )
-from mresim_phys.strategies import Decision, RobotView
+from mresim_phys.strategies import Decision, RobotView, relax
 from mresim_phys.world.views import movable_views
 
 PHASES = ("sensing", "mapping", "planning", "communication", "metrics")
@@ -281,7 +281,7 @@ class Simulation:
         """Ask the robot's strategy for a new path from what the robot knows."""
         assert robot.strategy is not None
         started = perf_counter()
-        robot.adopt(robot.strategy.decide(self.view_of(robot)), self.t)
+        robot.adopt(relax.decide(robot.strategy, self.view_of(robot)), self.t)
         effects.spend("planning", perf_counter() - started)
 
     def view_of(self, robot: Robot) -> RobotView:

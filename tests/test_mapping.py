@@ -190,15 +190,54 @@ def test_a_full_circle_scan_leaves_no_gap_behind_the_robot() -> None:
     assert np.all(belief[within] == FREE)
 
 
-def test_known_obstacles_stay_occupied_and_are_never_safe(rooms: np.ndarray) -> None:
+def test_a_false_wall_the_rays_go_through_is_cleared(rooms: np.ndarray) -> None:
+    """A wall the robot's map holds where the truth is free (an earlier bump, a wall face
+    joined across a doorway, a person who left) is FREE once a scan's rays pass through it;
+    a false wall no ray crosses (behind the robot) stays."""
     belief, safe = empty_belief(rooms.shape)
     belief[28:33, 22:24] = OCCUPIED  # a stale obstacle right in front of the robot
+    belief[29:32, 15:17] = OCCUPIED  # ... and one behind it (a 180-degree laser facing +x)
     world = World(rooms, [])
     result = scan(world, (20.5, 30.5), 0.0, SensorSpec(range=60), world.query_filter(None, False))
     update = integrate_scan(belief, safe, result, 0.1)
     assert update is not None and update.free[28 - update.row0, 22 - update.col0]
-    assert np.all(belief[28:33, 22:24] == OCCUPIED)
-    assert not safe[28:33, 22:24].any() and safe.any()
+    assert np.all(belief[28:33, 22:24] == FREE)
+    assert np.all(belief[29:32, 15:17] == OCCUPIED)
+    assert np.all(belief[safe] == FREE)
+
+
+def test_true_walls_known_from_the_start_are_never_cleared(rooms: np.ndarray) -> None:
+    """Rays never pass through a true wall, so no scan from anywhere, at any range, field
+    of view or ray count, clears a wall cell the map already holds (even a lone pillar
+    between two rays far away)."""
+    truth = rooms.copy()
+    rng = np.random.default_rng(5)
+    free_rows, free_cols = np.nonzero(~truth)
+    pick = rng.choice(len(free_rows), 40, replace=False)
+    truth[free_rows[pick], free_cols[pick]] = True  # lone one-cell pillars in open space
+    belief, safe = empty_belief(truth.shape)
+    belief[truth] = OCCUPIED
+    for result in random_scans(truth, 150, seed=13):
+        integrate_scan(belief, safe, result, 0.1)
+    assert np.all(belief[truth] == OCCUPIED)
+
+
+def test_a_pillar_between_two_far_rays_stays_a_wall() -> None:
+    """Rays 1 degree apart pass 1.0 and 1.6 cells beside a one-cell pillar 150 cells away,
+    and both go on: the pillar's centre is inside the scan's polygon, yet no ray crossed
+    its inside, so the map keeps it (the fill alone would have called it free)."""
+    box = np.zeros((200, 250), dtype=bool)
+    box[:2, :] = box[-2:, :] = box[:, :2] = box[:, -2:] = True
+    box[101, 170] = True
+    belief, safe = empty_belief(box.shape)
+    belief[101, 170] = OCCUPIED
+    world = World(box, [])
+    sensor = SensorSpec(range=240, fov_deg=180.0, rays=181)
+    result = scan(world, (20.5, 100.5), 0.0, sensor, world.query_filter(None, False))
+    assert not result.on_wall[90:92].any() or result.ranges[90:92].min() > 200
+    integrate_scan(belief, safe, result, 0.1)
+    assert belief[101, 170] == OCCUPIED
+    assert belief[101, 160] == FREE
 
 
 def test_degenerate_scans_do_not_break_the_update() -> None:

@@ -5,7 +5,8 @@ From each scan, as the original MRESim does:
 * the free-space polygon spanned by the robot position and the ray end points
   (the end points alone for a 360 degree scan) is marked FREE: a cell is free iff
   its centre lies inside the polygon, plus the cells within ``NEAR_ROBOT`` of the
-  robot; cells already OCCUPIED stay OCCUPIED;
+  robot; cells already OCCUPIED stay OCCUPIED unless a ray of the scan went through
+  them (:func:`clear_contradicted`: walls are solid, so the map's wall there is false);
 * every ray that ended on a wall below max range marks the wall cell it hit as
   OCCUPIED, and two consecutive hits on the same straight wall face, less than
   ``WALL_GAP`` apart, mark the face between them where still UNKNOWN (the original
@@ -50,6 +51,7 @@ NEAR_PARALLEL = 0.999  # cosine above which two face normals are the same face d
 NEAR_ROBOT = 1.0  # cells: the robot's own cell neighbourhood is free whatever the ray geometry
 EDGE_BAND = 0.5 - 1e-6  # cells: chord band re-checked against the flanking rays (strict)
 TRIMMED = 2  # mask value, inside the kernel only: a band cell excluded from the fill
+THROUGH = 0.35  # cells: a ray this close to a cell's centre crossed its inside (0.7 cells)
 
 
 @dataclass(frozen=True)
@@ -198,9 +200,10 @@ def fold_scan(
         return -1, -1, np.zeros((0, 0), np.uint8)
     mask = np.zeros((r1 - r0, c1 - c0), np.uint8)
     trimmed = chord_band(ox, oy, ux, uy, ex, ey, ranges, n if full else n - 1, mask, r0, c0)
-    fill_centres(vx, vy, mask, belief, r0, c0)
+    walls = fill_centres(vx, vy, mask, belief, r0, c0)
     for i in range(len(trimmed)):
         mask[trimmed[i, 0], trimmed[i, 1]] = 0
+    clear_contradicted(ox, oy, angles, ranges, walls, mask, belief, r0, c0)
     for r in range(max(int(oy - NEAR_ROBOT) - 1, r0), min(int(oy + NEAR_ROBOT) + 2, r1)):
         for c in range(max(int(ox - NEAR_ROBOT) - 1, c0), min(int(ox + NEAR_ROBOT) + 2, c1)):
             if (c + 0.5 - ox) ** 2 + (r + 0.5 - oy) ** 2 <= NEAR_ROBOT * NEAR_ROBOT:
@@ -228,15 +231,18 @@ def fold_scan(
 @njit(cache=True, nogil=True)
 def fill_centres(
     vx: FloatArray, vy: FloatArray, mask: BeliefGrid, belief: BeliefGrid, r0: int, c0: int
-) -> None:
+) -> IntArray:
     """Scanline fill: mark the window cells whose centre is inside the polygon (even-odd).
 
     Every edge adds its x crossing to the rows whose centre line it crosses
     (half-open in y, so a vertex is counted once); each row's crossings, sorted,
-    pair up into spans. Cells marked TRIMMED are skipped.
+    pair up into spans. Cells marked TRIMMED are skipped. Returns the window indices
+    (``r * w + c``) of the OCCUPIED cells whose centre is inside: candidates for
+    :func:`clear_contradicted`.
     """
     m = len(vx)
     h, w = mask.shape
+    walls, found = np.empty(16, np.int64), 0
     starts = np.zeros(h + 1, np.int64)  # crossings per row, then row offsets
     for i in range(m):
         j = i + 1 if i + 1 < m else 0
@@ -274,6 +280,51 @@ def fill_centres(
                     mask[r, c] = 1
                     if belief[r + r0, c + c0] == UNKNOWN:
                         belief[r + r0, c + c0] = FREE
+                    elif belief[r + r0, c + c0] == OCCUPIED:
+                        if found == len(walls):
+                            walls = np.concatenate((walls, np.empty_like(walls)))
+                        walls[found] = r * w + c
+                        found += 1
+    return walls[:found]
+
+
+@njit(cache=True, nogil=True)
+def clear_contradicted(
+    ox: float,
+    oy: float,
+    angles: FloatArray,
+    ranges: FloatArray,
+    walls: IntArray,
+    mask: BeliefGrid,
+    belief: BeliefGrid,
+    r0: int,
+    c0: int,
+) -> None:
+    """Make FREE the OCCUPIED cells of ``walls`` (window indices, inside the polygon and
+    not trimmed) that a ray of this scan went through: it passed within
+    :data:`THROUGH` of the cell's centre (so through its inside, over 0.7 cells) and
+    ended more than half a cell beyond it. Walls are solid, so such a cell is free now:
+    an earlier bump, a wall face joined across a doorway or a person who has left. The
+    rays checked are the few whose direction is nearest the cell's (evenly spread)."""
+    n = len(angles)
+    if n < 2:
+        return
+    step = (angles[n - 1] - angles[0]) / (n - 1)
+    w = mask.shape[1]
+    for i in range(len(walls)):
+        r, c = walls[i] // w, walls[i] % w
+        if mask[r, c] != 1:
+            continue
+        dx, dy = c + c0 + 0.5 - ox, r + r0 + 0.5 - oy
+        turn = (math.atan2(dy, dx) - angles[0]) % (2.0 * math.pi)
+        near = int(turn / step)
+        for k in range(near - 1, near + 3):
+            if 0 <= k < n:
+                ux, uy = math.cos(angles[k]), math.sin(angles[k])
+                along = dx * ux + dy * uy
+                if abs(dx * uy - dy * ux) < THROUGH and along + 0.5 < ranges[k]:
+                    belief[r + r0, c + c0] = FREE
+                    break
 
 
 @njit(cache=True, nogil=True)
@@ -365,12 +416,15 @@ def mark_face(
             belief[r, c] = OCCUPIED
 
 
-def mark_bump(belief: BeliefGrid, point: tuple[float, float], direction: FloatArray) -> None:
-    """Mark the cell a robot bumped into (just past ``point`` along ``direction``) OCCUPIED."""
+def mark_bump(belief: BeliefGrid, point: tuple[float, float], direction: FloatArray) -> bool:
+    """Mark the cell a robot bumped into (just past ``point`` along ``direction``) OCCUPIED;
+    return whether that taught the map anything (the cell was not OCCUPIED already)."""
     x, y = np.asarray(point) + 1e-3 * direction
     rows, cols = belief.shape
-    if 0 <= x < cols and 0 <= y < rows:
-        belief[int(y), int(x)] = OCCUPIED
+    if not (0 <= x < cols and 0 <= y < rows) or belief[int(y), int(x)] == OCCUPIED:
+        return False
+    belief[int(y), int(x)] = OCCUPIED
+    return True
 
 
 def merge_into(target: BeliefGrid, source: BeliefGrid) -> None:

@@ -86,6 +86,7 @@ class RobotView:
     parent: str | None = None  # its parent in the team's hierarchy: 'base', a robot, or None
     children: tuple[str, ...] = ()  # the robots whose parent it is
     hops: int = 0  # robots from the base down to it along its parents (0: not under the base)
+    escaping: bool = False  # a collision taught its map nothing: it plans wide of corners
 
     @property
     def planning_map(self) -> BeliefGrid:
@@ -329,16 +330,25 @@ def heading_for(context: PlanContext, point: tuple[float, float], **fields: Any)
 
 
 HOME_TOLERANCE = 1.5  # cells: a done robot this close to its home point stays put
+# Why a robot is done (``Decision.info["reason"]``): only NO_FRONTIER lets the decide phase
+# try a smaller clearance first (``strategies/relax.py``); the others are the strategy's choice.
+NO_FRONTIER = "no reachable frontier"
+GOAL_MET = "mission complete"
 
 
 def return_to_base(
-    view: RobotView, context: PlanContext, home: tuple[float, float] | None = None
+    view: RobotView,
+    context: PlanContext,
+    home: tuple[float, float] | None = None,
+    reason: str = NO_FRONTIER,
 ) -> Decision:
     """Nothing left to explore: head for the base station (as near as it can get) and stay.
 
     ``home`` is where an earlier call found the robot could get; a robot already
-    there stays idle without searching the map again.
+    there stays idle without searching the map again. ``reason`` says why it is done
+    (``Decision.info["reason"]``).
     """
     if home is not None and np.hypot(*np.subtract(view.position, home)) <= HOME_TOLERANCE:
-        return Decision(goal=home, done=True)
-    return heading_for(context, view.base_position, done=True, info=context.planner_info())
+        return Decision(goal=home, done=True, info={"reason": reason})
+    info = {**context.planner_info(), "reason": reason}
+    return heading_for(context, view.base_position, done=True, info=info)

@@ -43,6 +43,8 @@ from mresim_phys.strategies.auction import (
     utility,
 )
 from mresim_phys.strategies.base import (
+    GOAL_MET,
+    NO_FRONTIER,
     STRATEGIES,
     Decision,
     PlanContext,
@@ -142,7 +144,8 @@ class FrontierExploration(Plugin):
         frontiers = self._frontiers(view, context)
         reach = self.params.reach or view.clearance + 2.0
         fields = context.fields_staged(self.params.horizon * view.sensor_range)
-        searching = len(frontiers) > 0 and not self._goal_met(view)
+        goal_met = len(frontiers) > 0 and self._goal_met(view)
+        searching = len(frontiers) > 0 and not goal_met
         finder = TargetFinder.of(frontiers, context.passable, reach)
         for limit, field, final in fields if searching else ():
             targets, costs = finder.targets(field, final)
@@ -151,7 +154,8 @@ class FrontierExploration(Plugin):
                 break
         else:
             self._chasing = None
-            decision = return_to_base(view, context, self._home)
+            reason = GOAL_MET if goal_met else NO_FRONTIER
+            decision = return_to_base(view, context, self._home, reason)
             self._home = decision.goal
             return decision
         self._home = None

@@ -1,0 +1,82 @@
+"""Relaxed clearance (phase 4, decide): a robot never quits while its body fits to a frontier.
+
+A strategy plans on the cells at least the robot's *clearance* (body radius plus its
+``wall_margin``) from every wall its map knows. On a real map that margin closes doorways
+and pockets: a robot standing where it closes has no passable component and its strategy
+finds nothing reachable. :func:`decide` asks the strategy as usual; when the answer is
+``done`` because no frontier is reachable (``NO_FRONTIER``; a strategy's own choice, such
+as the mission-complete rule, is kept), and the robot's map holds a frontier its body can
+reach at the least clearance (its radius: touching walls, never through one), the strategy
+is asked again with the margin relaxed in :data:`LEVELS` steps towards the radius; the
+first answer that is not done is taken. ``done`` thus means: no frontier reachable under
+any margin the robot may use.
+
+A collision that taught the robot's map nothing (a diagonal move past a wall corner
+its map already holds) marks the robot ``escaping`` (``agents.Robot.escape_from``): until
+it has moved a cell away, it plans with at least :data:`CORNER` clearance beyond its
+radius, which no cell-to-cell move can cut (half a cell's diagonal); if that boxes it
+in, it takes the original's random step after a collision. A collision never freezes it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+
+from mresim_phys.knowledge.frontiers import frontiers_in
+from mresim_phys.knowledge.targets import TargetFinder
+from mresim_phys.strategies.base import NO_FRONTIER, Decision, RobotView, Strategy, plan_context
+from mresim_phys.strategies.random_walk import random_step
+
+LEVELS = (1 / 3, 2 / 3, 1.0)  # shares of the margin given up, in turn
+CORNER = 0.75  # cells beyond the radius: more than half a cell's diagonal (0.707)
+DEFAULT_MIN_SIZE = 3  # frontier cells of the smallest cluster, if the strategy sets none
+RELAXED = "relaxed clearance"  # Decision.info["clearance_reason"] of a relaxed answer
+
+
+def decide(strategy: Strategy, view: RobotView) -> Decision:
+    """The strategy's decision for ``view``, relaxing its clearance before it gives up."""
+    decision = strategy.decide(view)
+    if decision.done and decision.info.get("reason") == NO_FRONTIER:
+        return _relaxed(strategy, view, decision)
+    if view.escaping and len(decision.path) == 0 and not decision.done:
+        return _random_escape(view) or decision
+    return decision
+
+
+def _relaxed(strategy: Strategy, view: RobotView, decision: Decision) -> Decision:
+    """Ask again at smaller clearances (down to the radius) while a frontier is in reach."""
+    if view.escaping:
+        return _random_escape(view) or decision
+    margin = view.clearance - view.radius
+    if margin <= 1e-9 or not frontier_reachable(view, view.radius, min_size(strategy)):
+        return decision
+    for share in LEVELS:
+        relaxed = strategy.decide(replace(view, clearance=view.clearance - share * margin))
+        if not relaxed.done:
+            return replace(relaxed, info={**relaxed.info, "clearance_reason": RELAXED})
+    return decision
+
+
+def _random_escape(view: RobotView) -> Decision | None:
+    """The original's random step after a collision, at the robot's body clearance."""
+    body = replace(view, clearance=view.radius)
+    return random_step(body, plan_context(body))
+
+
+def frontier_reachable(view: RobotView, clearance: float, size: int = DEFAULT_MIN_SIZE) -> bool:
+    """Whether the robot's map holds a frontier cluster of ``size`` cells or more that the
+    robot reaches (within ``clearance + 2`` cells) on the cells ``clearance`` from its walls."""
+    context = plan_context(replace(view, clearance=clearance))
+    frontiers = frontiers_in(view.belief, context.free_box, size)
+    if len(frontiers) == 0:
+        return False
+    finder = TargetFinder.of(frontiers, context.passable, clearance + 2.0)
+    _, costs = finder.targets(context.field)
+    return bool(np.isfinite(costs).any())
+
+
+def min_size(strategy: Strategy) -> int:
+    """The smallest frontier cluster the strategy chases (its ``min_frontier_size``)."""
+    return int(getattr(strategy.params, "min_frontier_size", DEFAULT_MIN_SIZE))
