@@ -38,6 +38,7 @@ from mresim_phys.world.space import World
 from mresim_phys.world.terrain import TerrainGrid, factor_at
 
 EPS = 1e-9
+MID_STEP_REPLANS = 1  # plans a robot may make on reaching its goal within one step
 
 
 @dataclass(frozen=True)
@@ -96,27 +97,30 @@ def take_step(
     robot: Robot,
     world: World,
     rules: MoveRules,
-    planned: bool,
+    given: bool,
     replan: Callable[[Robot], None],
     sense: Callable[[Robot], None],
     settle: Callable[[], None] = lambda: None,
 ) -> None:
     """Move ``robot`` up to its speed along its path, sensing after each path point.
 
-    ``planned``: the robot already decided this step (its strategy is not asked
-    again when the path runs out; the robot waits for the next step). ``sense`` may hold
-    its scans back (``knowledge.scanfold.ScanQueue``) until ``settle``, which is called
-    before anything here reads or writes the robot's map (a replan, a bump) and at the end.
+    A robot that reaches its goal with distance left to go this step asks its strategy
+    once more and goes on (once a step: a second goal reached waits for the next step);
+    ``given``: its path this step is a caller's decision, never replaced mid-step.
+    ``sense`` may hold its scans back (``knowledge.scanfold.ScanQueue``) until ``settle``,
+    which is called before anything here reads or writes the robot's map (a replan, a bump)
+    and at the end.
     """
     budget = robot.speed * factor_at(rules.terrain, robot.position)
     moved = False
+    replans = 0 if given else MID_STEP_REPLANS
     while budget > EPS:
         if len(robot.path) == 0:
-            if planned or not robot.reached_goal:
+            if replans == 0 or not robot.reached_goal:
                 break
             settle()
             replan(robot)
-            planned = True
+            replans -= 1
             continue
         used = move_towards(robot, world, rules, budget, settle)
         if used is None:

@@ -255,11 +255,11 @@ class Simulation:
         replan, sense = partial(self.replan, effects=effects), partial(self.sense, effects=effects)
         queue = self.senses.queue_for(robot)  # scans held back and folded together
         if queue is None:
-            take_step(robot, self.world, self.move_rules, due or given, replan, sense)
+            take_step(robot, self.world, self.move_rules, given, replan, sense)
         else:
             hold = partial(self.senses.hold, queue=queue)
             settle = partial(self.senses.fold_held, queue, effects)
-            take_step(robot, self.world, self.move_rules, due or given, replan, hold, settle)
+            take_step(robot, self.world, self.move_rules, given, replan, hold, settle)
         started = perf_counter()
         self.network.stamp_own(robot, effects.window, self.t)
         effects.spend("communication", perf_counter() - started)
