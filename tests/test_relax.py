@@ -120,3 +120,19 @@ def test_a_robot_that_reaches_its_goal_mid_step_goes_on() -> None:
             total += len(moved)
         before = moved
     assert short / total < 0.07
+
+
+def test_a_robot_its_map_walls_in_looks_around_instead_of_quitting() -> None:
+    """Its map holds walls all round it (one false: a face joined across an alcove's
+    mouth) while frontiers remain beyond: it is not done; it turns to face behind it and
+    scans, which clears a false wall the rays pass through."""
+    view = doorway_view(9)
+    belief = view.belief.copy()
+    belief[18:23, 18:23] = OCCUPIED
+    belief[19:22, 19:22] = FREE  # a 3x3 pocket round the robot
+    boxed = replace(view, belief=belief, position=(20.5, 20.5), heading=0.0)
+    assert relax.boxed_in(boxed)
+    decision = relax.decide(strategy(), boxed)
+    assert not decision.done and decision.info["reason"] == relax.BOXED
+    assert decision.look_at is not None and decision.look_at[0] < 20.5
+    assert not relax.boxed_in(view)  # the open room: done means done

@@ -16,6 +16,11 @@ its map already holds) marks the robot ``escaping`` (``agents.Robot.escape_from`
 it has moved a cell away, it plans with at least :data:`CORNER` clearance beyond its
 radius, which no cell-to-cell move can cut (half a cell's diagonal); if that boxes it
 in, it takes the original's random step after a collision. A collision never freezes it.
+
+A robot left with no way out on its own map (:func:`boxed_in`: the cells its body reaches
+are a pocket hardly larger than itself, while frontiers remain elsewhere) is not done: it
+turns round in place and scans (:func:`look_around`), which clears walls its map holds
+falsely where the rays pass; a robot truly shut in keeps looking, and counts as idle.
 """
 
 from __future__ import annotations
@@ -33,15 +38,19 @@ LEVELS = (1 / 3, 2 / 3, 1.0)  # shares of the margin given up, in turn
 CORNER = 0.75  # cells beyond the radius: more than half a cell's diagonal (0.707)
 DEFAULT_MIN_SIZE = 3  # frontier cells of the smallest cluster, if the strategy sets none
 RELAXED = "relaxed clearance"  # Decision.info["clearance_reason"] of a relaxed answer
+BOXED = "boxed in: looking around"  # Decision.info["reason"] of a turn in place
+POCKET = 2.0  # cells beyond its radius: a reachable area under pi (r + 2)^2 is a pocket
 
 
 def decide(strategy: Strategy, view: RobotView) -> Decision:
     """The strategy's decision for ``view``, relaxing its clearance before it gives up."""
     decision = strategy.decide(view)
     if decision.done and decision.info.get("reason") == NO_FRONTIER:
-        return _relaxed(strategy, view, decision)
-    if view.escaping and len(decision.path) == 0 and not decision.done:
-        return _random_escape(view) or decision
+        decision = _relaxed(strategy, view, decision)
+    elif view.escaping and len(decision.path) == 0 and not decision.done:
+        decision = _random_escape(view) or decision
+    if decision.done and decision.info.get("reason") == NO_FRONTIER and boxed_in(view):
+        return look_around(view)
     return decision
 
 
@@ -63,6 +72,26 @@ def _random_escape(view: RobotView) -> Decision | None:
     """The original's random step after a collision, at the robot's body clearance."""
     body = replace(view, clearance=view.radius)
     return random_step(body, plan_context(body))
+
+
+def boxed_in(view: RobotView) -> bool:
+    """Whether the cells its body can reach on its map (clearance = its radius) are a
+    pocket hardly larger than the body, while its map holds a frontier elsewhere: walls
+    its map holds around it close every way out (false ones, often: a wall face joined
+    across an alcove's mouth while it stood inside)."""
+    body = plan_context(replace(view, clearance=view.radius))
+    reached = int(np.count_nonzero(np.isfinite(body.field.costs)))
+    if reached >= np.pi * (view.radius + POCKET) ** 2:
+        return False
+    return len(frontiers_in(view.belief, body.free_box, DEFAULT_MIN_SIZE)) > 0
+
+
+def look_around(view: RobotView) -> Decision:
+    """Turn in place to face the way behind and scan: a ray through a false wall clears it
+    (``knowledge.mapping.clear_contradicted``), so the next plan may find the way out."""
+    x, y = view.position
+    behind = (x - np.cos(view.heading), y - np.sin(view.heading))
+    return Decision(path=np.array([[x, y]]), goal=(x, y), look_at=behind, info={"reason": BOXED})
 
 
 def frontier_reachable(view: RobotView, clearance: float, size: int = DEFAULT_MIN_SIZE) -> bool:
