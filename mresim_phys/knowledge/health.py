@@ -38,6 +38,7 @@ CHECK_EVERY = 20  # steps between frontier checks of a robot that stays idle or 
 WARN_AFTER = 20  # idle steps with reachable frontier cells that make a warning (in a run)
 NOT_LOGGED = "not logged"  # a change without a reason (a log written before reasons were)
 WORKING, IDLE, STUCK = "working", "idle", "stuck"
+TOTALS = ("robots_idle_with_frontier", "idle_robot_steps", "stuck_robot_steps")  # sweep columns
 
 
 @dataclass(frozen=True)
@@ -263,11 +264,9 @@ class HealthReport:
         """The sweep tables' columns: robots that idled with reachable frontier cells,
         idle and stuck robot-steps."""
         robots = self.robots.values()
-        return {
-            "robots_idle_with_frontier": sum(h.idle_with_frontier >= WARN_AFTER for h in robots),
-            "idle_robot_steps": sum(h.idle for h in robots),
-            "stuck_robot_steps": sum(h.stuck for h in robots),
-        }
+        warned = sum(h.idle_with_frontier >= WARN_AFTER for h in robots)
+        values = (warned, sum(h.idle for h in robots), sum(h.stuck for h in robots))
+        return dict(zip(TOTALS, values, strict=True))
 
     def summary(self) -> dict[str, Any]:
         """JSON-ready: totals, per robot counts, end check and state changes, warnings."""

@@ -248,14 +248,14 @@ def draw_robot(
     colour: BGR,
     style: Style,
 ) -> None:
-    """A triangle: filled (working), hollow (done), light grey outlined in its colour
-    (idle), red outline (error), grey + red X (failed); a red ring around a stuck robot."""
+    """A triangle: filled (working), hollow (done), grey outlined in its colour (idle), red
+    outline (error), dark grey + red X (failed); a red ring around a stuck robot."""
     state, activity = robot.state, robot.activity
     if state == "done":
         cv2.polylines(image, [pts], True, colour, 2, AA, SHIFT)
     elif state != "failed" and activity == "idle":
         cv2.fillPoly(image, [pts], style.idle, AA, SHIFT)
-        cv2.polylines(image, [pts], True, colour, 2, AA, SHIFT)
+        cv2.polylines(image, [pts], True, colour, 1, AA, SHIFT)
     else:
         cv2.fillPoly(image, [pts], style.failed if state == "failed" else colour, AA, SHIFT)
         outline, width = (style.error, 2) if state == "error" else ((0, 0, 0), 1)

@@ -57,7 +57,7 @@ class Style:
     link: BGR = (128, 128, 0)
     hierarchy: BGR = (130, 0, 75)
     failed: BGR = (128, 128, 128)
-    idle: BGR = (215, 215, 215)  # light grey fill of an idle robot (outlined in its colour)
+    idle: BGR = (175, 175, 175)  # grey fill of an idle robot (outlined in its colour)
     stuck: BGR = (0, 0, 230)  # red ring around a stuck robot
     error: BGR = (0, 0, 255)
     base: BGR = (0, 0, 0)
