@@ -15,8 +15,10 @@ next to it. The others are *closed by clearance* when the FREE cells alone (clea
 connect the robot to them (the gap is narrower than its body), else *behind walls* (its
 map holds no FREE way there at all: cells seen through a gap or over an obstacle).
 
-One check is a few OpenCV passes over the bounding box of the map's FREE cells: about a
-millisecond or two on the 800x600 maps.
+One check is a few OpenCV passes (a dilation for the clearance, a flood fill from the
+robot, a dilation for the reach) over the bounding box of the map's FREE cells: 2-4 ms on
+the 800x600 maps (the second pass, at clearance 0, only when some frontier cell is out of
+reach).
 """
 
 from __future__ import annotations
@@ -112,9 +114,9 @@ def frontier_check(
     body = reached_near(belief, box, crop, position, radius)
     reachable = frontier & body if body is not None else np.zeros_like(frontier)
     rest = frontier & ~reachable
-    loose = reached_near(belief, box, crop, position, 0.0)
-    closed = int(np.count_nonzero(rest & loose)) if loose is not None else 0
     found = int(np.count_nonzero(reachable))
+    loose = reached_near(belief, box, crop, position, 0.0) if found < total else None
+    closed = int(np.count_nonzero(rest & loose)) if loose is not None else 0
     return FrontierCheck(total, found, closed, total - found - closed, body is not None)
 
 
@@ -140,9 +142,9 @@ def reached_near(
     if start is None:
         return None
     r0, r1, c0, c1 = crop
-    mask = np.ascontiguousarray(passable[r0:r1, c0:c1]).view(np.uint8)
-    _, labels = cv2.connectedComponents(mask, connectivity=4)
-    component = (labels == labels[start[0] - r0, start[1] - c0]).view(np.uint8)
+    cells = np.ascontiguousarray(passable[r0:r1, c0:c1]).astype(np.uint8)
+    cv2.floodFill(cells, None, (start[1] - c0, start[0] - r0), 2, flags=4)  # its component
+    component = (cells == 2).view(np.uint8)
     kernel = clearance_kernel(float(clearance) + 1.0)
     near = cv2.dilate(component, kernel, borderType=cv2.BORDER_CONSTANT, borderValue=0)
     out: BoolGrid = near.view(bool)
