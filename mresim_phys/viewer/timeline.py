@@ -4,7 +4,7 @@ For every step: the explored and known-at-base fractions (the page's chart) and 
 step's events (failures, doors, debris, ... : ``Snapshot.events``), which the page draws
 as marks on the scrubber; a robot whose state turns ``failed`` without an event of its
 own (a random fault) is marked too, and so is a robot that declares itself done or turns
-active again after that, with the reason the run gave (``B done (no frontier left)``: the
+active again after that, with the reason the run gave (``B done (no reachable frontier)``: the
 run-health record's state changes, ``knowledge/health.py``). Filled step by step, live or
 from a log's index.
 """
