@@ -74,9 +74,12 @@ def clearance_of(robot: Robot) -> float:
     return clearance
 
 
-def agent_snapshot(agent: Agent, lost: frozenset[str] = frozenset()) -> AgentSnapshot:
+def agent_snapshot(
+    agent: Agent, lost: frozenset[str] = frozenset(), health: tuple[str, str | None] = ("", None)
+) -> AgentSnapshot:
     """One agent as a snapshot (grids as read-only views); ``lost``: the teammates it
-    presumes lost.
+    presumes lost; ``health``: its activity this step and the reason of a state change
+    this step (``knowledge.health.HealthWatch.view``).
 
     A strategy exposes extra views through its decision's ``info``: ``skeleton``
     (a bool grid, read-only), ``rendezvous`` (the agreed meeting points), ``rv_candidates``
@@ -110,4 +113,6 @@ def agent_snapshot(agent: Agent, lost: frozenset[str] = frozenset()) -> AgentSna
         presumed_lost=tuple(sorted(lost)) if agent.alive else (),
         battery=robot.battery if robot else None,
         parent=info.get("parent", agent.parent),  # a strategy that changes the hierarchy
+        activity=health[0],
+        state_reason=health[1],
     )

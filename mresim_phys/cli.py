@@ -23,6 +23,7 @@ from mresim_phys.errors import MresimError
 from mresim_phys.metrics import StepRecord
 from mresim_phys.output.bench import PRESETS, run_bench
 from mresim_phys.output.files import write_text_atomic
+from mresim_phys.output.health import print_warnings
 from mresim_phys.output.plots import plot_runs
 from mresim_phys.output.recorders import default_run_dir
 from mresim_phys.output.replay import replay_run
@@ -279,6 +280,7 @@ def run_command(args: argparse.Namespace) -> int:
         outcome = run_with_bar(sim, out_dir, args, stop, plots)
     if not args.quiet:
         print(summary_line(sim, outcome, any(plotted)))
+    print_warnings(outcome.summary)
     return outcome.exit_status
 
 

@@ -37,6 +37,8 @@ from mresim_phys.comms.ledger import box_around, sensed_tick
 from mresim_phys.errors import ScenarioError, UnknownRobotError
 from mresim_phys.event_context import RunEventContext
 from mresim_phys.faults.runtime import hazard_grid
+from mresim_phys.health_phase import robot_steps
+from mresim_phys.knowledge.health import HealthWatch
 from mresim_phys.knowledge.latest import LatestCoverage
 from mresim_phys.knowledge.robustness import FailureWatch, robot_states
 from mresim_phys.knowledge.teammates import presumed_lost
@@ -92,6 +94,7 @@ class Simulation:
         self.stall = StallWatch(s.rules.stalled_for, s.rules.stalled_gain)
         self.curves = Curves()
         self.failures = FailureWatch([r.name for r in self.robots])
+        self.health = HealthWatch([r.name for r in self.robots])  # idle, stuck, state reasons
         self.fault_columns = s.rules.fault_columns  # metrics.csv has the robustness columns
         self.senses = Senses(s.world, s.rules.robots_block, s.terrain, s.sensing_streams())
         # the hazard zones' failure probability per cell and step (static; None: no zones)
@@ -336,7 +339,8 @@ class Simulation:
         """The run at the end of the current step (views of the live grids, not copies)."""
         silence = self.rules.presume_lost_after
         agents = [
-            agent_snapshot(a, presumed_lost(a.teammates, self.t, silence)) for a in self.agents
+            agent_snapshot(a, presumed_lost(a.teammates, self.t, silence), self.health.view(a.name))
+            for a in self.agents
         ]
         rubble, gave_way = self.world.debris() or (None, None)
         return Snapshot(
@@ -380,6 +384,7 @@ class Simulation:
         watch, coverage = self.failures, self.coverage
         watch.update(self.t, robot_states(self.robots), self.base.belief, coverage.reachable,
                      coverage.total)  # fmt: skip
+        self.health.update(self.t, robot_steps(self.robots, self.health, self.t, self.events_now))
         latency = base_latency(self.t, heard, [r.name for r in self.robots if r.alive])
         record = measure_step(
             self.t,

@@ -286,7 +286,8 @@ def test_static_frames_are_unchanged(
     """Frames of shipped static scenarios do not change with the world layers: they equal
     the same frame drawn without them, and the reference frames in tests/data (first
     written by the code of commit 1cc4d1a, before the world layers existed; re-rendered when
-    the frontier rule changed the runs themselves)."""
+    the frontier rule changed the runs themselves, and when the legend gained the done,
+    idle and stuck glyphs and labels that would overlap were placed apart)."""
     sim = Simulation.from_yaml(ROOT / "scenarios" / f"{name}.yaml", steps=steps)
     for _ in range(steps):
         sim.step()

@@ -23,7 +23,8 @@ RUNS_COLUMNS = [
     "steps_to_known_at_base_90", "steps_to_known_at_base_95", "total_distance", "alive",
     "comm_bytes", "control_bytes", "mean_links", "latency_max", "latency_mean",
     "auc_explored", "auc_known_at_base", "alive_fraction", "base_deficit_at_end",
-    "base_deficit_fraction_at_end", "failed_robots",
+    "base_deficit_fraction_at_end", "failed_robots", "robots_idle_with_frontier",
+    "idle_robot_steps", "stuck_robot_steps",
 ]  # fmt: skip
 STEPS_COLUMNS = [
     "run_id", "step", "explored", "known_at_base", "distance", "alive", "links",
@@ -152,5 +153,6 @@ def test_damaged_tables(sweep: Path, tmp_path: Path, capsys: pytest.CaptureFixtu
     assert_clear(*compare(folder, capsys), "runs.parquet", "column 'run_id' holds 'a000-s0000'")
     folder = copy(sweep, tmp_path / "metrics")
     metrics = [c for c in runs.columns if c.startswith(("steps_to_", "auc_", "final_"))]
+    metrics += ["robots_idle_with_frontier", "idle_robot_steps", "stuck_robot_steps"]
     runs.drop(columns=metrics).to_parquet(folder / "runs.parquet")
     assert_clear(*compare(folder, capsys), "runs.parquet", "none of the default metrics")

@@ -8,7 +8,8 @@ Each field of :class:`~mresim_phys.snapshot.Snapshot` and of its
 * ``steps.jsonl``, one JSON line per step (:class:`LineField`): ``step``, ``events``,
   ``links``, ``comm``, ``world_version`` (:data:`SNAPSHOT_LINE`) and per agent
   ``position``, ``heading``, ``state``, ``role``, ``goal``, ``distance``, ``parent``,
-  ``base_contact``, ``broken``, ``presumed_lost``, ``battery`` (:data:`AGENT_LINE`);
+  ``base_contact``, ``broken``, ``presumed_lost``, ``battery``, ``state_reason``
+  (:data:`AGENT_LINE`);
 * delta chunks, as changes since the previous logged step: grids (:class:`GridField`:
   ``belief``, ``safe``, ``skeleton``, the ``truth`` when the world changed, ``rubble``
   and ``gave_way``) and point arrays (:class:`PointsField`: ``path``, ``rendezvous``,
@@ -17,7 +18,8 @@ Each field of :class:`~mresim_phys.snapshot.Snapshot` and of its
   (``output.logworld``);
 * not at all, recomputed on replay: ``explored``, ``known_at_base``, ``alive``,
   ``lost_knowledge`` and ``failures`` (``knowledge.robustness``, from the replayed maps and
-  fault states).
+  fault states), each robot's ``activity`` (``knowledge.health``, from its replayed odometer,
+  path, state and parts).
 
 Importing this module fails if a dataclass field has no codec here (or a codec has no
 field), so a new snapshot field cannot be left out of the log by mistake.
@@ -121,6 +123,7 @@ AGENT_LINE = {
     "broken": LineField(list, to_events, omit_empty=True),
     "presumed_lost": LineField(list, to_events, omit_empty=True),
     "battery": LineField(float, to_float, omit_none=True),
+    "state_reason": LineField(str, plain, omit_none=True),  # only at a change of state
 }
 SNAPSHOT_LINE = {
     "step": LineField(int, to_int),
@@ -135,6 +138,7 @@ SNAPSHOT_ELSEWHERE += ("movables", "rubble", "gave_way", "terrain", "prior")  # 
 SNAPSHOT_ELSEWHERE += ("hazards",)  # in truth.npz
 SNAPSHOT_ELSEWHERE += ("latest",)  # meta.json "beliefs"
 RECOMPUTED = ("explored", "known_at_base", "alive", "lost_knowledge", "failures")  # replayed
+AGENT_RECOMPUTED = ("activity",)  # replayed by the run-health watch (knowledge.health)
 
 
 def encode_line(codecs: Mapping[str, LineField], obj: object) -> dict[str, Any]:
@@ -373,6 +377,7 @@ def chunk_arrays(parts: Parts) -> Chunk:
 def stored_fields() -> dict[type, list[str]]:
     """The fields of each snapshot class that the tables above store (or recompute)."""
     agent = [*STATIC_AGENT, *AGENT_LINE, *(f.name for f in (*AGENT_GRIDS, *AGENT_POINTS))]
+    agent += AGENT_RECOMPUTED
     snapshot = [*SNAPSHOT_LINE, *SNAPSHOT_ELSEWHERE, *RECOMPUTED]
     return {AgentSnapshot: agent, Snapshot: snapshot}
 

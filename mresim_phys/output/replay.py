@@ -6,7 +6,8 @@ snapshot from the log (``output.runlog.Replay``), and renders frames with any la
 through the live runs' ``FrameRecorder``, without re-simulating: frame for frame what
 live rendering of that run gives.
 With ``--metrics`` it recomputes ``metrics.csv`` from the log into
-``metrics-replayed.csv`` and compares the two.
+``metrics-replayed.csv`` and compares the two, and recomputes summary.json's run-health
+record (``output.health``) and compares it too.
 """
 
 from __future__ import annotations
@@ -24,8 +25,9 @@ from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.errors import MresimError, ScenarioError
 from mresim_phys.metrics import csv_header
 from mresim_phys.output.files import atomic_path
+from mresim_phys.output.health import compare_health
 from mresim_phys.output.recorders import checked_layers, frame_recorder, given
-from mresim_phys.output.runlog import Replay, RunLog, recompute_metrics
+from mresim_phys.output.runlog import Replay, RunLog
 from mresim_phys.output.video import chosen_video_path
 from mresim_phys.scenario.load import validate_scenario
 from mresim_phys.scenario.readers import read_yaml_mapping
@@ -142,21 +144,26 @@ def replay_frames(
 
 
 def replay_metrics(log: RunLog, run_dir: Path) -> tuple[list[str], bool]:
-    """Write metrics-replayed.csv from the log and compare it with metrics.csv."""
+    """Write metrics-replayed.csv from the log and compare it with metrics.csv; recompute
+    the run-health record and compare it with summary.json's (one pass over the log)."""
     out = run_dir / "metrics-replayed.csv"
     latest = log.meta.get("beliefs") == "latest"
+    replay, last = Replay(log, latest), None
     with atomic_path(out) as tmp, tmp.open("w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle, lineterminator="\n")
         faults = bool(log.meta.get("fault_columns", False))
         writer.writerow(csv_header(log.names[1:], stale=latest, faults=faults))
-        for record in recompute_metrics(log):
+        for snap, record in replay.run():
             writer.writerow(record.csv_row())
+            last = snap
+    health = replay.health_report(last).summary() if last is not None else {}
+    lines, same_health = compare_health(health, run_dir)
     live = run_dir / "metrics.csv"
     if not live.is_file():
-        return [f"metrics recomputed into {out} (no metrics.csv to compare)"], True
+        return [f"metrics recomputed into {out} (no metrics.csv to compare)", *lines], same_health
     same = live.read_bytes() == out.read_bytes()
     verdict = "identical to" if same else "DIFFERENT from"
-    return [f"metrics recomputed into {out}: {verdict} {live}"], same
+    return [f"metrics recomputed into {out}: {verdict} {live}", *lines], same and same_health
 
 
 def replay_run(run_dir: Path, overrides: dict[str, Any], metrics: bool) -> ReplayResult:

@@ -18,6 +18,7 @@ from __future__ import annotations
 import json
 import zipfile
 from collections.abc import Iterator
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -25,6 +26,7 @@ import numpy as np
 
 from mresim_phys.errors import MresimError
 from mresim_phys.knowledge.coverage import Coverage
+from mresim_phys.knowledge.health import HealthReport, HealthWatch, step_of
 from mresim_phys.knowledge.latest import LatestCoverage
 from mresim_phys.knowledge.robustness import FailureWatch, robot_states
 from mresim_phys.metrics import RobotRecord, StepRecord, measure_step, update_known_at_base
@@ -189,6 +191,7 @@ class Replay:
         )
         self._maps: dict[int, BeliefGrid] = {}  # each robot's map as one stable 2-D view
         self.failures = FailureWatch(log.robot_names)
+        self.health = HealthWatch(log.robot_names)  # idle, stuck, state reasons, as live
         self.fault_columns = bool(log.meta.get("fault_columns", False))
         self.known_at_base, self.first = 0.0, True
         self.version: int | None = None
@@ -221,6 +224,8 @@ class Replay:
             elif i > 0:  # robots: cells newly FREE in their maps count as explored
                 free.append(self.newly_free(i, belief_changed))
         record = self.measure(fields["step"], free, fields["links"], agents, fields["comm"])
+        self.health.update(fields["step"], [step_of(a) for a in agents[1:]])
+        agents[1:] = [replace(a, activity=self.health.view(a.name)[0]) for a in agents[1:]]
         snap = Snapshot(
             **fields,
             **self.world_grids(chunk, j),  # rubble, gave_way
@@ -239,6 +244,10 @@ class Replay:
             failures=self.failures.notes(),
         )
         return snap, record
+
+    def health_report(self, last: Snapshot) -> HealthReport:
+        """The run-health record at the end, ``last`` being the last step replayed."""
+        return self.health.report([step_of(a) for a in last.robots])
 
     def follow_truth(self, version: int, chunk: Chunk, j: int) -> None:
         """Apply the step's truth change, if the world changed, and retarget the coverage."""

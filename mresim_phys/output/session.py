@@ -28,6 +28,7 @@ from pathlib import Path
 
 from mresim_phys.metrics import StepRecord
 from mresim_phys.output.files import WriteError
+from mresim_phys.output.health import run_health
 from mresim_phys.output.recorders import Recorder, SnapshotSource, make_recorders, summarise
 from mresim_phys.output.robustness import check_paired, run_robustness, write_robustness
 from mresim_phys.output.rundir import StagedRun
@@ -134,7 +135,7 @@ def record_run(
     natural = sim.stop_reason()
     reason = natural if natural is not None else INTERRUPTED
     summary = summarise(sim.scenario, sim.record, sim.milestones, elapsed, reason, sim.comm_totals)
-    summary |= run_robustness(sim)
+    summary |= run_robustness(sim) | run_health(sim)
     interrupted = reason == INTERRUPTED
     if interrupted:
         summary["signal"] = stop.name

@@ -1,12 +1,13 @@
 """Views (phase 8), vector stage: what a frame shows in output pixels, over the coloured map.
 
 Open doors (dashed lines) and moving obstacles' names, comm ranges, links, hierarchy,
-paths, goals, rendezvous points, robots, names, header and legend, bottom to top, with cv2
-primitives in 4-bit fixed point (anti-aliased). Points are converted to pixels in one numpy
-call per frame (every agent, every path point, every goal), robot triangles in another,
-and all links are one ``cv2.polylines`` call; the drawing order (and so every blended
-pixel) is the same as one robot at a time. The legend band is drawn once per set of robot
-names (and world legend entries) and pasted.
+paths, goals, rendezvous points, robots (a done, idle or stuck one unlike a working one),
+names (placed apart: ``render.labels``), header and legend (``render.legend``), bottom to
+top, with cv2 primitives in 4-bit fixed point (anti-aliased). Points are converted to
+pixels in one numpy call per frame (every agent, every path point, every goal), robot
+triangles in another, and all links are one ``cv2.polylines`` call; the drawing order (and
+so every blended pixel) is the same as one robot at a time. The legend band is drawn once
+per set of robot names (and world legend entries) and pasted.
 
 Typical use: ``Overlay(layers, style, scale, to_px).draw(image, snapshot)``.
 """
@@ -19,15 +20,15 @@ from typing import TYPE_CHECKING
 import cv2
 import numpy as np
 
+from mresim_phys.render.labels import Label, place_labels
 from mresim_phys.render.layers import LayerSpec
-from mresim_phys.render.style import BGR, Style
+from mresim_phys.render.legend import legend_band
+from mresim_phys.render.legend import world_legend as world_legend
+from mresim_phys.render.style import AA, BGR, FONT, ONE, SHIFT, Style
 
 if TYPE_CHECKING:
     from mresim_phys.snapshot import AgentSnapshot, Snapshot
 
-SHIFT, ONE, FONT, AA = 4, 16, cv2.FONT_HERSHEY_SIMPLEX, cv2.LINE_AA  # 4-bit fixed point
-LEGEND = {"walls": "wall", "unexplored": "unexplored", "team_known": "team_known"}
-LEGEND["known_at_base"] = "known_at_base"  # global layer -> Style colour, in legend order
 TRIANGLE_TURNS = np.array((0.0, 2.4, -2.4))  # radians from the heading: tip, two corners
 TRIANGLE_REACH = np.array((1.6, 1.0, 1.0))  # in robot glyph sizes
 FAR_PX = 2**24  # fixed-point pixels (a million whole pixels): farther points are clipped here
@@ -74,25 +75,42 @@ class Overlay:
         self._draw_network(image, snap, centres, colours, layers, regions)
         for i, robot in enumerate(snap.robots, start=1):
             self._draw_plans(image, robot, paths[i], goals[i], colours[i], layers[i])
+        sizes = [max(style.robot_px, robot.radius * self.scale) for robot in snap.robots]
+        labels = iter(self._labels(snap, layers, centres, sizes))
         if "location" in layers[0]:
             c, half = centres[0], 5 * ONE
             cv2.rectangle(image, c - half, c + half, style.base, -1, cv2.LINE_8, SHIFT)
-            label = robot_label(snap.base, "presumed_lost" in layers[0])
-            draw_label(image, label, centres[0], 5.0, style.base, style)
-        sizes = [max(style.robot_px, robot.radius * self.scale) for robot in snap.robots]
+            draw_text(image, *next(labels), style.base, style)
         triangles = robot_triangles(snap.robots, centres[1:], sizes)
         for i, robot in enumerate(snap.robots, start=1):
             if "location" in layers[i]:
                 at, size = centres[i], sizes[i - 1]
-                draw_robot(image, robot.state, triangles[i - 1], at, size, colours[i], style)
+                draw_robot(image, robot, triangles[i - 1], at, size, colours[i], style)
                 if robot.broken and robot.state != "failed":
                     draw_ring(image, at, size, style.partial)
-                label = robot_label(robot, "presumed_lost" in layers[i])
-                draw_label(image, label, at, size, colours[i], style)
+                draw_text(image, *next(labels), colours[i], style)
         if "header" in on:
             draw_header(image, snap, style)
         if "legend" in on:
             self._paste_legend(image, tuple(r.name for r in snap.robots), world_legend(snap, on))
+
+    def _labels(
+        self,
+        snap: Snapshot,
+        layers: list[frozenset[str]],
+        centres: np.ndarray,
+        sizes: Sequence[float],
+    ) -> list[tuple[str, tuple[int, int]]]:
+        """(text, text origin) of the label of every agent drawn (base first), placed
+        apart (``render.labels``)."""
+        labels: list[Label] = []
+        offsets = [5.0, *sizes]
+        for agent, mine, centre, offset in zip(snap.agents, layers, centres, offsets, strict=True):
+            if "location" in mine:
+                text = robot_label(agent, "presumed_lost" in mine)
+                labels.append((text, (int(centre[0]) >> SHIFT, int(centre[1]) >> SHIFT), offset))
+        origins = place_labels(labels, self.style)
+        return [(label[0], org) for label, org in zip(labels, origins, strict=True)]
 
     def _points(
         self, snap: Snapshot, layers: list[frozenset[str]]
@@ -223,22 +241,30 @@ def draw_cross(image: np.ndarray, centre: np.ndarray, half: int, colour: BGR) ->
 
 def draw_robot(
     image: np.ndarray,
-    state: str,
+    robot: AgentSnapshot,
     pts: np.ndarray,
     at: np.ndarray,
     size: float,
     colour: BGR,
     style: Style,
 ) -> None:
-    """A triangle: filled (active), red outline (error), hollow (done), grey + red X (failed)."""
+    """A triangle: filled (working), hollow (done), grey outlined in its colour (idle), red
+    outline (error), dark grey + red X (failed); a red ring around a stuck robot."""
+    state, activity = robot.state, robot.activity
     if state == "done":
         cv2.polylines(image, [pts], True, colour, 2, AA, SHIFT)
-        return
-    cv2.fillPoly(image, [pts], style.failed if state == "failed" else colour, AA, SHIFT)
-    outline, width = (style.error, 2) if state == "error" else ((0, 0, 0), 1)
-    cv2.polylines(image, [pts], True, outline, width, AA, SHIFT)
+    elif state != "failed" and activity == "idle":
+        cv2.fillPoly(image, [pts], style.idle, AA, SHIFT)
+        cv2.polylines(image, [pts], True, colour, 1, AA, SHIFT)
+    else:
+        cv2.fillPoly(image, [pts], style.failed if state == "failed" else colour, AA, SHIFT)
+        outline, width = (style.error, 2) if state == "error" else ((0, 0, 0), 1)
+        cv2.polylines(image, [pts], True, outline, width, AA, SHIFT)
     if state == "failed":
         draw_cross(image, at, max(round(size * 0.8), 3), style.error)
+    elif activity == "stuck":
+        centre = (int(at[0]), int(at[1]))
+        cv2.circle(image, centre, round((size * 1.5 + 1) * ONE), style.stuck, 2, AA, SHIFT)
 
 
 def draw_ring(image: np.ndarray, at: np.ndarray, size: float, colour: BGR) -> None:
@@ -248,12 +274,23 @@ def draw_ring(image: np.ndarray, at: np.ndarray, size: float, colour: BGR) -> No
 
 
 def robot_label(robot: AgentSnapshot, lost: bool = False) -> str:
-    """A robot's name, with its failed parts if any, its battery level if it has one
-    (``B [radio] 73%``) and, with ``lost``, the teammates it presumes lost (``A lost?B,C``:
-    the ``presumed_lost`` layer)."""
+    """A robot's name, with its failed parts if any, its battery level if it has one, what
+    it is doing when that is not work (``done``, ``idle``, ``stuck``: ``B [radio] 73%
+    idle``) and, with ``lost``, the teammates it presumes lost (``A lost?B,C``: the
+    ``presumed_lost`` layer)."""
     text = f"{robot.name} [{','.join(robot.broken)}]" if robot.broken else robot.name
     text = text if robot.battery is None else f"{text} {robot.battery:.0%}"
+    tag = state_tag(robot)
+    text = f"{text} {tag}" if tag else text
     return f"{text} lost?{','.join(robot.presumed_lost)}" if lost and robot.presumed_lost else text
+
+
+def state_tag(robot: AgentSnapshot) -> str:
+    """``done``, ``idle`` or ``stuck`` (knowledge.health's activity), or ``""`` for a robot
+    at work, a failed one (its grey X says it) and the base."""
+    if robot.state == "done":
+        return "done"
+    return robot.activity if robot.activity in ("idle", "stuck") and robot.state != "failed" else ""
 
 
 def draw_label(
@@ -261,7 +298,13 @@ def draw_label(
 ) -> None:
     """``text`` up and right of the fixed-point point ``at``, on a white halo."""
     x, y = (int(v) >> SHIFT for v in at)
-    org = (x + int(offset) + 2, y - int(offset) - 1)
+    draw_text(image, text, (x + int(offset) + 2, y - int(offset) - 1), colour, style)
+
+
+def draw_text(
+    image: np.ndarray, text: str, org: tuple[int, int], colour: BGR, style: Style
+) -> None:
+    """``text`` from the pixel ``org`` (its baseline's left end), on a white halo."""
     cv2.putText(image, text, org, FONT, style.font_scale, (255, 255, 255), 3, AA)
     cv2.putText(image, text, org, FONT, style.font_scale, colour, 1, AA)
 
@@ -283,18 +326,6 @@ def draw_header(image: np.ndarray, snap: Snapshot, style: Style) -> None:
         cv2.putText(image, line, (4, top + th + 3), FONT, style.font_scale, (255, 255, 255), 1, AA)
 
 
-def world_legend(snap: Snapshot, on: frozenset[str]) -> tuple[str, ...]:
-    """The changing world's legend entries (Style colour names) a frame shows: obstacle and
-    door if the run has them, rubble once some has fallen, hazard zones (a static run
-    without faults: none)."""
-    kinds = {m.kind for m in snap.movables}
-    rubble = snap.rubble is not None and bool(snap.rubble.any())
-    present = [("obstacle", "obstacles", "obstacle" in kinds), ("door", "doors", "door" in kinds)]
-    present.append(("rubble", "debris", rubble))
-    present.append(("hazard", "hazards", snap.hazards is not None))
-    return tuple(name for name, layer, shown in present if shown and layer in on)
-
-
 def dashes(ends: np.ndarray, dash: float) -> list[np.ndarray]:
     """A dashed line between the two fixed-point points ``ends``: an odd number of pieces
     about ``dash`` long (fixed point), every other one drawn, starting and ending drawn."""
@@ -304,32 +335,3 @@ def dashes(ends: np.ndarray, dash: float) -> list[np.ndarray]:
     points = np.round(start + np.linspace(0.0, 1.0, pieces + 1)[:, None] * (end - start))
     points = points.astype(np.int32)
     return [points[i : i + 2] for i in range(0, pieces, 2)]
-
-
-def legend_band(
-    width: int, names: Sequence[str], layers: LayerSpec, style: Style, extras: Sequence[str] = ()
-) -> np.ndarray:
-    """A band image with colour swatches for the map classes shown, the changing world's
-    ``extras`` (Style colour names) and every robot."""
-    on = layers.global_layers
-    items = [
-        (name.replace("_", " "), getattr(style, name)) for key, name in LEGEND.items() if key in on
-    ]
-    if "frontiers" in set(layers.robot_layers).union(*layers.per_robot.values()):
-        items.append(("frontier", style.frontier))
-    items += [(name, getattr(style, name)) for name in extras]
-    items += [(name, style.robot_colour(i)) for i, name in enumerate(names)]
-    (_, th), base = cv2.getTextSize("Ag", FONT, style.font_scale, 1)
-    line, spots, x, y = th + base + 4, [], 4, 0
-    for text, colour in items:
-        w = cv2.getTextSize(text, FONT, style.font_scale, 1)[0][0] + th + 12
-        x, y = (4, y + line) if x + w > width and x > 4 else (x, y)
-        spots.append((x, y, text, colour))
-        x += w
-    band = np.full((y + line + 2, width, 3), style.legend_bg, dtype=np.uint8)
-    for x, y, text, colour in spots:
-        cv2.rectangle(band, (x, y + 3), (x + th, y + 3 + th), colour, -1)
-        cv2.rectangle(band, (x, y + 3), (x + th, y + 3 + th), (60, 60, 60), 1)
-        org = (x + th + 4, y + 3 + th)
-        cv2.putText(band, text, org, FONT, style.font_scale, (0, 0, 0), 1, AA)
-    return band

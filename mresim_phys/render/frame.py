@@ -7,7 +7,8 @@ lookup table (:meth:`Style.lut <mresim_phys.render.style.Style.lut>`) and resize
 a changing world's rubble, closed doors and moving obstacles are solid labels over them.
 Vector stage (:mod:`~mresim_phys.render.draw`), in output pixels with cv2 primitives: comm
 ranges, links, hierarchy, paths, goals, rendezvous points, robots, names, header and legend.
-Modules import downwards only: ``layers`` <- ``style`` <- ``raster``, ``draw`` <- ``frame``.
+Modules import downwards only: ``layers`` <- ``style`` <- ``raster``, ``labels``,
+``legend`` <- ``draw`` <- ``frame``.
 On an 8-robot 800x600 office frame with every layer on, a new snapshot each frame costs
 ~2-3 ms (``benchmarks/bench_render.py``; the numpy/cv2 renderer it replaced took 6-8 ms).
 
@@ -23,7 +24,7 @@ from typing import TYPE_CHECKING
 import cv2
 import numpy as np
 
-from mresim_phys.render.draw import ONE, Overlay
+from mresim_phys.render.draw import Overlay
 from mresim_phys.render.layers import LayerSpec
 from mresim_phys.render.raster import (
     LabelGrids,
@@ -34,7 +35,7 @@ from mresim_phys.render.raster import (
     shade_prior,
     shade_terrain,
 )
-from mresim_phys.render.style import DEFAULT_STYLE, Style
+from mresim_phys.render.style import DEFAULT_STYLE, ONE, Style
 
 if TYPE_CHECKING:
     from mresim_phys.comms.regions import RegionProbe

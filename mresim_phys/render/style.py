@@ -15,11 +15,13 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import cv2
 import numpy as np
 
 from mresim_phys.render.layers import LayerSpec
 
 BGR = tuple[int, int, int]
+SHIFT, ONE, FONT, AA = 4, 16, cv2.FONT_HERSHEY_SIMPLEX, cv2.LINE_AA  # 4-bit fixed point, text
 TEAM_KNOWN, AT_BASE, WALL, SKELETON, FRONTIER, CLASSES = 1, 2, 3, 4, 5, 6
 RUBBLE, DOOR, OBSTACLE = 253, 254, 255  # solid labels, above every class + tint (< 246)
 _SOLID_COLOURS = {RUBBLE: "rubble", DOOR: "door", OBSTACLE: "obstacle"}
@@ -55,6 +57,8 @@ class Style:
     link: BGR = (128, 128, 0)
     hierarchy: BGR = (130, 0, 75)
     failed: BGR = (128, 128, 128)
+    idle: BGR = (175, 175, 175)  # grey fill of an idle robot (outlined in its colour)
+    stuck: BGR = (0, 0, 230)  # red ring around a stuck robot
     error: BGR = (0, 0, 255)
     base: BGR = (0, 0, 0)
     header_bg: BGR = (40, 40, 40)

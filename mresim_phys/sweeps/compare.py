@@ -33,6 +33,9 @@ DEFAULT_METRICS = (
     "auc_explored",
     "auc_known_at_base",
     "final_explored",
+    "robots_idle_with_frontier",  # run health (knowledge/health.py, docs/run-health.md)
+    "idle_robot_steps",
+    "stuck_robot_steps",
 )
 
 

@@ -6,10 +6,11 @@
 ``run_time_s`` (the worker's wall time), ``attempt`` (1, or more for a run run again after
 a lost or failed attempt), then the run's summary figures (``summary.json`` flattened:
 ``steps_to_explored_90`` for ``steps_to_explored["0.9"]``, the ``communication`` block's
-fields, ``failed_robots`` (the
-summary's ``failures``, counted), the robustness figures) and, for paired runs,
-``robustness.json``'s differences (``diff_<name>``). Wall-clock columns are
-:data:`WALL_COLUMNS`; everything else is the same on any machine and any backend.
+fields, ``failed_robots`` (the summary's ``failures``, counted), the robustness figures,
+the run-health totals ``robots_idle_with_frontier``, ``idle_robot_steps`` and
+``stuck_robot_steps``) and, for paired runs, ``robustness.json``'s differences
+(``diff_<name>``). Wall-clock columns are :data:`WALL_COLUMNS`; everything else is the same
+on any machine and any backend.
 
 ``steps.parquet`` is the long table: ``run_id``, then every ``metrics.csv`` column
 (per-robot columns of robots a run does not have are null).
@@ -25,6 +26,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
+from mresim_phys.knowledge.health import TOTALS
 from mresim_phys.output.files import atomic_path
 from mresim_phys.sweeps.expand import RunSpec
 from mresim_phys.sweeps.worker import DONE, run_folder
@@ -56,6 +58,8 @@ def flatten_summary(summary: dict[str, Any]) -> dict[str, Any]:
             row |= value
         elif key == "failures" and isinstance(value, list):
             row["failed_robots"] = len(value)
+        elif key == "health" and isinstance(value, dict):
+            row |= {name: value.get(name) for name in TOTALS}
         elif not isinstance(value, (dict, list)):
             row[key] = value
     return row

@@ -17,6 +17,7 @@ from pathlib import Path
 
 from mresim_phys.build import region_probe
 from mresim_phys.errors import MresimError
+from mresim_phys.output.health import print_warnings
 from mresim_phys.output.recorders import default_run_dir
 from mresim_phys.output.session import Outcome, run_session
 from mresim_phys.output.signals import StopRequest, stop_on_signals
@@ -149,6 +150,7 @@ def view_run(args: argparse.Namespace) -> int:
                 raise
         if not args.quiet:
             print(summary_line(sim, outcome, plotted), flush=True)
+        print_warnings(outcome.summary)
         replay_after(server, outcome, stop, later)
     return outcome.exit_status
 

@@ -3,8 +3,9 @@
 A :class:`FrameMaker` renders a snapshot with the layers a page asks for through the same
 :class:`~mresim_phys.render.Renderer` (same scale, style and communication regions) as a
 run's video, and encodes it as PNG (lossless: the page's pixels are the renderer's).
-:func:`agent_rows` gives what hovering a robot shows (state, role, distance travelled,
-path left, battery, last contact with the base) and where the robot is in frame pixels.
+:func:`agent_rows` gives what hovering a robot shows (state, activity: working, idle or
+stuck, role, distance travelled, path left, battery, last contact with the base) and where
+the robot is in frame pixels.
 
 Typical use: ``FrameMaker(shape, scale).png(snapshot, layers)``.
 """
@@ -117,6 +118,7 @@ def agent_row(agent: AgentSnapshot, px: tuple[float, float], radius: float) -> d
         "px": [round(px[0], 2), round(px[1], 2)],
         "r": round(max(radius, 3.0), 2),
         "state": agent.state,
+        "activity": agent.activity,
         "role": agent.role,
         "distance": round(agent.distance, 2),
         "path_left": round(path_length(np.concatenate([start, agent.path])), 2),

@@ -152,8 +152,9 @@ class LiveSource:
     def on_step(self, record: StepRecord) -> None:
         """The session's hook: note the step, serve frames, hold while paused."""
         states = [r.state for r in record.robots]
+        reasons = [self.sim.health.view(r.name)[1] for r in record.robots]
         with self.cond:
-            self.timeline.add(record, self.sim.events_now, states)
+            self.timeline.add(record, self.sim.events_now, states, reasons)
             self.step = record.step
             self._pace()
             self._serve()

@@ -159,7 +159,9 @@ class ReplaySource:
                 snap, record = replay.step(index.lines[n], chunk, j)
             except DECODE_ERRORS as exc:
                 raise damaged(self.log.log_dir, f"logged step {n}: {exc!r}") from None
-            index.timeline.add(record, snap.events, [a.state for a in snap.robots])
+            robots = snap.robots
+            states, reasons = [a.state for a in robots], [a.state_reason for a in robots]
+            index.timeline.add(record, snap.events, states, reasons)
         return index
 
     def snapshot(self, n: int) -> Snapshot:

@@ -3,7 +3,10 @@
 For every step: the explored and known-at-base fractions (the page's chart) and the
 step's events (failures, doors, debris, ... : ``Snapshot.events``), which the page draws
 as marks on the scrubber; a robot whose state turns ``failed`` without an event of its
-own (a random fault) is marked too. Filled step by step, live or from a log's index.
+own (a random fault) is marked too, and so is a robot that declares itself done or turns
+active again after that, with the reason the run gave (``B done (no reachable frontier)``: the
+run-health record's state changes, ``knowledge/health.py``). Filled step by step, live or
+from a log's index.
 """
 
 from __future__ import annotations
@@ -25,8 +28,15 @@ class Timeline:
     events: list[tuple[int, str]] = field(default_factory=list)  # (logged step n, text)
     _states: list[str] = field(default_factory=list)
 
-    def add(self, record: StepRecord, events: Sequence[str], states: Sequence[str]) -> None:
-        """Add the next step: its record, its events and the robots' states."""
+    def add(
+        self,
+        record: StepRecord,
+        events: Sequence[str],
+        states: Sequence[str],
+        reasons: Sequence[str | None] = (),
+    ) -> None:
+        """Add the next step: its record, its events, the robots' states and the reasons
+        of the state changes of this step (None where a robot's state did not change)."""
         n = len(self.steps)
         self.steps.append(record.step)
         self.explored.append(record.explored)
@@ -38,6 +48,9 @@ class Timeline:
                 name = record.robots[robot].name if robot < len(record.robots) else str(robot)
                 if now == "failed" and was != "failed" and name not in told:
                     self.events.append((n, f"{name} failed"))
+                reason = reasons[robot] if robot < len(reasons) else None
+                if "done" in (was, now) and "failed" not in (was, now) and was != now:
+                    self.events.append((n, f"{name} {now} ({reason or 'no reason logged'})"))
         self._states = list(states)
 
     def __len__(self) -> int:

@@ -1,0 +1,76 @@
+"""Run health, live side (phase 7, measure): the robots' steps and their state-change reasons.
+
+The simulation (``sim.py``) hands the run-health watch (``knowledge/health.py``) every
+robot at the end of each step; when a robot's reported state differs from the one the
+watch holds, :func:`change_reason` says why, from what the step left:
+
+* ``done``, or ``active`` again after ``done``: the reason of the decision the robot took
+  this step (``Decision.info["reason"]``; ``"strategy"`` when it gives none);
+* ``error``: the collision (``collision at (x, y)``, where the robot stopped);
+* ``failed``: the event that failed it (``fail B``, ``fail B (random)``, ...; ``"fault"``
+  if no event names it); back from ``failed``: the event that repaired it (``recover B``;
+  ``"repaired"``);
+* out of ``error``: ``moved again`` (to ``done`` with a decision of this step: its reason).
+
+The reasons go into the snapshot (``AgentSnapshot.state_reason``) and so into the run log,
+from which a replay reads them back.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+from mresim_phys.agents import Robot
+from mresim_phys.knowledge.health import HealthWatch, RobotStep
+
+PARTS = frozenset(("drive", "sensor", "radio", "degraded"))  # a part's failure is no state
+
+
+def decision_reason(robot: Robot) -> str:
+    """The reason its latest decision gives (``Decision.info["reason"]``), or ``strategy``."""
+    info = robot.decision.info if robot.decision is not None else {}
+    reason = info.get("reason")
+    return str(reason) if reason else "strategy"
+
+
+def event_naming(name: str, events: Sequence[str], verb: str) -> str | None:
+    """The first of ``events`` that says ``verb`` of the whole robot ``name`` (``fail B``,
+    ``fail B (random)``, not ``fail B radio``).
+
+    >>> event_naming("B", ["fail B radio", "fail B (random)"], "fail")
+    'fail B (random)'
+    """
+    for text in events:
+        words = text.split()
+        if words[:2] == [verb, name] and (len(words) == 2 or words[2] not in PARTS):
+            return text
+    return None
+
+
+def change_reason(robot: Robot, old: str, step: int, events: Sequence[str]) -> str:
+    """Why ``robot``'s state is no longer ``old`` at the end of ``step`` (module docstring)."""
+    new = robot.state
+    if new == "failed":
+        return event_naming(robot.name, events, "fail") or "fault"
+    if old == "failed":
+        return event_naming(robot.name, events, "recover") or "repaired"
+    if new == "error":
+        x, y = robot.position
+        return f"collision at ({x:.1f}, {y:.1f})"
+    if old == "error" and (new == "active" or robot.last_plan_step != step):
+        return "moved again"
+    return decision_reason(robot)
+
+
+def robot_steps(
+    robots: Sequence[Robot], watch: HealthWatch, step: int, events: Sequence[str]
+) -> list[RobotStep]:
+    """Every robot at the end of ``step`` as the watch reads it, with the reason of a
+    state change."""
+    out = []
+    for r in robots:
+        old = watch.state_of(r.name)
+        reason = None if r.state == old else change_reason(r, old, step, events)
+        moving = (r.distance, len(r.path) > 0, r.can_move)
+        out.append(RobotStep(r.name, r.state, *moving, r.position, r.radius, r.belief, reason))
+    return out

@@ -1,0 +1,278 @@
+"""Run health (phase 7, measure): how each robot spent the run, and why its state changed.
+
+At the end of every step :class:`HealthWatch` reads each robot's :class:`RobotStep` (what
+a snapshot holds of it: state, odometer, path, drive, pose, map) and keeps, per robot:
+
+* its *activity* in the step (after step 0, for a robot alive with a working drive):
+  ``working`` (it moved at least :data:`MOVE_EPS` cells), else ``stuck`` (it had a path
+  to follow, or its last move bumped: state ``error``), else ``idle`` (parked, done, no
+  path); ``""`` when not assessed (step 0, a failed robot, a broken drive);
+* ``idle_steps``, ``stuck_steps`` and the longest idle stretch;
+* every change of its reported state (``active``, ``done``, ``error``, ``failed``) with
+  the step and the reason the run gave (:class:`StateChange`; the live reasons come from
+  ``health_phase.change_reason``, a replay reads them from the run log); when it became
+  ``done`` (a change to ``done`` from ``active``: not a return to ``done`` after a bump or
+  a repair);
+* while it is idle or done, whether its OWN map holds a frontier its body could reach
+  (``knowledge/frontier_reach.py``), checked when the stretch starts and then every
+  :data:`CHECK_EVERY` steps of it (a robot that works is never checked): an idle step whose
+  latest check found reachable frontier cells counts in ``idle_with_frontier``.
+
+:meth:`HealthWatch.report` adds a last check of every robot's map at the end and a warning
+for every robot that idled at least :data:`WARN_AFTER` steps with reachable frontier cells
+in its map. Everything here is read from what a snapshot (and so the run log) holds, so a
+replay rebuilds the same record (``output.runlog.Replay``); nothing here changes the run.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field, replace
+from typing import Any, Protocol
+
+from mresim_phys.knowledge.frontier_reach import FrontierCheck, frontier_check
+from mresim_phys.types import BeliefGrid, FloatArray
+
+MOVE_EPS = 0.05  # cells: a robot that moved less in a step did not move
+CHECK_EVERY = 20  # steps between frontier checks of a robot that stays idle or done
+WARN_AFTER = 20  # idle steps with reachable frontier cells that make a warning (in a run)
+NOT_LOGGED = "not logged"  # a change without a reason (a log written before reasons were)
+WORKING, IDLE, STUCK = "working", "idle", "stuck"
+TOTALS = ("robots_idle_with_frontier", "idle_robot_steps", "stuck_robot_steps")  # sweep columns
+
+
+@dataclass(frozen=True)
+class RobotStep:
+    """What the watch reads of one robot at the end of a step."""
+
+    name: str
+    state: str  # active / done / error / failed
+    distance: float  # odometer, cells
+    has_path: bool  # points left to follow
+    can_move: bool  # alive with a working drive
+    position: tuple[float, float]
+    radius: float
+    belief: BeliefGrid
+    reason: str | None = None  # why its state changed this step (None: unknown)
+
+
+class AgentLike(Protocol):
+    """The fields of an ``AgentSnapshot`` the watch reads (a replayed robot)."""
+
+    @property
+    def name(self) -> str: ...
+    @property
+    def state(self) -> str: ...
+    @property
+    def distance(self) -> float: ...
+    @property
+    def path(self) -> FloatArray: ...
+    @property
+    def broken(self) -> tuple[str, ...]: ...
+    @property
+    def position(self) -> tuple[float, float]: ...
+    @property
+    def radius(self) -> float: ...
+    @property
+    def belief(self) -> BeliefGrid: ...
+    @property
+    def state_reason(self) -> str | None: ...
+
+
+def step_of(agent: AgentLike) -> RobotStep:
+    """A snapshot's robot as the watch reads it (the same values the live run gives)."""
+    return RobotStep(
+        agent.name,
+        agent.state,
+        agent.distance,
+        len(agent.path) > 0,
+        agent.state != "failed" and "drive" not in agent.broken,
+        agent.position,
+        agent.radius,
+        agent.belief,
+        agent.state_reason,
+    )
+
+
+def activity_of(moved: float, has_path: bool, state: str) -> str:
+    """``working``, ``stuck`` or ``idle`` for a robot that could move (module docstring).
+
+    >>> activity_of(0.5, True, "active"), activity_of(0.0, True, "active")
+    ('working', 'stuck')
+    >>> activity_of(0.0, False, "error"), activity_of(0.01, False, "done")
+    ('stuck', 'idle')
+    """
+    if moved >= MOVE_EPS:
+        return WORKING
+    return STUCK if has_path or state == "error" else IDLE
+
+
+@dataclass(frozen=True)
+class StateChange:
+    """A robot's reported state changed at ``step``, for ``reason``."""
+
+    step: int
+    robot: str
+    old: str
+    new: str
+    reason: str
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready."""
+        return {"step": self.step, "from": self.old, "to": self.new, "reason": self.reason}
+
+
+@dataclass
+class RobotHealth:
+    """One robot's counts so far and what the watch remembers of its last step."""
+
+    idle: int = 0
+    stuck: int = 0
+    idle_with_frontier: int = 0
+    first_idle_with_frontier: int | None = None
+    longest_idle: int = 0
+    streak: int = 0  # idle steps in a row up to now
+    done_at: list[int] = field(default_factory=list)
+    done: bool = False  # it declared itself done (reset when it turns active)
+    state: str = "active"
+    distance: float = 0.0
+    activity: str = ""
+    reason_now: str | None = None  # the reason of a change at the latest step
+    last_check: int | None = None  # step of the latest frontier check of this stretch
+    check: FrontierCheck | None = None
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready counts (the end check and state changes are added by the report)."""
+        return {
+            "idle_steps": self.idle,
+            "stuck_steps": self.stuck,
+            "longest_idle": self.longest_idle,
+            "idle_with_frontier": self.idle_with_frontier,
+            "first_idle_with_frontier": self.first_idle_with_frontier,
+            "done_at": list(self.done_at),
+        }
+
+
+class HealthWatch:
+    """Every robot's run-health record, one step at a time (module docstring)."""
+
+    def __init__(self, names: Sequence[str], check_every: int = CHECK_EVERY) -> None:
+        self.robots = {name: RobotHealth() for name in names}
+        self.changes: list[StateChange] = []
+        self.check_every = check_every
+        self.step: int | None = None  # the latest step seen
+
+    def state_of(self, name: str) -> str:
+        """The state ``name`` reported at the latest step (``active`` before any)."""
+        return self.robots[name].state
+
+    def view(self, name: str) -> tuple[str, str | None]:
+        """(activity, reason of a state change at the latest step) of agent ``name``;
+        ("", None) for an agent that is no robot (the base)."""
+        health = self.robots.get(name)
+        return ("", None) if health is None else (health.activity, health.reason_now)
+
+    def changes_at(self, step: int) -> list[StateChange]:
+        """The state changes of ``step`` (the latest ones are at the end)."""
+        out = []
+        for change in reversed(self.changes):
+            if change.step != step:
+                break
+            out.append(change)
+        return out[::-1]
+
+    def update(self, step: int, robots: Sequence[RobotStep]) -> None:
+        """Take the end of ``step`` (steps in order; the first one seen is not assessed)."""
+        first, self.step = self.step is None, step
+        for robot in robots:
+            health = self.robots[robot.name]
+            self.note_state(step, robot, health)
+            moved = robot.distance - health.distance
+            assessed = not first and robot.can_move
+            health.activity = activity_of(moved, robot.has_path, robot.state) if assessed else ""
+            health.distance = robot.distance
+            self.count(step, robot, health)
+
+    def note_state(self, step: int, robot: RobotStep, health: RobotHealth) -> None:
+        """Record a change of the robot's reported state."""
+        health.reason_now = None
+        if robot.state == health.state:
+            return
+        reason = robot.reason or NOT_LOGGED
+        self.changes.append(StateChange(step, robot.name, health.state, robot.state, reason))
+        health.reason_now = reason
+        if robot.state == "done" and not health.done:
+            health.done_at.append(step)
+        health.done = robot.state == "done" or (health.done and robot.state != "active")
+        health.state = robot.state
+
+    def count(self, step: int, robot: RobotStep, health: RobotHealth) -> None:
+        """Idle and stuck counts; the frontier check of an idle or done robot when due."""
+        idle = health.activity == IDLE
+        if idle or robot.state == "done":
+            due = health.last_check is None or step - health.last_check >= self.check_every
+            if due:
+                health.check = frontier_check(robot.belief, robot.position, robot.radius)
+                health.last_check = step
+        else:
+            health.last_check, health.check = None, None
+        health.stuck += health.activity == STUCK
+        health.streak = health.streak + 1 if idle else 0
+        if not idle:
+            return
+        health.idle += 1
+        health.longest_idle = max(health.longest_idle, health.streak)
+        if health.check is not None and health.check.reachable > 0:
+            health.idle_with_frontier += 1
+            if health.first_idle_with_frontier is None:
+                health.first_idle_with_frontier = step
+
+    def report(self, robots: Sequence[RobotStep]) -> HealthReport:
+        """The record at the end (``robots``: every robot at the last step)."""
+        ends = {r.name: frontier_check(r.belief, r.position, r.radius) for r in robots}
+        robots_now = {n: replace(h, done_at=list(h.done_at)) for n, h in self.robots.items()}
+        return HealthReport(robots_now, ends, list(self.changes))
+
+
+@dataclass(frozen=True)
+class HealthReport:
+    """The run-health record of a whole run: summary.json's ``health``."""
+
+    robots: dict[str, RobotHealth]
+    ends: dict[str, FrontierCheck]  # each robot's map at the end
+    changes: list[StateChange]
+
+    @property
+    def warnings(self) -> list[str]:
+        """One line per robot that idled with reachable frontier cells in its map."""
+        out = []
+        for name, health in self.robots.items():
+            if health.idle_with_frontier < WARN_AFTER:
+                continue
+            end = self.ends[name]
+            rest = end.frontier - end.reachable
+            out.append(
+                f"robot {name} idled {health.idle_with_frontier} steps (from step"
+                f" {health.first_idle_with_frontier}) while its map held frontier cells it"
+                f" could reach; at the end its map holds {end.frontier} frontier cells,"
+                f" {end.reachable} of them reachable"
+                + (f"; {rest} unreachable: {end.reason}" if rest else "")
+            )
+        return out
+
+    def totals(self) -> dict[str, int]:
+        """The sweep tables' columns: robots that idled with reachable frontier cells,
+        idle and stuck robot-steps."""
+        robots = self.robots.values()
+        warned = sum(h.idle_with_frontier >= WARN_AFTER for h in robots)
+        values = (warned, sum(h.idle for h in robots), sum(h.stuck for h in robots))
+        return dict(zip(TOTALS, values, strict=True))
+
+    def summary(self) -> dict[str, Any]:
+        """JSON-ready: totals, per robot counts, end check and state changes, warnings."""
+        robots = {}
+        for name, health in self.robots.items():
+            changes = [c.summary() for c in self.changes if c.robot == name]
+            end = self.ends[name].summary()
+            robots[name] = {**health.summary(), "at_end": end, "state_changes": changes}
+        return {**self.totals(), "robots": robots, "warnings": self.warnings}

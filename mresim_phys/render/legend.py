@@ -1,0 +1,95 @@
+"""Views (phase 8), legend: the band at the bottom of a frame that says what is what.
+
+Colour swatches for the map classes shown, the changing world's parts a frame holds
+(:func:`world_legend`: obstacles, doors, rubble, hazard zones) and every robot; then, when
+robots are drawn, the glyphs of a robot that is done, idle or stuck (the run-health
+record's activity, ``knowledge/health.py``), as ``render.draw`` draws them on the map.
+
+Typical use: ``legend_band(width, names, layers, style, world_legend(snap, on))``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import cv2
+import numpy as np
+
+from mresim_phys.render.layers import LayerSpec
+from mresim_phys.render.style import AA, BGR, FONT, ONE, SHIFT, Style
+
+if TYPE_CHECKING:
+    from mresim_phys.snapshot import Snapshot
+
+LEGEND = {"walls": "wall", "unexplored": "unexplored", "team_known": "team_known"}
+LEGEND["known_at_base"] = "known_at_base"  # global layer -> Style colour, in legend order
+STATE_GLYPHS = ("done", "idle", "stuck")  # legend entries of robots not at work
+GLYPH_COLOUR: BGR = (90, 90, 90)  # the legend's robot glyphs (a robot's own colour on frames)
+
+
+def world_legend(snap: Snapshot, on: frozenset[str]) -> tuple[str, ...]:
+    """The changing world's legend entries (Style colour names) a frame shows: obstacle and
+    door if the run has them, rubble once some has fallen, hazard zones (a static run
+    without faults: none)."""
+    kinds = {m.kind for m in snap.movables}
+    rubble = snap.rubble is not None and bool(snap.rubble.any())
+    present = [("obstacle", "obstacles", "obstacle" in kinds), ("door", "doors", "door" in kinds)]
+    present.append(("rubble", "debris", rubble))
+    present.append(("hazard", "hazards", snap.hazards is not None))
+    return tuple(name for name, layer, shown in present if shown and layer in on)
+
+
+def legend_band(
+    width: int, names: Sequence[str], layers: LayerSpec, style: Style, extras: Sequence[str] = ()
+) -> np.ndarray:
+    """A band image with colour swatches for the map classes shown, the changing world's
+    ``extras`` (Style colour names) and every robot, then (when robots are drawn) the
+    glyphs of a robot that is done, idle or stuck (:data:`STATE_GLYPHS`)."""
+    on = layers.global_layers
+    robot_layers = set(layers.robot_layers).union(*layers.per_robot.values())
+    items = [
+        (name.replace("_", " "), getattr(style, name)) for key, name in LEGEND.items() if key in on
+    ]
+    if "frontiers" in robot_layers:
+        items.append(("frontier", style.frontier))
+    items += [(name, getattr(style, name)) for name in extras]
+    items += [(name, style.robot_colour(i)) for i, name in enumerate(names)]
+    glyphs = STATE_GLYPHS if "location" in robot_layers else ()
+    (_, th), base = cv2.getTextSize("Ag", FONT, style.font_scale, 1)
+    line, spots, x, y = th + base + 4, [], 4, 0
+    for text, colour in [*items, *((g, GLYPH_COLOUR) for g in glyphs)]:
+        w = cv2.getTextSize(text, FONT, style.font_scale, 1)[0][0] + th + 12
+        x, y = (4, y + line) if x + w > width and x > 4 else (x, y)
+        spots.append((x, y, text, colour))
+        x += w
+    band = np.full((y + line + 2, width, 3), style.legend_bg, dtype=np.uint8)
+    for n, (x, y, text, colour) in enumerate(spots):
+        if n < len(items):
+            cv2.rectangle(band, (x, y + 3), (x + th, y + 3 + th), colour, -1)
+            cv2.rectangle(band, (x, y + 3), (x + th, y + 3 + th), (60, 60, 60), 1)
+        else:
+            legend_glyph(band, text, (x, y + 3), th, style)
+        org = (x + th + 4, y + 3 + th)
+        cv2.putText(band, text, org, FONT, style.font_scale, (0, 0, 0), 1, AA)
+    return band
+
+
+def legend_glyph(
+    band: np.ndarray, kind: str, corner: tuple[int, int], side: int, style: Style
+) -> None:
+    """A small robot glyph in the ``side``-pixel square at ``corner``, drawn as a robot
+    that is ``kind`` (done, idle or stuck) is drawn on a frame, in :data:`GLYPH_COLOUR`."""
+    x, y = corner
+    tip, back = (x + side) * ONE, x * ONE + ONE
+    pts = np.array([[tip, (y + side // 2) * ONE], [back, y * ONE], [back, (y + side) * ONE]])
+    pts = pts.astype(np.int32)
+    if kind == "done":
+        cv2.polylines(band, [pts], True, GLYPH_COLOUR, 1, AA, SHIFT)
+    elif kind == "idle":
+        cv2.fillPoly(band, [pts], style.idle, AA, SHIFT)
+        cv2.polylines(band, [pts], True, GLYPH_COLOUR, 1, AA, SHIFT)
+    else:
+        cv2.fillPoly(band, [pts], GLYPH_COLOUR, AA, SHIFT)
+        centre = ((2 * x + side) * ONE // 2, (2 * y + side) * ONE // 2)
+        cv2.circle(band, centre, (side * ONE) // 2 + ONE, style.stuck, 1, AA, SHIFT)

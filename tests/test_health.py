@@ -1,0 +1,260 @@
+"""Run health (knowledge/health.py, knowledge/frontier_reach.py, output/health.py): idle and
+stuck steps, state changes with reasons, frontier cells a robot could reach, warnings; the
+record in summary.json, the run log and its replay."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from mresim_phys import Simulation
+from mresim_phys.cli import main
+from mresim_phys.knowledge import health
+from mresim_phys.knowledge.frontier_reach import frontier_cells, frontier_check
+from mresim_phys.knowledge.health import CHECK_EVERY, HealthWatch, RobotStep
+from mresim_phys.output.health import replayed_health, run_health
+from mresim_phys.output.runlog import RunLog
+from mresim_phys.strategies import Decision
+from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
+
+ScenarioFile = Callable[..., Path]
+ONE_ROBOT = [{"name": "A", "start": [8, 20], "heading_deg": 0}]
+QUITS = {"name": "health_plugins:QuitsAtFive", "params": {"replan_interval": 1}}
+
+
+# --- which frontier cells a robot could reach ----------------------------------------------
+
+
+def known_room(rows: int = 30, cols: int = 40) -> np.ndarray:
+    """A belief: walls around, everything inside FREE."""
+    belief = np.full((rows, cols), FREE, np.uint8)
+    belief[0, :] = belief[-1, :] = belief[:, 0] = belief[:, -1] = OCCUPIED
+    return belief
+
+
+def test_a_frontier_cell_is_free_beside_an_unknown_4_neighbour() -> None:
+    belief = known_room()
+    belief[10, 20] = UNKNOWN
+    cells = set(map(tuple, np.argwhere(frontier_cells(belief))))
+    assert cells == {(9, 20), (11, 20), (10, 19), (10, 21)}  # not the diagonal ones
+
+
+def test_a_fully_known_room_has_none_left() -> None:
+    check = frontier_check(known_room(), (10.5, 10.5), 2.0)
+    assert (check.frontier, check.reachable, check.reason) == (0, 0, "none left")
+
+
+def test_an_open_side_is_reachable() -> None:
+    belief = known_room()
+    belief[1:-1, 30:-1] = UNKNOWN  # the right part unknown: its edge is a frontier
+    check = frontier_check(belief, (10.5, 10.5), 2.0)
+    assert check.frontier == 28 and check.reachable == 28 and check.reason == "all reachable"
+
+
+def test_cells_past_a_wall_are_behind_walls() -> None:
+    belief = known_room()
+    belief[:, 20] = OCCUPIED  # a wall splits the room
+    belief[10:14, 30:34] = UNKNOWN  # a hole in the right half's knowledge
+    check = frontier_check(belief, (10.5, 10.5), 1.0)
+    assert check.frontier == 16 and check.reachable == 0 and check.behind_walls == 16
+    assert check.reason == "behind walls"
+
+
+def test_cells_past_a_gap_narrower_than_the_body_are_closed_by_clearance() -> None:
+    belief = known_room()
+    belief[:, 20] = OCCUPIED
+    belief[15:17, 20] = FREE  # a two-cell gap
+    belief[10:14, 30:34] = UNKNOWN
+    narrow = frontier_check(belief, (10.5, 10.5), 2.0)  # a body of radius 2 does not pass
+    assert narrow.reachable == 0 and narrow.closed_by_clearance == 16
+    assert narrow.reason == "closed by clearance"
+    small = frontier_check(belief, (10.5, 10.5), 0.5)
+    assert small.reachable == 16 and small.reason == "all reachable"
+
+
+def test_a_robot_with_no_room_for_its_body_reaches_nothing() -> None:
+    belief = known_room(12, 12)
+    belief[5, 5] = UNKNOWN
+    check = frontier_check(belief, (5.5, 3.5), 8.0)  # no cell is 8 cells from every wall
+    assert check.reachable == 0 and check.reason == "no room for its body where it stands"
+
+
+# --- the watch, step by step ------------------------------------------------------------
+
+
+def step(state: str = "active", distance: float = 0.0, path: bool = False, **kw: Any) -> RobotStep:
+    values: dict[str, Any] = {"name": "A", "state": state, "distance": distance}
+    values |= {"has_path": path, "can_move": True, "position": (10.5, 10.5), "radius": 1.0}
+    values |= {"belief": known_room()} | kw
+    return RobotStep(**values)
+
+
+def test_activity_is_working_stuck_or_idle_from_the_odometer_and_path() -> None:
+    watch = HealthWatch(["A"])
+    steps = [
+        step(),  # step 0: not assessed
+        step(distance=1.0),  # moved: working
+        step(distance=1.01, path=True),  # a path, no motion: stuck
+        step("error", reason="collision at (1.0, 1.0)", distance=1.01),  # bumped: stuck
+        step("active", reason="moved again", distance=1.02),  # parked: idle
+        step(distance=1.02, can_move=False),  # drive broken: not assessed
+    ]
+    seen = []
+    for n, robot in enumerate(steps):
+        watch.update(n, [robot])
+        seen.append(watch.view("A")[0])
+    assert seen == ["", "working", "stuck", "stuck", "idle", ""]
+    record = watch.report([steps[-1]]).summary()["robots"]["A"]
+    assert (record["idle_steps"], record["stuck_steps"], record["longest_idle"]) == (1, 2, 1)
+    assert [(c["from"], c["to"], c["reason"]) for c in record["state_changes"]] == [
+        ("active", "error", "collision at (1.0, 1.0)"),
+        ("error", "active", "moved again"),
+    ]
+    assert watch.view("base") == ("", None)
+
+
+def test_done_counts_declarations_not_returns_after_a_bump() -> None:
+    watch = HealthWatch(["A"])
+    states = ["active", "done", "error", "done", "active", "done"]
+    for n, state in enumerate(states):
+        watch.update(n, [step(state, reason=f"r{n}")])
+    assert watch.robots["A"].done_at == [1, 5]  # not 3: it was done before it bumped
+
+
+def test_an_idle_robot_is_checked_when_it_stops_then_every_few_steps(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    calls: list[int] = []
+    real = health.frontier_check
+    watch = HealthWatch(["A"])
+
+    def counted(*args: Any) -> Any:
+        calls.append(watch.step or 0)
+        return real(*args)
+
+    monkeypatch.setattr(health, "frontier_check", counted)
+    distance = 0.0
+    for n in range(60):
+        distance += 1.0 if n < 10 or 40 <= n < 45 else 0.0  # works, idles, works, idles
+        watch.update(n, [step(distance=distance)])
+    assert calls == [10, 10 + CHECK_EVERY, 45]
+
+
+# --- whole runs ----------------------------------------------------------------------------
+
+
+def test_a_parked_robot_with_frontiers_in_reach_counts_them_and_the_run_warns(
+    scenario_file: ScenarioFile, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = scenario_file(robots=ONE_ROBOT, steps=40, team=parked_team())
+    assert main(["run", str(path), "--out", str(tmp_path / "run"), "--quiet"]) == 0
+    summary = json.loads((tmp_path / "run" / "summary.json").read_text())
+    record = summary["health"]["robots"]["A"]
+    assert record["idle_steps"] == record["idle_with_frontier"] == 40
+    assert record["first_idle_with_frontier"] == 1 and record["at_end"]["reachable_frontier_cells"]
+    assert summary["health"]["robots_idle_with_frontier"] == 1
+    assert summary["health"]["idle_robot_steps"] == 40
+    [warning] = summary["health"]["warnings"]
+    assert warning.startswith("robot A idled 40 steps (from step 1)")
+    assert f"mresim: warning: {warning}\n" in capsys.readouterr().err
+
+
+def test_a_robot_that_explored_everything_idles_without_a_warning(
+    scenario_file: ScenarioFile, tmp_path: Path
+) -> None:
+    """A frontier robot in one closed room sees it whole, says it is done and parks: idle,
+    but its map has no frontier left."""
+    room = np.zeros((40, 50), bool)
+    room[:2, :] = room[-2:, :] = room[:, :2] = room[:, -2:] = True
+    image = tmp_path / "room.png"
+    from PIL import Image
+
+    Image.fromarray(np.where(room, 0, 255).astype(np.uint8)).save(image)
+    team = {"speed": 2, "radius": 1.0, "sensor": {"range": 80, "fov_deg": 360, "rays": 720}}
+    path = scenario_file(
+        map={"image": str(image), "resolution": 0.1},
+        team={**team, "comm_range": 20, "strategy": "frontier"},
+        robots=[{"name": "A", "start": [20, 20], "heading_deg": 0}],
+        stop={"all_done": False, "stalled_for": None},
+        steps=40,
+    )
+    sim = Simulation.from_yaml(path)
+    sim.run()
+    record = run_health(sim)["health"]
+    a = record["robots"]["A"]
+    assert a["done_at"] and a["idle_steps"] >= 20  # parked at the base once done
+    assert a["idle_with_frontier"] == 0 and a["at_end"]["reason"] == "none left"
+    assert record["warnings"] == [] and record["robots_idle_with_frontier"] == 0
+
+
+def test_state_change_reasons_are_logged_and_replayed_identically(
+    scenario_file: ScenarioFile, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    robots = [
+        {"name": "A", "start": [8, 20], "heading_deg": 0},
+        {"name": "B", "start": [8, 40], "heading_deg": 0, "strategy": QUITS},
+        {"name": "C", "start": [20, 30], "heading_deg": 90},
+    ]
+    events = [{"step": 10, "fail": "C"}]
+    path = scenario_file(robots=robots, events=events, steps=30, stop={"all_done": False})
+    out = tmp_path / "run"
+    assert main(["run", str(path), "--out", str(out), "--quiet"]) == 0
+    summary = json.loads((out / "summary.json").read_text())
+    changes = {n: r["state_changes"] for n, r in summary["health"]["robots"].items()}
+    assert changes["B"][0] == {"step": 5, "from": "active", "to": "done", "reason": "told to quit"}
+    assert summary["health"]["robots"]["B"]["done_at"] == [5]
+    assert changes["C"] == [{"step": 10, "from": "active", "to": "failed", "reason": "fail C"}]
+    lines = [json.loads(line) for line in (out / "log" / "steps.jsonl").read_text().splitlines()]
+    assert lines[5]["agents"][2]["state_reason"] == "told to quit"
+    assert lines[10]["agents"][3]["state_reason"] == "fail C"
+    assert "state_reason" not in lines[6]["agents"][2]  # only where the state changed
+    assert replayed_health(RunLog.open(out / "log")) == summary["health"]
+    capsys.readouterr()
+    assert main(["replay", str(out), "--metrics"]) == 0
+    assert "health record recomputed: identical to" in capsys.readouterr().out
+
+
+def test_replayed_activity_equals_the_live_one(scenario_file: ScenarioFile, tmp_path: Path) -> None:
+    from mresim_phys.output.logwriter import RunLogWriter
+
+    robots = [*ONE_ROBOT, {"name": "B", "start": [8, 40], "heading_deg": 0}]
+    sim = Simulation.from_yaml(scenario_file(robots=robots, steps=25))
+    live = []
+    with RunLogWriter(tmp_path / "log", sim.snapshot(), name="tiny", seed=3) as writer:
+        for n in range(25):
+            actions = {"B": Decision()} if 8 <= n < 16 else None  # B parked for a while
+            sim.step(actions)
+            writer.write(sim.snapshot())
+            live.append([(r.activity, r.state_reason) for r in sim.snapshot().robots])
+    replayed = [
+        [(r.activity, r.state_reason) for r in s.robots]
+        for s in RunLog.open(tmp_path / "log").snapshots()
+    ]
+    assert replayed[1:] == live
+    assert ("idle", None) in [b for _, b in live]
+
+
+def test_a_log_without_reasons_replays_them_as_not_logged(
+    scenario_file: ScenarioFile, tmp_path: Path
+) -> None:
+    path = scenario_file(robots=ONE_ROBOT, events=[{"step": 3, "fail": "A"}], steps=6)
+    out = tmp_path / "run"
+    assert main(["run", str(path), "--out", str(out), "--quiet"]) == 0
+    steps = out / "log" / "steps.jsonl"
+    lines = [json.loads(line) for line in steps.read_text().splitlines()]
+    for line in lines:
+        for agent in line["agents"]:
+            agent.pop("state_reason", None)
+    steps.write_text("".join(json.dumps(line) + "\n" for line in lines))
+    record = replayed_health(RunLog.open(out / "log"))
+    assert record["robots"]["A"]["state_changes"][0]["reason"] == health.NOT_LOGGED
+
+
+def parked_team() -> dict[str, Any]:
+    team = {"speed": 2, "radius": 1.0, "sensor": {"range": 30}, "comm_range": 20}
+    return {**team, "strategy": "health_plugins:Parked"}
