@@ -14,7 +14,7 @@ from mresim_phys.agents import Agent, Robot
 from mresim_phys.knowledge.teammates import presumed_lost
 from mresim_phys.snapshot import AgentSnapshot, bool_view, points_or_none, read_only
 from mresim_phys.strategies import RobotView
-from mresim_phys.strategies.relax import CORNER
+from mresim_phys.strategies.relax import escape_clearance
 
 
 def robot_view(
@@ -65,13 +65,13 @@ def robot_view(
 
 
 def clearance_of(robot: Robot) -> float:
-    """What its planner keeps from known walls: radius + wall margin, and at least
-    ``relax.CORNER`` beyond the radius while it escapes a collision that taught it nothing."""
+    """What its planner keeps from known walls: radius + wall margin, and wider while it
+    escapes a collision that taught it nothing (``relax.escape_clearance``)."""
     assert robot.body is not None
     clearance = robot.radius + robot.body.wall_margin
-    if robot.escape_from is not None:
-        clearance = max(clearance, robot.radius + CORNER)
-    return clearance
+    if robot.escape_from is None:
+        return clearance
+    return escape_clearance(robot.belief, robot.position, robot.radius, clearance)
 
 
 def agent_snapshot(

@@ -40,16 +40,18 @@ def test_a_cell_seen_occupied_then_seen_free_is_free() -> None:
     assert belief[19, 30] == FREE and observed[19, 30] == 2
 
 
-def test_without_observation_steps_a_scan_never_clears_an_obstacle() -> None:
+def test_without_observation_steps_only_a_ray_through_clears_an_obstacle() -> None:
     truth = np.zeros((40, 60), dtype=bool)
     truth[0, :] = truth[-1, :] = truth[:, 0] = truth[:, -1] = True
     world = World(truth, [])
     laser = Laser(range=50, fov_deg=180, rays=181)
     belief, safe, _ = fresh(truth.shape)
-    belief[19, 30] = OCCUPIED
+    belief[19, 30] = OCCUPIED  # in front of the robot: a ray goes right through it
+    belief[19, 5] = OCCUPIED  # behind it: no ray sees it
     look = scan(world, (10.5, 19.5), 0.0, laser, world.query_filter(None, False))
     integrate_scan(belief, safe, look, laser.safe_fraction)
-    assert belief[19, 30] == OCCUPIED  # 'grow' beliefs, as the original
+    assert belief[19, 30] == FREE  # 'grow' beliefs: walls are solid, that one was false
+    assert belief[19, 5] == OCCUPIED
 
 
 @pytest.mark.parametrize(

@@ -136,3 +136,16 @@ def test_a_robot_its_map_walls_in_looks_around_instead_of_quitting() -> None:
     assert not decision.done and decision.info["reason"] == relax.BOXED
     assert decision.look_at is not None and decision.look_at[0] < 20.5
     assert not relax.boxed_in(view)  # the open room: done means done
+
+
+def test_a_diagonal_past_a_wall_corner_goes_round_it_at_half_a_cell() -> None:
+    """At clearance 0.5 (radius 0.5, no margin) a cell beside a wall is passable and a
+    diagonal move between two such cells passes the wall's corner at no distance: the
+    path gets a stop at the free cell of the corner, so the body never touches it."""
+    belief = np.full((6, 6), FREE, dtype=np.uint8)
+    belief[2, 3] = OCCUPIED
+    path = np.array([[2.5, 2.5], [3.5, 1.5], [4.5, 0.5]])
+    uncut = relax.uncut_corners(path, belief)
+    assert uncut.tolist() == [[2.5, 2.5], [2.5, 1.5], [3.5, 1.5], [4.5, 0.5]]
+    belief[2, 3] = FREE
+    assert relax.uncut_corners(path, belief).tolist() == path.tolist()

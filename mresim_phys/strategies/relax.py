@@ -14,8 +14,10 @@ any margin the robot may use.
 A collision that taught the robot's map nothing (a diagonal move past a wall corner
 its map already holds) marks the robot ``escaping`` (``agents.Robot.escape_from``): until
 it has moved a cell away, it plans with at least :data:`CORNER` clearance beyond its
-radius, which no cell-to-cell move can cut (half a cell's diagonal); if that boxes it
-in, it takes the original's random step after a collision. A collision never freezes it.
+radius, which no cell-to-cell move can cut (half a cell's diagonal), unless its own cell
+is not passable at that (:func:`escape_clearance`: a start snapped to a cell nearby would
+cut a corner on the way); if that boxes it in, it takes the original's random step after
+a collision. A collision never freezes it.
 
 A robot left with no way out on its own map (:func:`boxed_in`: the cells its body reaches
 are a pocket hardly larger than itself, while frontiers remain elsewhere) is not done: it
@@ -31,14 +33,17 @@ import numpy as np
 
 from mresim_phys.knowledge.frontiers import frontiers_in
 from mresim_phys.knowledge.targets import TargetFinder
+from mresim_phys.planning.fields import clearance_kernel
 from mresim_phys.strategies.base import NO_FRONTIER, Decision, RobotView, Strategy, plan_context
 from mresim_phys.strategies.random_walk import random_step
+from mresim_phys.types import OCCUPIED, BeliefGrid, FloatArray
 
 LEVELS = (1 / 3, 2 / 3, 1.0)  # shares of the margin given up, in turn
 CORNER = 0.75  # cells beyond the radius: more than half a cell's diagonal (0.707)
 DEFAULT_MIN_SIZE = 3  # frontier cells of the smallest cluster, if the strategy sets none
 RELAXED = "relaxed clearance"  # Decision.info["clearance_reason"] of a relaxed answer
 BOXED = "boxed in: looking around"  # Decision.info["reason"] of a turn in place
+HALF_CELL = 0.5  # cells: at this clearance or less a planned diagonal may touch a corner
 POCKET = 2.0  # cells beyond its radius: a reachable area under pi (r + 2)^2 is a pocket
 
 
@@ -51,7 +56,29 @@ def decide(strategy: Strategy, view: RobotView) -> Decision:
         decision = _random_escape(view) or decision
     if decision.done and decision.info.get("reason") == NO_FRONTIER and boxed_in(view):
         return look_around(view)
+    if view.clearance <= HALF_CELL and len(decision.path) > 1:
+        return replace(decision, path=uncut_corners(decision.path, view.belief))
     return decision
+
+
+def uncut_corners(path: FloatArray, belief: BeliefGrid) -> FloatArray:
+    """``path`` with a stop added at the free corner cell of every diagonal move between
+    cell centres that passes the corner of a known wall (at a clearance of half a cell or
+    less, a cell beside a wall is passable and the planners' diagonal passes its corner at
+    no distance: a body of any size would touch it)."""
+    points = [path[0]]
+    for end in path[1:]:
+        start = points[-1]
+        dx, dy = end[0] - start[0], end[1] - start[1]
+        if abs(abs(dx) - 1.0) < 1e-9 and abs(abs(dy) - 1.0) < 1e-9:
+            row, col = int(start[1]), int(start[0])
+            beside = (row, int(end[0]))  # the cell the move passes on its row
+            if belief[beside] == OCCUPIED:
+                points.append(np.array([start[0], end[1]]))
+            elif belief[int(end[1]), col] == OCCUPIED:
+                points.append(np.array([end[0], start[1]]))
+        points.append(end)
+    return np.array(points)
 
 
 def _relaxed(strategy: Strategy, view: RobotView, decision: Decision) -> Decision:
@@ -72,6 +99,29 @@ def _random_escape(view: RobotView) -> Decision | None:
     """The original's random step after a collision, at the robot's body clearance."""
     body = replace(view, clearance=view.radius)
     return random_step(body, plan_context(body))
+
+
+def stands_clear(belief: BeliefGrid, position: tuple[float, float], clearance: float) -> bool:
+    """Whether the robot's own cell is passable at ``clearance``: no known wall (nor the
+    map's edge) closer to its centre. A start that is not gets snapped to a passable cell
+    nearby, and the straight move there may cut a wall's corner."""
+    row, col = int(position[1]), int(position[0])
+    kernel = clearance_kernel(clearance)
+    half = kernel.shape[0] // 2
+    rows, cols = belief.shape
+    if row - half < 0 or col - half < 0 or row + half >= rows or col + half >= cols:
+        return False
+    around = belief[row - half : row + half + 1, col - half : col + half + 1]
+    return not bool(np.any((around == OCCUPIED) & (kernel > 0)))
+
+
+def escape_clearance(
+    belief: BeliefGrid, position: tuple[float, float], radius: float, nominal: float
+) -> float:
+    """The clearance of a robot escaping a collision: at least :data:`CORNER` beyond its
+    radius where its own cell is passable at that, else its nominal clearance."""
+    wide = max(nominal, radius + CORNER)
+    return wide if stands_clear(belief, position, wide) else nominal
 
 
 def boxed_in(view: RobotView) -> bool:
