@@ -39,6 +39,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
+from functools import lru_cache
 from typing import Protocol
 
 import cv2
@@ -61,7 +62,7 @@ from mresim_phys.world.reach import (
     relabel_window,
     ring_of,
 )
-from mresim_phys.world.sight import FULL, KEEP, NONE, SECTOR, clear_line, see_cells
+from mresim_phys.world.sight import NONE, clear_line, see_again, see_cells
 from mresim_phys.world.wallset import Box
 
 Kernel = NDArray[np.uint8]
@@ -90,6 +91,7 @@ class SightGroup:
     sensor_range: float
     seeds: IntArray  # (n, 2) row, col: the positions the starts seed from
     reach: BoolGrid = field(default_factory=lambda: np.zeros((0, 0), bool))
+    near: BoolGrid = field(default_factory=lambda: np.zeros((0, 0), bool))  # sight_kernel's
     seen: BoolGrid = field(default_factory=lambda: np.zeros((0, 0), bool))
     witness: NDArray[np.int32] = field(default_factory=lambda: np.zeros(0, np.int32))
 
@@ -99,6 +101,7 @@ class SightGroup:
         return sight_kernel(self.radius, self.sensor_range)
 
 
+@lru_cache(maxsize=64)
 def body_kernel(radius: float) -> Kernel:
     """Offsets of the cells whose square is closer than ``radius`` to a cell centre: a
     position needs every one of them free.
@@ -111,9 +114,11 @@ def body_kernel(radius: float) -> Kernel:
     half = max(math.ceil(radius + 0.5) - 1, 0)
     gap = np.maximum(np.abs(np.arange(-half, half + 1)) - 0.5, 0.0)
     kernel: Kernel = (gap[:, None] ** 2 + gap[None, :] ** 2 < radius * radius).astype(np.uint8)
+    kernel.flags.writeable = False
     return kernel
 
 
+@lru_cache(maxsize=64)
 def sight_kernel(radius: float, sensor_range: float) -> Kernel:
     """Offsets within ``sensor_range`` whose segment from the centre touches only cells of
     :func:`body_kernel`: seen from every position, whatever else the map holds.
@@ -130,6 +135,7 @@ def sight_kernel(radius: float, sensor_range: float) -> Kernel:
             near = dr * dr + dc * dc <= sensor_range * sensor_range
             if near and body[half + dr, half + dc]:
                 out[half + dr, half + dc] = clear_line(walls, half, half, half + dr, half + dc)
+    out.flags.writeable = False
     return out
 
 
@@ -197,21 +203,9 @@ def cut(grid: np.ndarray, box: Box) -> np.ndarray:
     return grid[box[0] : box[1], box[2] : box[3]]
 
 
-def joined(a: Box | None, b: Box) -> Box:
-    """The box around ``a`` (if any) and ``b``."""
-    if a is None:
-        return b
+def joined(a: Box, b: Box) -> Box:
+    """The box around ``a`` and ``b``."""
     return (min(a[0], b[0]), max(a[1], b[1]), min(a[2], b[2]), max(a[3], b[3]))
-
-
-def search(occupied: BoolGrid, group: SightGroup, cells: IntArray, modes: np.ndarray,
-           toward: Box) -> None:  # fmt: skip
-    """Decide the cells of ``cells`` (raster order) for ``group`` (``sight.see_cells``)."""
-    see_cells(
-        occupied, group.reach, np.ascontiguousarray(cells, dtype=np.int64),
-        np.ascontiguousarray(modes, dtype=np.int8), float(group.sensor_range),
-        np.array(toward, dtype=np.int64), group.witness, group.seen,
-    )  # fmt: skip
 
 
 class Explorable:
@@ -249,14 +243,16 @@ class Explorable:
         """Compute ``group`` afresh on the whole map (``labels``: the free regions)."""
         places = self.places[group.radius]
         group.reach = connected_to(places, group.seeds)
-        group.seen = dilated(group.reach, group.kernel, whole(self.shape), outside=False)
+        group.near = dilated(group.reach, group.kernel, whole(self.shape), outside=False)
+        group.seen = group.near.copy()
         if group.witness.size != occupied.size:
             group.witness = np.full(occupied.size, NONE, dtype=np.int32)
         seeds = group.seeds[places[group.seeds[:, 0], group.seeds[:, 1]]]
         regions = np.unique(labels[seeds[:, 0], seeds[:, 1]])  # the reachable positions'
         hopeful = np.isin(labels, regions[regions > 0])
-        cells = np.argwhere(hopeful & ~group.seen)
-        search(occupied, group, cells, np.full(len(cells), FULL, np.int8), NOTHING)
+        cells = np.argwhere(hopeful & ~group.seen).astype(np.int64)
+        sensor = float(group.sensor_range)
+        see_cells(occupied, group.reach, cells, sensor, group.witness, group.seen)
 
     def _unite(self, box: Box) -> None:
         """The mask inside ``box``: the union of the groups' seen cells."""
@@ -276,11 +272,11 @@ class Explorable:
 
     def update(self, occupied: BoolGrid, box: Box, flips: BoolGrid) -> tuple[Box, BoolGrid]:
         """Follow the cells of ``box`` flipped where ``flips`` is True (``occupied``: the
-        truth after); the box where :attr:`mask` may have changed and what it held there
-        before (the mask is changed in place)."""
+        truth after); a box holding ``box`` and every cell where :attr:`mask` changed, and
+        what the mask held there before (it is changed in place)."""
         grew = bool((flips & ~cut(occupied, box)).any())
         before = {radius: self._move_places(occupied, radius, box) for radius in self.places}
-        changed: Box | None = None
+        changed = box
         labels: IntArray | None = None
         for group in self.groups:
             window = self._follow(occupied, group, box, flips, grew, before[group.radius])
@@ -289,8 +285,8 @@ class Explorable:
                 labels = free_components(occupied) if labels is None else labels
                 self._compute(occupied, group, labels)
                 window = whole(self.shape)
-            changed = joined(changed, window)
-        assert changed is not None
+            if window != NOTHING:
+                changed = joined(changed, window)
         held = cut(self.mask, changed).copy()
         self._unite(changed)
         return changed, held
@@ -312,8 +308,8 @@ class Explorable:
         grew: bool,
         moved: tuple[Box, BoolGrid],
     ) -> Box | None:
-        """Follow a change locally: the box where ``group.seen`` may have changed, or None
-        (nothing changed yet) when its reachable positions need the whole map."""
+        """Follow a change locally: the box where ``group.seen`` changed (NOTHING: nowhere),
+        or None (nothing changed yet) when its reachable positions need the whole map."""
         window = grown(moved[0], MARGIN, self.shape)
         if area(window) > LOCAL_SHARE * occupied.size:
             return None
@@ -334,21 +330,22 @@ class Explorable:
         grew: bool,
     ) -> Box:  # fmt: skip
         """Decide again the cells within sensor range of ``window`` (where the reachable
-        positions changed; ``box``: the flipped cells); return the box looked at."""
+        positions changed; ``box``: the flipped cells); the box where ``group.seen``
+        changed (NOTHING: nowhere)."""
         kernel = group.kernel
+        near = grown(window, kernel.shape[0] // 2, self.shape)
+        cut(group.near, near)[...] = dilated(group.reach, kernel, near, outside=False)
         margin = max(math.ceil(group.sensor_range), kernel.shape[0] // 2) + 1
         around = grown(window, margin, self.shape)
-        near = dilated(group.reach, kernel, around, outside=False)
-        seen = cut(group.seen, around)
-        held = seen.copy()
-        seen[...] = near
-        leftovers = ~cut(occupied, around) & ~near
-        flipped = np.zeros(near.shape, dtype=bool)
-        cut(flipped, shifted(box, around))[...] = flips
-        modes = np.where(held | flipped, FULL, SECTOR if grew else KEEP)[leftovers]
-        cells = np.argwhere(leftovers) + np.array([around[0], around[2]])
-        search(occupied, group, cells, modes, window)
-        return around
+        changed = see_again(
+            occupied, group.reach, group.near, group.seen, group.witness,
+            np.array(around, dtype=np.int64), np.ascontiguousarray(flips),
+            np.array([box[0], box[2]], dtype=np.int64), grew,
+            np.array(window, dtype=np.int64), float(group.sensor_range),
+        )  # fmt: skip
+        if changed[0] >= changed[1]:
+            return NOTHING
+        return (int(changed[0]), int(changed[1]), int(changed[2]), int(changed[3]))
 
 
 def shifted(box: Box, frame: Box) -> Box:

@@ -7,8 +7,9 @@ meeting at a corner block sight as they block robots (``world/maps.py``). Within
 the touched cells are the segment's *supercover*, walked by :func:`clear_line` with
 integer arithmetic only (no rounding can decide a tangency).
 
-:func:`see_cells` answers, for a list of cells, whether some reachable position within
-the sensor range sees each one, and which (the *witness*). It tries cheap guesses first
+:func:`decide` answers, for a cell, whether some reachable position within the sensor
+range sees it, and which (the *witness*); :func:`see_cells` decides a list of cells,
+:func:`see_again` a window after a change of the world. It tries cheap guesses first
 (the witness the cell had before, those of its neighbours: sight is coherent), then
 searches: a shadow cast from C itself, octant by octant, depth (Chebyshev distance) by
 depth across all octants at once (a first-in first-out queue of lit slope intervals), so
@@ -32,7 +33,7 @@ from mresim_phys.types import BoolGrid
 
 SLACK = 1e-9  # slopes: shadows are narrowed (lit intervals widened) by this much
 NONE = -1  # no witness
-FULL, SECTOR, KEEP = 0, 1, 2  # see_cells modes: search all around, towards a box, or not
+FULL, SECTOR, KEEP = 0, 1, 2  # decide's modes: search all around, towards a box, or not
 # octant k maps (depth d, offset y), 0 <= y <= d, to (row, col) offsets d*D[k] + y*Y[k]
 OCTANT_ROW_D = np.array([0, 1, 1, 0, 0, -1, -1, 0], dtype=np.int64)
 OCTANT_ROW_Y = np.array([1, 0, 0, 1, -1, 0, 0, -1], dtype=np.int64)
@@ -183,48 +184,115 @@ def box_sector(row: int, col: int, box: NDArray[np.int64], out: NDArray[np.float
 
 
 @njit(cache=True, nogil=True)
+def decide(
+    occupied: BoolGrid,
+    reach: BoolGrid,
+    row: int,
+    col: int,
+    mode: int,
+    sensor_range: float,
+    toward: NDArray[np.int64],
+    witness: NDArray[np.int32],
+    scratch: tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]],
+) -> bool:
+    """Whether a reachable position within ``sensor_range`` sees cell (row, col); its
+    witness (flat index, or NONE) is written into the flat ``witness`` grid, which also
+    holds the guesses tried first (the cell's own witness, its neighbours').
+
+    ``mode``: FULL searches all around, SECTOR only towards the box ``toward``, KEEP only
+    tries the guesses. ``scratch``: the search's queue, slopes and guesses."""
+    queue, slopes, guesses = scratch
+    rows, cols = occupied.shape
+    range2 = sensor_range * sensor_range
+    here = row * cols + col
+    guesses[0] = witness[here]
+    guesses[1] = witness[here - 1] if col > 0 else NONE
+    guesses[2] = witness[here - cols] if row > 0 else NONE
+    guesses[3] = witness[here + 1] if col + 1 < cols else NONE
+    guesses[4] = witness[here + cols] if row + 1 < rows else NONE
+    found = NONE
+    for guess in guesses:
+        if _witness_ok(occupied, reach, row, col, int(guess), range2):
+            found = int(guess)
+            break
+    if found == NONE and mode != KEEP:
+        if mode == SECTOR:
+            box_sector(row, col, toward, slopes)
+        else:
+            slopes[:, 0], slopes[:, 1] = 0.0, 1.0
+        found = shadow_search(occupied, reach, row, col, sensor_range, slopes, queue)
+    witness[here] = found
+    return found != NONE
+
+
+@njit(cache=True, nogil=True)
+def scratch_for(
+    sensor_range: float,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+    """The scratch arrays of :func:`decide` for a search within ``sensor_range``."""
+    queue = np.empty((16 * (int(sensor_range) + 3), 4), dtype=np.float64)
+    return queue, np.empty((8, 2), dtype=np.float64), np.empty(5, dtype=np.int64)
+
+
+@njit(cache=True, nogil=True)
 def see_cells(
     occupied: BoolGrid,
     reach: BoolGrid,
     cells: NDArray[np.int64],
-    modes: NDArray[np.int8],
     sensor_range: float,
-    box: NDArray[np.int64],
     witness: NDArray[np.int32],
     seen: BoolGrid,
 ) -> None:
-    """For each cell (row, col) of ``cells``: whether a reachable position within
-    ``sensor_range`` sees it, into ``seen``; its witness (flat index, or NONE) into the
-    flat ``witness`` grid, which also holds the guesses tried first.
-
-    ``modes``: FULL searches all around; SECTOR only towards ``box``; KEEP only tries the
-    guesses (the cell was not seen before and nothing that could change that changed).
-    Cells are taken in the given order, so a raster order lets each cell try the
-    witnesses just found for the cells left of it and above it.
-    """
-    rows, cols = occupied.shape
-    range2 = sensor_range * sensor_range
-    queue = np.empty((16 * (int(sensor_range) + 3), 4), dtype=np.float64)
-    slopes = np.empty((8, 2), dtype=np.float64)
-    guesses = np.empty(5, dtype=np.int64)
+    """:func:`decide` (all around) each cell (row, col) of ``cells`` into ``seen``. Cells
+    are taken in the given order, so a raster order lets each cell try the witnesses
+    just found for the cells left of it and above it."""
+    scratch = scratch_for(sensor_range)
+    nowhere = np.zeros(4, dtype=np.int64)
     for n in range(cells.shape[0]):
         row, col = cells[n, 0], cells[n, 1]
-        here = row * cols + col
-        found = NONE
-        guesses[0] = witness[here]
-        guesses[1] = witness[here - 1] if col > 0 else NONE
-        guesses[2] = witness[here - cols] if row > 0 else NONE
-        guesses[3] = witness[here + 1] if col + 1 < cols else NONE
-        guesses[4] = witness[here + cols] if row + 1 < rows else NONE
-        for guess in guesses:
-            if _witness_ok(occupied, reach, row, col, int(guess), range2):
-                found = int(guess)
-                break
-        if found == NONE and modes[n] != KEEP:
-            if modes[n] == SECTOR:
-                box_sector(row, col, box, slopes)
+        seen[row, col] = decide(
+            occupied, reach, row, col, FULL, sensor_range, nowhere, witness, scratch
+        )
+
+
+@njit(cache=True, nogil=True)
+def see_again(
+    occupied: BoolGrid,
+    reach: BoolGrid,
+    near: BoolGrid,
+    seen: BoolGrid,
+    witness: NDArray[np.int32],
+    window: NDArray[np.int64],
+    flipped: BoolGrid,
+    flipped_at: NDArray[np.int64],
+    grew: bool,
+    toward: NDArray[np.int64],
+    sensor_range: float,
+) -> NDArray[np.int64]:
+    """Decide again the cells of ``window`` (row0, row1, col0, col1) after a change: free
+    cells in ``near`` are seen; each other free cell is decided (:func:`decide`) all
+    around if it was seen before or flipped (``flipped`` at (row, col) ``flipped_at``),
+    else towards ``toward`` if some cell became free (``grew``), else it stays unseen.
+    Returns the box of the cells whose ``seen`` changed (empty: row0 >= row1)."""
+    scratch = scratch_for(sensor_range)
+    changed = np.array([window[1], window[0], window[3], window[2]], dtype=np.int64)
+    f_rows, f_cols = flipped.shape
+    for r in range(window[0], window[1]):
+        for c in range(window[2], window[3]):
+            was = seen[r, c]
+            if occupied[r, c]:
+                now = False
+            elif near[r, c]:
+                now = True
             else:
-                slopes[:, 0], slopes[:, 1] = 0.0, 1.0
-            found = shadow_search(occupied, reach, row, col, sensor_range, slopes, queue)
-        witness[here] = found
-        seen[row, col] = found != NONE
+                fr, fc = r - flipped_at[0], c - flipped_at[1]
+                flip = 0 <= fr < f_rows and 0 <= fc < f_cols and flipped[fr, fc]
+                mode = FULL if was or flip else (SECTOR if grew else KEEP)
+                now = mode != KEEP and decide(
+                    occupied, reach, r, c, mode, sensor_range, toward, witness, scratch
+                )
+            if now != was:
+                seen[r, c] = now
+                changed[0], changed[1] = min(changed[0], r), max(changed[1], r + 1)
+                changed[2], changed[3] = min(changed[2], c), max(changed[3], c + 1)
+    return changed
