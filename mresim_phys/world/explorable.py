@@ -62,7 +62,7 @@ from mresim_phys.world.reach import (
     relabel_window,
     ring_of,
 )
-from mresim_phys.world.sight import NONE, clear_line, see_again, see_cells
+from mresim_phys.world.sight import NONE, clear_line, see_again, see_cells, words
 from mresim_phys.world.wallset import Box
 
 Kernel = NDArray[np.uint8]
@@ -148,7 +148,10 @@ def dilated(grid: BoolGrid, kernel: Kernel, box: Box, outside: bool) -> BoolGrid
     a0, a1 = max(row0 - half, 0), min(row1 + half, rows)
     b0, b1 = max(col0 - half, 0), min(col1 + half, cols)
     pad = ((a0 - row0 + half, row1 + half - a1), (b0 - col0 + half, col1 + half - b1))
-    window = np.pad(grid[a0:a1, b0:b1], pad, constant_values=outside)
+    if any(pad[0] + pad[1]):
+        window = np.pad(grid[a0:a1, b0:b1], pad, constant_values=outside)
+    else:  # inside the map: a copy is cheaper than np.pad
+        window = np.ascontiguousarray(grid[a0:a1, b0:b1])
     if half == 0:
         return window & bool(kernel[0, 0])
     out = cv2.dilate(window.view(np.uint8), kernel)[half:-half, half:-half]
@@ -342,6 +345,7 @@ class Explorable:
             np.array(around, dtype=np.int64), np.ascontiguousarray(flips),
             np.array([box[0], box[2]], dtype=np.int64), grew,
             np.array(window, dtype=np.int64), float(group.sensor_range),
+            (words(occupied), words(group.near), words(group.seen)),
         )  # fmt: skip
         if changed[0] >= changed[1]:
             return NOTHING

@@ -255,6 +255,34 @@ def see_cells(
         )
 
 
+WORD = 8  # cells looked at as one uint64 by see_again
+ONES = np.uint64(0x0101010101010101)  # a word of eight True cells
+
+
+def words(grid: BoolGrid) -> NDArray[np.uint64]:
+    """``grid`` (bool, C-contiguous) as rows of uint64 words of 8 cells; an empty
+    (rows, 0) array when its rows are not a whole number of words (then
+    :func:`see_again` looks at every cell)."""
+    if grid.shape[1] % WORD or not grid.flags.c_contiguous:
+        return np.zeros((grid.shape[0], 0), np.uint64)
+    return grid.view(np.uint64)
+
+
+@njit(cache=True, nogil=True)
+def settled(
+    occupied: NDArray[np.uint64], near: NDArray[np.uint64], seen: NDArray[np.uint64],
+    r: int, c: int, end: int,
+) -> bool:  # fmt: skip
+    """Whether the 8 cells from (r, c) (c a whole word, within ``end``) are each either
+    near and seen or occupied and unseen: nothing to decide (word views, :func:`words`)."""
+    if occupied.shape[1] == 0 or c % WORD or c + WORD > end:
+        return False
+    w = c // WORD
+    o, n, s = occupied[r, w], near[r, w], seen[r, w]
+    done: bool = ((n & ~o & s) | (o & ~s)) & ONES == ONES
+    return done
+
+
 @njit(cache=True, nogil=True)
 def see_again(
     occupied: BoolGrid,
@@ -268,17 +296,24 @@ def see_again(
     grew: bool,
     toward: NDArray[np.int64],
     sensor_range: float,
+    grids: tuple[NDArray[np.uint64], NDArray[np.uint64], NDArray[np.uint64]],
 ) -> NDArray[np.int64]:
     """Decide again the cells of ``window`` (row0, row1, col0, col1) after a change: free
     cells in ``near`` are seen; each other free cell is decided (:func:`decide`) all
     around if it was seen before or flipped (``flipped`` at (row, col) ``flipped_at``),
     else towards ``toward`` if some cell became free (``grew``), else it stays unseen.
-    Returns the box of the cells whose ``seen`` changed (empty: row0 >= row1)."""
+    ``grids``: word views of ``occupied``, ``near`` and ``seen`` (:func:`words`), to skip
+    eight settled cells at a time. Returns the box of the cells whose ``seen`` changed
+    (empty: row0 >= row1)."""
     scratch = scratch_for(sensor_range)
     changed = np.array([window[1], window[0], window[3], window[2]], dtype=np.int64)
     f_rows, f_cols = flipped.shape
     for r in range(window[0], window[1]):
-        for c in range(window[2], window[3]):
+        c = window[2]
+        while c < window[3]:
+            if settled(grids[0], grids[1], grids[2], r, c, window[3]):
+                c += WORD
+                continue
             was = seen[r, c]
             if occupied[r, c]:
                 now = False
@@ -295,4 +330,5 @@ def see_again(
                 seen[r, c] = now
                 changed[0], changed[1] = min(changed[0], r), max(changed[1], r + 1)
                 changed[2], changed[3] = min(changed[2], c), max(changed[3], c + 1)
+            c += 1
     return changed
