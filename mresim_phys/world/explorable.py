@@ -94,6 +94,12 @@ class SightGroup:
     near: BoolGrid = field(default_factory=lambda: np.zeros((0, 0), bool))  # sight_kernel's
     seen: BoolGrid = field(default_factory=lambda: np.zeros((0, 0), bool))
     witness: NDArray[np.int32] = field(default_factory=lambda: np.zeros(0, np.int32))
+    left_rows: NDArray[np.int32] = field(default_factory=lambda: np.zeros(0, np.int32))
+
+    def count_left(self, occupied: BoolGrid, rows: tuple[int, int]) -> None:
+        """:attr:`left_rows` (each row's free cells not ``near``) for ``rows`` (from, to)."""
+        cells = ~occupied[rows[0] : rows[1]] & ~self.near[rows[0] : rows[1]]
+        self.left_rows[rows[0] : rows[1]] = np.count_nonzero(cells, axis=1)
 
     @property
     def kernel(self) -> Kernel:
@@ -248,6 +254,8 @@ class Explorable:
         group.reach = connected_to(places, group.seeds)
         group.near = dilated(group.reach, group.kernel, whole(self.shape), outside=False)
         group.seen = group.near.copy()
+        group.left_rows = np.zeros(self.shape[0], dtype=np.int32)
+        group.count_left(occupied, (0, self.shape[0]))
         if group.witness.size != occupied.size:
             group.witness = np.full(occupied.size, NONE, dtype=np.int32)
         seeds = group.seeds[places[group.seeds[:, 0], group.seeds[:, 1]]]
@@ -336,8 +344,9 @@ class Explorable:
         positions changed; ``box``: the flipped cells); the box where ``group.seen``
         changed (NOTHING: nowhere)."""
         kernel = group.kernel
-        near = grown(window, kernel.shape[0] // 2, self.shape)
+        near = grown(window, kernel.shape[0] // 2, self.shape)  # holds the flipped cells
         cut(group.near, near)[...] = dilated(group.reach, kernel, near, outside=False)
+        group.count_left(occupied, (near[0], near[1]))
         margin = max(math.ceil(group.sensor_range), kernel.shape[0] // 2) + 1
         around = grown(window, margin, self.shape)
         changed = see_again(
@@ -345,7 +354,8 @@ class Explorable:
             np.array(around, dtype=np.int64), np.ascontiguousarray(flips),
             np.array([box[0], box[2]], dtype=np.int64), grew,
             np.array(window, dtype=np.int64), float(group.sensor_range),
-            (words(occupied), words(group.near), words(group.seen)),
+            (words(occupied), words(group.near), words(group.seen)), group.left_rows,
+            np.array(near[:2], dtype=np.int64),
         )  # fmt: skip
         if changed[0] >= changed[1]:
             return NOTHING

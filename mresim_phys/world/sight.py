@@ -297,18 +297,24 @@ def see_again(
     toward: NDArray[np.int64],
     sensor_range: float,
     grids: tuple[NDArray[np.uint64], NDArray[np.uint64], NDArray[np.uint64]],
+    left_rows: NDArray[np.int32],
+    changed_rows: NDArray[np.int64],
 ) -> NDArray[np.int64]:
     """Decide again the cells of ``window`` (row0, row1, col0, col1) after a change: free
     cells in ``near`` are seen; each other free cell is decided (:func:`decide`) all
     around if it was seen before or flipped (``flipped`` at (row, col) ``flipped_at``),
     else towards ``toward`` if some cell became free (``grew``), else it stays unseen.
     ``grids``: word views of ``occupied``, ``near`` and ``seen`` (:func:`words`), to skip
-    eight settled cells at a time. Returns the box of the cells whose ``seen`` changed
-    (empty: row0 >= row1)."""
+    eight settled cells at a time; ``left_rows``: each row's free cells not ``near``, to
+    skip rows without any outside ``changed_rows`` (row0, row1: where ``near`` or the
+    truth changed). Returns the box of the cells whose ``seen`` changed (empty: row0 >=
+    row1)."""
     scratch = scratch_for(sensor_range)
     changed = np.array([window[1], window[0], window[3], window[2]], dtype=np.int64)
     f_rows, f_cols = flipped.shape
     for r in range(window[0], window[1]):
+        if left_rows[r] == 0 and not changed_rows[0] <= r < changed_rows[1]:
+            continue
         c = window[2]
         while c < window[3]:
             if settled(grids[0], grids[1], grids[2], r, c, window[3]):
