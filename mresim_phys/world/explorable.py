@@ -27,11 +27,12 @@ When the truth changes, :meth:`Explorable.update` follows a box of flipped cells
 positions change within the box grown by the body kernel, the reachable positions are
 relabelled in that window (``world.reach.relabel_window``; the whole map when the change
 regroups its terminals: a door closed or opened), and only the cells within sensor range
-of the window are looked at again. A cell seen before keeps its witness if the witness
+of the window are looked at again (``sight.see_again``; rows holding no free cell outside
+the always-seen band are skipped). A cell seen before keeps its witness if the witness
 still sees it; one not seen before is searched again only if some cell became free, and
 then only towards the window. The result is the full computation's
 (``tests/test_explorable.py``), so a replay that follows the net change of a step gets
-the live mask. Cost: ``docs/performance.md``.
+the live mask. Definition, algorithm and cost: ``docs/explorable.md``.
 """
 
 from __future__ import annotations
