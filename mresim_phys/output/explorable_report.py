@@ -13,6 +13,7 @@ the team's explorable share. Warnings (the scenario still validates) name a robo
 
 from __future__ import annotations
 
+import sys
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
@@ -83,6 +84,16 @@ def size_lines(explorable: Explorable, names: Sequence[str], free: int) -> list[
             f" see {percent(seen, free)}"
         )
     return lines
+
+
+def print_team_report(sim: Simulation, label: str) -> None:
+    """``mresim validate``'s output: ``label: ok``, the scenario in a few words and
+    :func:`team_report`'s lines on stdout, its warnings on stderr."""
+    robots, source = len(sim.scenario.robots), sim.scenario.map.source[1]
+    lines, warnings = team_report(sim)
+    print("\n  ".join([f"{label}: ok ({robots} robots, map {source})", *lines]))
+    for warning in warnings:
+        print(f"mresim: warning: {warning}", file=sys.stderr)
 
 
 def team_report(sim: Simulation) -> tuple[list[str], list[str]]:
