@@ -3,7 +3,8 @@
 The only module that reads the schema and builds runtime objects: the ground
 truth and the pymunk world, the team (bodies, lasers, strategies, planners; every
 start checked against the world), the base station, the network with its
-channels, the events, the coverage counter and reachable set, every named random
+channels, the events, the coverage counter, the explorable area and the connected free
+space it counts against, every named random
 stream (one :class:`~mresim_phys.rng.Streams` per run) and the run rules. The
 runtime (``sim``, motion, sensing, comms, strategies, metrics) takes these values
 and never imports the schema, so a run can be rebuilt in any process from a
@@ -57,6 +58,7 @@ from mresim_phys.world.events import (
     Event,
     make_event,
 )
+from mresim_phys.world.explorable import Explorable, RobotSight
 from mresim_phys.world.obstacles import MovingObstacle
 from mresim_phys.world.reach import Reachable
 from mresim_phys.world.sensing import Laser
@@ -294,6 +296,7 @@ class Setup:
     network: Network
     coverage: Coverage
     reachable: Reachable  # free space connected to the starts, followed across world changes
+    explorable: Explorable  # what the team can see from where it can go, followed likewise
     events: list[Event]
     streams: Streams
     rules: RunRules
@@ -313,6 +316,11 @@ class Setup:
     def event_streams(self) -> list[np.random.Generator]:
         """Each event's own stream, in scenario order."""
         return [self.streams.get("event", k) for k in range(len(self.events))]
+
+
+def explorable_area(occupied: np.ndarray, robots: list[Robot]) -> Explorable:
+    """The explorable area of ``robots`` from where they start (after any jitter)."""
+    return Explorable(occupied, [RobotSight(r.position, r.radius, r.laser.range) for r in robots])
 
 
 def run_rules(scenario: Scenario) -> RunRules:
@@ -355,6 +363,7 @@ def build_setup(scenario: Scenario) -> Setup:
         scenario.obstacles, scenario.doors, scenario.random_debris, world, streams, bodies
     )
     reachable = Reachable(truth.occupied, starts)
+    explorable = explorable_area(truth.occupied, robots)
     rules = run_rules(scenario)
     base = make_base(scenario.base_station, world.shape)
     if rules.latest:
@@ -369,11 +378,12 @@ def build_setup(scenario: Scenario) -> Setup:
         robots=robots,
         network=build_network(scenario, streams, world.shape, rules.latest),
         coverage=(
-            LatestCoverage(reachable.mask, world.occupied)
+            LatestCoverage(explorable.mask, world.occupied, reachable.mask)
             if rules.latest
-            else Coverage(reachable.mask)
+            else Coverage(explorable.mask, reachable.mask)
         ),
         reachable=reachable,
+        explorable=explorable,
         events=events,
         streams=streams,
         rules=rules,

@@ -22,6 +22,7 @@ from tqdm import tqdm
 from mresim_phys.errors import MresimError
 from mresim_phys.metrics import StepRecord
 from mresim_phys.output.bench import PRESETS, run_bench
+from mresim_phys.output.explorable_report import print_team_report
 from mresim_phys.output.files import write_text_atomic
 from mresim_phys.output.health import print_warnings
 from mresim_phys.output.plots import plot_runs
@@ -312,9 +313,9 @@ def run_with_bar(
 
 
 def validate_command(args: argparse.Namespace) -> int:
-    """``mresim validate``: schema, plugins, map and robot starts, without running."""
-    scenario = Simulation.from_yaml(args.scenario).scenario
-    print(f"{args.scenario}: ok ({len(scenario.robots)} robots, map {scenario.map.source[1]})")
+    """``mresim validate``: schema, plugins, map and robot starts, without running; then
+    where the team can go and what it can see, with warnings on stderr."""
+    print_team_report(Simulation.from_yaml(args.scenario), str(args.scenario))
     return 0
 
 

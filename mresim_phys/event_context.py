@@ -3,7 +3,8 @@
 :class:`RunEventContext` implements :class:`~mresim_phys.world.events.EventContext`
 over the running simulation's parts: robots fail (whole or one part), agents
 fall silent through the network's blackouts, the true world changes (the
-coverage counter's reachable set follows), lines are logged for the step, and
+connected free space and the explorable area the coverage counts follow), lines are
+logged for the step, and
 each event draws only from its own named random stream.
 """
 
@@ -23,7 +24,8 @@ from mresim_phys.world.debris import Crush
 from mresim_phys.world.doors import Door
 from mresim_phys.world.elements import WorldElement
 from mresim_phys.world.events import Box, Channels, Event, RobotPart
-from mresim_phys.world.reach import Reachable, follow_changes
+from mresim_phys.world.explorable import Explorable, follow_world
+from mresim_phys.world.reach import Reachable
 from mresim_phys.world.space import World
 
 CHANNELS: dict[str, tuple[str, ...]] = {
@@ -42,13 +44,13 @@ class RunEventContext:
         network: Network,
         world: World,
         coverage: Coverage,
-        reachable: Reachable,
+        reaches: tuple[Reachable, Explorable],
         streams: Sequence[np.random.Generator],
         elements: Sequence[WorldElement] = (),
     ) -> None:
         self.agents = {a.name: a for a in agents}
         self.network, self.world, self.coverage = network, world, coverage
-        self.reachable = reachable
+        self.reachable, self.explorable = reaches
         self.streams = list(streams)
         self.elements = list(elements)
         self.doors = {e.params.name: e for e in self.elements if isinstance(e, Door)}
@@ -102,10 +104,8 @@ class RunEventContext:
         self.network.add_blackout(Blackout(self._step, until, members, CHANNELS[channels]))
 
     def change_world(self, box: Box, occupied: BoolGrid | bool) -> None:
-        """Set the true occupancy of ``box``; the explored metric's reachable set follows."""
-        change = self.world.set_cells(box, occupied)
-        if change:
-            follow_changes(self.coverage, self.reachable, self.world.occupied, [change])
+        """Set the true occupancy of ``box``; the explored metric's cells follow."""
+        self._follow(self.world.set_cells(box, occupied))
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -113,9 +113,10 @@ class RunEventContext:
         return self.world.shape
 
     def _follow(self, change: Change) -> None:
-        """The explored metric's reachable set follows a change of the truth."""
+        """The explored metric's cells (connected, explorable) follow a change of the truth."""
         if change:
-            follow_changes(self.coverage, self.reachable, self.world.occupied, [change])
+            occupied = self.world.occupied
+            follow_world(self.coverage, self.reachable, self.explorable, occupied, [change])
 
     def change_cells(self, cells: BoolGrid, occupied: bool, crush: Crush) -> list[str]:
         """Make the True cells of ``cells`` rubble or free; robots in the way are spared

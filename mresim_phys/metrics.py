@@ -1,9 +1,12 @@
 """Metrics (phase 7): what one step achieved, in numbers.
 
-``explored`` is the fraction of truth-free cells reachable from the robots'
-starts that the team (robots and base together) has marked free;
-``known_at_base`` the same for the base station's own grid. Both are in [0, 1]
-and never decrease. ``links`` counts linked agent pairs (the base included),
+``explored`` is the fraction of the explorable cells (``world.explorable``: free cells
+some robot can see from where its body can go) that the team (robots and base
+together) has marked free; ``known_at_base`` the same for the base station's own grid.
+Both are in [0, 1] and never decrease. ``explored_connected`` and
+``known_at_base_connected`` are the same over the definition before the explorable area
+(truth-free cells 4-connected to the robots' starts), for comparisons with earlier runs.
+``links`` counts linked agent pairs (the base included),
 ``comm_bytes`` what the main channel sent this step (maps and teammate records,
 all links), ``control_bytes`` the same for the control channel; the information
 latency at the base is the age of each alive robot's newest report the base
@@ -22,7 +25,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mresim_phys.knowledge.coverage import Coverage
-from mresim_phys.types import FREE, BeliefGrid
+from mresim_phys.types import FREE, BeliefGrid, BoolGrid
 
 THRESHOLDS = (0.5, 0.9, 0.95)
 
@@ -57,6 +60,10 @@ class StepRecord:
     # runs with faults (knowledge.robustness): failures so far, cells they lost (summed over
     # failures), lost cells the team has not known again yet; None: no such columns
     robustness: tuple[int, int, int] | None = None
+    # the same fractions over the free cells 4-connected to the starts (None: not measured,
+    # a replay of a log older than the explorable area)
+    explored_connected: float | None = None
+    known_at_base_connected: float | None = None
 
     def csv_row(self) -> list[str]:
         """Values in :func:`csv_header` order, floats as exact round-trip text."""
@@ -73,6 +80,8 @@ class StepRecord:
             repr(self.latency_max),
             repr(self.latency_mean),
         ]
+        if self.explored_connected is not None:
+            row += [repr(self.explored_connected), repr(self.known_at_base_connected)]
         row += [repr(r.distance) for r in self.robots]
         row += [r.state for r in self.robots]
         row += [str(r.base_contact) for r in self.robots]
@@ -81,14 +90,19 @@ class StepRecord:
 
 
 ROBUSTNESS_COLUMNS = ["failures", "knowledge_lost", "lost_unrecovered"]
+CONNECTED_COLUMNS = ["explored_connected", "known_at_base_connected"]
 
 
-def csv_header(robot_names: list[str], stale: bool = False, faults: bool = False) -> list[str]:
-    """Column names of ``metrics.csv`` (``stale`` for a world that changes, then the
-    robustness columns for a run with faults, last)."""
+def csv_header(
+    robot_names: list[str], stale: bool = False, faults: bool = False, connected: bool = True
+) -> list[str]:
+    """Column names of ``metrics.csv``: the fixed columns, the ``connected`` ones (left out
+    only by replays of logs older than them), the per-robot ones, ``stale`` for a world
+    that changes, then the robustness columns for a run with faults, last."""
     return (
         ["step", "explored", "known_at_base", "distance", "alive", "links"]
         + ["comm_bytes", "control_links", "control_bytes", "latency_max", "latency_mean"]
+        + (CONNECTED_COLUMNS if connected else [])
         + [f"distance_{n}" for n in robot_names]
         + [f"state_{n}" for n in robot_names]
         + [f"base_contact_{n}" for n in robot_names]
@@ -109,13 +123,14 @@ def measure_step(
     control_bytes: int,
     latency: tuple[float, float],
     robustness: tuple[int, int, int] | None = None,
+    known_at_base_connected: float | None = None,
 ) -> StepRecord:
     """The step's row of metrics, for a live run and a replay alike.
 
     Args:
         step: The step number.
         coverage: The team coverage, settled for this step (``explored``).
-        known_at_base: The running share of reachable free cells the base holds FREE.
+        known_at_base: The running share of explorable cells the base holds FREE.
         robots: Every robot's record, in scenario order (a ``failed`` one is not alive).
         links: (n, n) bool main-channel links (index 0 = base).
         control_links: (n, n) bool control-channel links, or None without that channel.
@@ -123,7 +138,9 @@ def measure_step(
         control_bytes: Control-channel bytes sent this step.
         latency: (max, mean) age of the robots' newest reports at the base.
         robustness: (failures, knowledge_lost, lost_unrecovered) in a run with faults.
+        known_at_base_connected: The same share over the coverage's connected cells.
     """
+    connected = coverage.fraction_connected
     return StepRecord(
         step=step,
         explored=min(coverage.fraction, 1.0),
@@ -139,17 +156,33 @@ def measure_step(
         latency_mean=latency[1],
         stale=getattr(coverage, "stale", None),
         robustness=robustness,
+        explored_connected=None if connected is None else min(connected, 1.0),
+        known_at_base_connected=None if connected is None else known_at_base_connected,
     )
 
 
 def update_known_at_base(
-    previous: float, base_belief: BeliefGrid, coverage: Coverage, monotone: bool = True
-) -> float:
-    """``known_at_base`` once the base heard news: the share of ``coverage``'s reachable
-    cells FREE in ``base_belief``, never below ``previous`` (unless not ``monotone``: with
-    'latest' beliefs the base's map can lose a cell a newer observation closed)."""
-    known = np.count_nonzero((base_belief == FREE) & coverage.reachable)
-    fraction = min(known / coverage.total if coverage.total else 1.0, 1.0)
+    previous: tuple[float, float | None],
+    base_belief: BeliefGrid,
+    coverage: Coverage,
+    monotone: bool = True,
+) -> tuple[float, float | None]:
+    """(``known_at_base``, ``known_at_base_connected``) once the base heard news: the share
+    of ``coverage``'s counted cells (and of its connected ones; None without them) FREE in
+    ``base_belief``, never below ``previous`` (unless not ``monotone``: with 'latest'
+    beliefs the base's map can lose a cell a newer observation closed)."""
+    free = base_belief == FREE
+    counted = share(previous[0], free, coverage.reachable, coverage.total, monotone)
+    if coverage.connected is None:
+        return counted, None
+    connected = coverage.connected, coverage.total_connected
+    return counted, share(previous[1] or 0.0, free, *connected, monotone)
+
+
+def share(previous: float, free: BoolGrid, cells: BoolGrid, total: int, monotone: bool) -> float:
+    """The share of ``cells`` (``total`` of them) that are ``free``, at least ``previous``
+    if ``monotone``."""
+    fraction = min(np.count_nonzero(free & cells) / total if total else 1.0, 1.0)
     return float(max(previous, fraction) if monotone else fraction)
 
 
@@ -168,25 +201,46 @@ def base_latency(step: int, heard: dict[str, int], robots: list[str]) -> tuple[f
     return max(ages), sum(ages) / len(ages)
 
 
+def no_milestones() -> dict[str, int | None]:
+    """Every threshold, none reached yet."""
+    return dict.fromkeys(map(str, THRESHOLDS))
+
+
 @dataclass
 class Milestones:
-    """First step at which ``explored`` / ``known_at_base`` reached each threshold."""
+    """First step at which ``explored`` / ``known_at_base`` (and their ``_connected``
+    versions) reached each threshold."""
 
-    explored: dict[str, int | None] = field(
-        default_factory=lambda: dict.fromkeys(map(str, THRESHOLDS))
-    )
-    known_at_base: dict[str, int | None] = field(
-        default_factory=lambda: dict.fromkeys(map(str, THRESHOLDS))
-    )
+    explored: dict[str, int | None] = field(default_factory=no_milestones)
+    known_at_base: dict[str, int | None] = field(default_factory=no_milestones)
+    explored_connected: dict[str, int | None] = field(default_factory=no_milestones)
+    known_at_base_connected: dict[str, int | None] = field(default_factory=no_milestones)
 
     def update(self, record: StepRecord) -> None:
         """Note thresholds first crossed by ``record``."""
-        for name, value in (("explored", record.explored), ("known_at_base", record.known_at_base)):
+        for name in ("explored", "known_at_base", "explored_connected", "known_at_base_connected"):
+            value: float | None = getattr(record, name)
             table = getattr(self, name)
             for threshold in THRESHOLDS:
                 key = str(threshold)
-                if table[key] is None and value >= threshold:
+                if table[key] is None and value is not None and value >= threshold:
                     table[key] = record.step
+
+
+def explorable_summary(
+    coverage: Coverage, last: StepRecord, milestones: Milestones
+) -> dict[str, object]:
+    """summary.json's fields about what the fractions count: the explorable cells and the
+    connected ones at the last step, and the ``_connected`` fractions' final values and
+    milestones."""
+    return {
+        "explorable_cells": coverage.total,
+        "connected_cells": coverage.total_connected if coverage.connected is not None else None,
+        "final_explored_connected": last.explored_connected,
+        "final_known_at_base_connected": last.known_at_base_connected,
+        "steps_to_explored_connected": dict(milestones.explored_connected),
+        "steps_to_known_at_base_connected": dict(milestones.known_at_base_connected),
+    }
 
 
 @dataclass

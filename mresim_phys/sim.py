@@ -89,6 +89,7 @@ class Simulation:
         self.events_now: list[str] = []
         self.comm = self.network.idle(len(self.agents))
         self.known_at_base = 0.0
+        self.known_at_base_connected: float | None = 0.0  # over the connected free cells
         self.milestones = Milestones()
         self.comm_totals = CommTotals()
         self.stall = StallWatch(s.rules.stalled_for, s.rules.stalled_gain)
@@ -100,8 +101,8 @@ class Simulation:
         # the hazard zones' failure probability per cell and step (static; None: no zones)
         self.hazards: NDArray[np.float32] | None = hazard_grid(s.faults, s.world.shape)
         self._events = RunEventContext(
-            self.agents, s.network, s.world, s.coverage, s.reachable, s.event_streams(),
-            s.elements,
+            self.agents, s.network, s.world, s.coverage, (s.reachable, s.explorable),
+            s.event_streams(), s.elements,
         )  # fmt: skip
         self.move_rules = MoveRules(s.rules.scan_every_point, self.robot_filter, s.terrain)
         self.pool = RobotPool(thread_count(scenario.simulation.threads, len(self.robots)))
@@ -314,9 +315,10 @@ class Simulation:
         if isinstance(self.coverage, LatestCoverage):
             self.touch_merged(self.coverage)
         if self.links[0].any() or self.t == 0:
-            self.known_at_base = update_known_at_base(
-                self.known_at_base, self.base.belief, self.coverage, not self.rules.latest
-            )
+            self.known_at_base, self.known_at_base_connected = update_known_at_base(
+                (self.known_at_base, self.known_at_base_connected),
+                self.base.belief, self.coverage, not self.rules.latest,
+            )  # fmt: skip
         self.phase_times["communication"] += perf_counter() - started
 
     def touch_merged(self, coverage: LatestCoverage) -> None:
@@ -371,6 +373,7 @@ class Simulation:
             gave_way=gave_way,
             lost_knowledge=self.failures.lost_view(),
             failures=self.failures.notes(),
+            sights=tuple(self.setup.explorable.robots),
         )
 
     def measure(self) -> StepRecord:
@@ -397,6 +400,7 @@ class Simulation:
             control_bytes=self.comm.control_traffic.total,
             latency=latency,
             robustness=watch.columns() if self.fault_columns else None,
+            known_at_base_connected=self.known_at_base_connected,
         )
         self.milestones.update(record)
         self.curves.update(record)

@@ -18,6 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray
+from mresim_phys.world.explorable import RobotSight
 
 
 def read_only(array: np.ndarray) -> np.ndarray:
@@ -150,6 +151,9 @@ class Snapshot:
     failures: tuple[tuple[int, str], ...] = ()  # (step, "B" or "C radio") of every failure
     rubble: BoolGrid | None = None  # static walls that were free on the map (None: none yet)
     gave_way: BoolGrid | None = None  # free cells that were the map's walls
+    # what the explorable area was computed from (static): each robot's start, radius,
+    # laser range and seeds (world.explorable); (): unknown (a log older than it)
+    sights: tuple[RobotSight, ...] = ()
 
     @property
     def base(self) -> AgentSnapshot:

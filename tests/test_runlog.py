@@ -29,6 +29,7 @@ from mresim_phys.render import LayerSpec, Renderer, frame_scale
 from mresim_phys.render.draw import robot_label
 from mresim_phys.scenario.schema import RenderSpec
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot
+from mresim_phys.world.explorable import follow_world
 from mresim_phys.world.maps import free_components_mask
 
 ScenarioFile = Callable[..., Path]
@@ -387,11 +388,11 @@ CHANGES = {8: (DOOR, True), 20: ((slice(25, 31), DOOR[1]), False)}  # closed, th
 
 
 def change_world(sim: Simulation, cells: tuple[slice, slice], occupied: bool) -> None:
-    """Change the truth in place, as World.set_cells will, and retarget the coverage."""
-    sim.world.occupied[cells] = occupied
-    sim.world.version += 1
-    starts = [robot.start for robot in sim.scenario.robots]
-    sim.coverage.retarget(free_components_mask(sim.world.occupied, starts))
+    """Change the truth, as a ``cells`` event does; the coverage's cells follow."""
+    rows, cols = cells
+    change = sim.world.set_cells((rows.start, rows.stop, cols.start, cols.stop), occupied)
+    setup = sim.setup
+    follow_world(sim.coverage, setup.reachable, setup.explorable, sim.world.occupied, [change])
 
 
 def test_replay_follows_truth_changes(scenario_file: ScenarioFile, tmp_path: Path) -> None:

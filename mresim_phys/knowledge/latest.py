@@ -2,16 +2,17 @@
 
 With 'latest' beliefs (``simulation.belief``) a robot's map can lose a FREE cell (a
 person stepped in, a door closed: its newer observation wins), and the truth can
-change under the maps. The explored metric then counts, among the free cells of the
-truth of this step that are reachable from the starts, those that at least one
-robot's *current* map holds FREE; ``stale`` counts the cells on which at least one
-robot's current map disagrees with the truth of this step: held FREE but now an
-obstacle, or held OCCUPIED but now free (a person who walked on, a door that opened).
+change under the maps. The explored metric then counts, among the explorable cells of
+this step's truth (``world.explorable``; and, for ``explored_connected``, among its free
+cells 4-connected to the starts), those that at least one robot's *current* map holds
+FREE; ``stale`` counts the cells on which at least one robot's current map disagrees
+with the truth of this step: held FREE but now an obstacle, or held OCCUPIED but now
+free (a person who walked on, a door that opened).
 
 Both follow every change incrementally, like :class:`~mresim_phys.knowledge.mapping.
 Coverage`: robots report the windows their scans touched and the boxes their merges
 changed (:meth:`LatestCoverage.touch_box`), the world reports where the truth or the
-reachable set changed (:meth:`LatestCoverage.retarget`); only those windows are
+counted sets changed (:meth:`LatestCoverage.retarget`); only those windows are
 recounted. A per-robot copy of which cells it held FREE / OCCUPIED turns a window of
 its map into changes of the per-cell holder counts. One compiled pass per window
 (:func:`fold_window`) folds a map's window and recounts it.
@@ -30,10 +31,12 @@ Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)
 
 
 class LatestCoverage(Coverage):
-    """Explored (reachable truth-free cells some robot now holds FREE) and stale cells."""
+    """Explored (counted truth-free cells some robot now holds FREE) and stale cells."""
 
-    def __init__(self, reachable: BoolGrid, truth: BoolGrid) -> None:
-        super().__init__(reachable)
+    def __init__(
+        self, reachable: BoolGrid, truth: BoolGrid, connected: BoolGrid | None = None
+    ) -> None:
+        super().__init__(reachable, connected)
         self.truth = truth  # the world's truth grid, changed in place by the world
         self.free_holders = np.zeros(truth.shape, dtype=np.uint16)
         self.wall_holders = np.zeros(truth.shape, dtype=np.uint16)
@@ -67,12 +70,14 @@ class LatestCoverage(Coverage):
             self._held[id(belief)] = np.zeros(belief.shape, np.uint8)  # all UNKNOWN
         rows, cols = window
         held = self._held[id(belief)]
-        counted, stale = fold_window(
+        second = self.reachable if self.connected is None else self.connected
+        counted, counted_second, stale = fold_window(
             belief, held, words(belief), words(held), self.free_holders, self.wall_holders,
-            self.known, self.reachable, self.truth, self.stale_mask,
+            self.known, self.reachable, second, self.truth, self.stale_mask,
             rows.start, rows.stop, cols.start, cols.stop,
         )  # fmt: skip
         self.count += counted
+        self.count_connected += counted_second if self.connected is not None else 0
         self.stale += stale
 
     def retarget(
@@ -112,23 +117,25 @@ def fold_window(
     wall_holders: np.ndarray,
     known: BoolGrid,
     reachable: BoolGrid,
+    connected: BoolGrid,
     truth: BoolGrid,
     stale_mask: BoolGrid,
     row0: int,
     row1: int,
     col0: int,
     col1: int,
-) -> tuple[int, int]:
+) -> tuple[int, int, int]:
     """Fold one map's window into the holder counts (what it holds now against what it
     held when last folded, ``held``, updated in place), recounting ``known`` and
     ``stale_mask`` on the cells whose value changed (elsewhere they are up to date:
     :meth:`LatestCoverage.retarget` follows the truth); returns the change of the
-    explored count and of the stale count.
+    explored count (cells of ``reachable``), of the count over ``connected`` and of the
+    stale count.
 
     With word views of both maps (:func:`words`), runs of 8 unchanged cells are skipped
     with one comparison (most of a window is unchanged: ~5x faster on the library);
     cells are still visited in raster order, so the result is the same."""
-    counted = 0
+    counted = counted_connected = 0
     stale_change = 0
     whole = belief_words.shape[1] > 0
     for r in range(row0, row1):
@@ -151,9 +158,11 @@ def fold_window(
                 now = free_holders[r, c] > 0
                 if reachable[r, c]:
                     counted += int(now) - int(known[r, c])
+                if connected[r, c]:
+                    counted_connected += int(now) - int(known[r, c])
                 known[r, c] = now
                 stale = (now and truth[r, c]) or (wall_holders[r, c] > 0 and not truth[r, c])
                 stale_change += int(stale) - int(stale_mask[r, c])
                 stale_mask[r, c] = stale
             c += 1
-    return counted, stale_change
+    return counted, counted_connected, stale_change

@@ -3,8 +3,9 @@
 Each field of :class:`~mresim_phys.snapshot.Snapshot` and of its
 :class:`~mresim_phys.snapshot.AgentSnapshot` s is stored in exactly one way:
 
-* ``meta.json``, once: ``resolution`` and each agent's ``name``, ``kind``, ``radius``,
-  ``comm_range`` (:data:`STATIC_AGENT`);
+* ``meta.json``, once: ``resolution``, each agent's ``name``, ``kind``, ``radius``,
+  ``comm_range`` (:data:`STATIC_AGENT`) and what the explorable area was computed from
+  (``sights``, ``output.logmeta``);
 * ``steps.jsonl``, one JSON line per step (:class:`LineField`): ``step``, ``events``,
   ``links``, ``comm``, ``world_version`` (:data:`SNAPSHOT_LINE`) and per agent
   ``position``, ``heading``, ``state``, ``role``, ``goal``, ``distance``, ``parent``,
@@ -38,8 +39,8 @@ import numpy as np
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
 from mresim_phys.types import FloatArray, IntArray
 
-FORMAT, VERSION = "mresim-runlog", 4
-READABLE = (1, 2, 3, 4)  # versions the reader reads (how 1 differs: docs/run-log-format.md)
+FORMAT, VERSION = "mresim-runlog", 5
+READABLE = (1, 2, 3, 4, 5)  # versions the reader reads (how 1 differs: docs/run-log-format.md)
 NEW, NONE = -1, -2  # PointsField codes: the points are stored; the field is None
 Parts = dict[str, list[np.ndarray]]
 Chunk = dict[str, np.ndarray]
@@ -137,6 +138,7 @@ SNAPSHOT_ELSEWHERE: tuple[str, ...] = ("resolution", "truth", "agents")
 SNAPSHOT_ELSEWHERE += ("movables", "rubble", "gave_way", "terrain", "prior")  # in truth.npz
 SNAPSHOT_ELSEWHERE += ("hazards",)  # in truth.npz
 SNAPSHOT_ELSEWHERE += ("latest",)  # meta.json "beliefs"
+SNAPSHOT_ELSEWHERE += ("sights",)  # meta.json "sights" (output.logmeta)
 RECOMPUTED = ("explored", "known_at_base", "alive", "lost_knowledge", "failures")  # replayed
 AGENT_RECOMPUTED = ("activity",)  # replayed by the run-health watch (knowledge.health)
 

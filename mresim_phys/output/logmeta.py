@@ -2,9 +2,11 @@
 
 ``meta.json`` (docs/run-log-format.md) is a run log's commit point: format, version,
 name, seed, grid shape, chunk size, the agents' static table, the robots' starts and the
-committed step count, and (version 3) the moving obstacles and doors
-(``output.logworld``). :func:`read_meta` reads it and checks every value, so a damaged or
-foreign file is a MresimError naming it rather than an error deep in a replay.
+committed step count, (version 3) the moving obstacles and doors (``output.logworld``)
+and (version 5) what the explorable area was computed from (``sights``:
+:func:`sight_meta`, :func:`read_sights`). :func:`read_meta` reads it and checks every
+value, so a damaged or foreign file is a MresimError naming it rather than an error deep
+in a replay.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from mresim_phys.errors import MresimError
 from mresim_phys.output.logformat import FORMAT, READABLE, STATIC_AGENT, decode_line
 from mresim_phys.output.logworld import read_movable_meta
 from mresim_phys.snapshot import AgentSnapshot
+from mresim_phys.world.explorable import RobotSight
 
 META = "meta.json"
 
@@ -83,7 +86,49 @@ def meta_problem(meta: dict[str, Any]) -> str | None:
     robots = sum(1 for a in agents if a["kind"] == "robot")
     if not (isinstance(starts, list) and len(starts) == robots and all(map(is_point, starts))):
         return f"starts {starts!r} are not {robots} [x, y] points"
-    return movables_problem(meta.get("movables", []))
+    return movables_problem(meta.get("movables", [])) or sights_problem(meta, robots)
+
+
+def sight_meta(sight: RobotSight) -> dict[str, Any]:
+    """One robot's entry of meta.json's ``sights``."""
+    seeds = [[int(r), int(c)] for r, c in sight.seeds or ()]
+    return {
+        "start": [float(sight.start[0]), float(sight.start[1])],
+        "radius": float(sight.radius),
+        "range": float(sight.sensor_range),
+        "seeds": seeds,
+    }
+
+
+def read_sights(meta: dict[str, Any]) -> tuple[RobotSight, ...]:
+    """meta.json's ``sights`` read back (checked by :func:`read_meta`; (): none, a log
+    older than version 5 or one written from hand-made snapshots)."""
+    return tuple(
+        RobotSight(
+            (float(e["start"][0]), float(e["start"][1])),
+            float(e["radius"]),
+            float(e["range"]),
+            tuple((int(r), int(c)) for r, c in e["seeds"]),
+        )
+        for e in meta.get("sights", [])
+    )
+
+
+def sights_problem(meta: dict[str, Any], robots: int) -> str | None:
+    """What is wrong with meta.json's ``sights`` (None: nothing, or no such key)."""
+    sights = meta.get("sights", [])
+    if not isinstance(sights, list) or len(sights) not in (0, robots):
+        return f"sights {sights!r} is not a list of {robots} robots' sights"
+    rows, cols = meta["shape"]
+    for entry in sights:
+        try:
+            sight = read_sights({"sights": [entry]})[0]
+        except (IndexError, KeyError, TypeError, ValueError):
+            return f"sight {entry!r} lacks a start, radius, range or seeds"
+        inside = all(0 <= r < rows and 0 <= c < cols for r, c in sight.seeds or ())
+        if not (is_point(entry["start"]) and inside and sight.radius > 0 <= sight.sensor_range):
+            return f"sight {entry!r} has a seed outside the map, no radius or a negative range"
+    return None
 
 
 def movables_problem(movables: Any) -> str | None:

@@ -33,7 +33,7 @@ from mresim_phys.output.logformat import (
     new_parts,
     point,
 )
-from mresim_phys.output.logmeta import META
+from mresim_phys.output.logmeta import META, sight_meta
 from mresim_phys.output.logworld import MovablesTrack, movable_meta
 from mresim_phys.snapshot import Snapshot
 
@@ -67,6 +67,8 @@ def new_meta(
     }
     if faults:
         meta["fault_columns"] = True
+    if first.sights:
+        meta["sights"] = [sight_meta(s) for s in first.sights]
     return meta
 
 

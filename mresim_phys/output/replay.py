@@ -152,7 +152,8 @@ def replay_metrics(log: RunLog, run_dir: Path) -> tuple[list[str], bool]:
     with atomic_path(out) as tmp, tmp.open("w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle, lineterminator="\n")
         faults = bool(log.meta.get("fault_columns", False))
-        writer.writerow(csv_header(log.names[1:], stale=latest, faults=faults))
+        connected = bool(log.meta.get("sights"))  # logs before the explorable area: no
+        writer.writerow(csv_header(log.names[1:], stale=latest, faults=faults, connected=connected))
         for snap, record in replay.run():
             writer.writerow(record.csv_row())
             last = snap

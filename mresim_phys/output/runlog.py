@@ -40,11 +40,12 @@ from mresim_phys.output.logformat import (
     Track,
     decode_line,
 )
-from mresim_phys.output.logmeta import META, damaged, read_meta
+from mresim_phys.output.logmeta import META, damaged, read_meta, read_sights
 from mresim_phys.output.logworld import MovablesTrack
 from mresim_phys.output.logwriter import STEPS, TRUTH_FILE, RunLogWriter, chunk_file, flat_cells
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
 from mresim_phys.types import FREE, BeliefGrid, BoolGrid, IntArray
+from mresim_phys.world.explorable import Explorable
 from mresim_phys.world.maps import connected_to, free_components_mask, seed_cells
 from mresim_phys.world.terrain import TerrainGrid
 
@@ -169,7 +170,10 @@ class Replay:
     """Applies a log's deltas to its own grids and recomputes each step's metrics.
 
     The truth follows the logged world changes; whenever it changes, the coverage counts
-    against the free cells then reachable from the robots' starts, as live.
+    against the explorable area then (``world.explorable``, from the logged ``sights``,
+    following the step's flipped cells) and the free cells then reachable from the
+    robots' starts, as live. A log without ``sights`` (older than version 5) replays the
+    metrics of its time: ``explored`` over the connected cells, no ``_connected`` columns.
     """
 
     def __init__(self, log: RunLog, latest: bool | None = None) -> None:
@@ -184,16 +188,23 @@ class Replay:
         if latest is None:  # logs before 'latest' beliefs existed were all 'grow'
             latest = log.meta.get("beliefs") == "latest"
         self.latest = latest  # 'latest' beliefs: maps can lose FREE cells (knowledge.latest)
+        self.sights = read_sights(log.meta)
+        truth = self.truth.view(bool).reshape(self.shape)  # writable: one compiled kernel
+        self.explorable = Explorable(truth, self.sights) if self.sights else None
+        counted, connected = (
+            (reachable, None) if self.explorable is None else (self.explorable.mask, reachable)
+        )
         self.coverage: Coverage = (
-            LatestCoverage(reachable, self.truth.view(bool).reshape(self.shape))
+            LatestCoverage(counted, self.truth.view(bool).reshape(self.shape), connected)
             if latest
-            else Coverage(reachable)
+            else Coverage(counted, connected)
         )
         self._maps: dict[int, BeliefGrid] = {}  # each robot's map as one stable 2-D view
         self.failures = FailureWatch(log.robot_names)
         self.health = HealthWatch(log.robot_names)  # idle, stuck, state reasons, as live
         self.fault_columns = bool(log.meta.get("fault_columns", False))
         self.known_at_base, self.first = 0.0, True
+        self.known_at_base_connected: float | None = None if connected is None else 0.0
         self.version: int | None = None
 
     @property
@@ -242,6 +253,7 @@ class Replay:
             latest=self.latest,
             lost_knowledge=self.failures.lost_view(),
             failures=self.failures.notes(),
+            sights=self.sights,
         )
         return snap, record
 
@@ -252,9 +264,24 @@ class Replay:
     def follow_truth(self, version: int, chunk: Chunk, j: int) -> None:
         """Apply the step's truth change, if the world changed, and retarget the coverage."""
         if self.version is not None and version != self.version:
-            TRUTH.read(self.truth, chunk, j)
-            self.coverage.retarget(reachable_from(self.truth_grid, self.log.meta["starts"]))
+            flipped = TRUTH.read(self.truth, chunk, j)
+            connected = reachable_from(self.truth_grid, self.log.meta["starts"])
+            if self.explorable is None:
+                self.coverage.retarget(connected)
+            else:
+                self.coverage.retarget_connected(connected)
+                if flipped is not None and len(flipped):
+                    self.follow_explorable(self.explorable, flipped)
         self.version = version
+
+    def follow_explorable(self, explorable: Explorable, flipped: IntArray) -> None:
+        """The explorable area follows the cells a logged truth change flipped."""
+        rows, cols = np.divmod(flipped, self.shape[1])
+        box = (int(rows.min()), int(rows.max()) + 1, int(cols.min()), int(cols.max()) + 1)
+        flips = np.zeros((box[1] - box[0], box[3] - box[2]), dtype=bool)
+        flips[rows - box[0], cols - box[2]] = True
+        window, held = explorable.update(self.truth.view(bool).reshape(self.shape), box, flips)
+        self.coverage.retarget(explorable.mask, window, held)
 
     def world_grids(self, chunk: Chunk, j: int) -> dict[str, Any]:
         """The step's rubble and gave-way grids (None before the first change of the
@@ -305,9 +332,9 @@ class Replay:
         self.coverage.settle()
         if self.first or links[0].any():  # the base's map changes only when it is linked
             base = self.tracks[0].grids["belief"].reshape(self.shape)
-            self.known_at_base = update_known_at_base(
-                self.known_at_base, base, self.coverage, not self.latest
-            )
+            known = (self.known_at_base, self.known_at_base_connected)
+            known = update_known_at_base(known, base, self.coverage, not self.latest)
+            self.known_at_base, self.known_at_base_connected = known
         self.first = False
         watch, coverage = self.failures, self.coverage
         base = agents[0].belief
@@ -323,6 +350,7 @@ class Replay:
             control_bytes=comm.control_bytes,
             latency=(comm.latency_max, comm.latency_mean),
             robustness=watch.columns() if self.fault_columns else None,
+            known_at_base_connected=self.known_at_base_connected,
         )
 
     def count_free(self, idx: IntArray) -> None:

@@ -26,7 +26,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from mresim_phys.metrics import StepRecord
+from mresim_phys.metrics import StepRecord, explorable_summary
 from mresim_phys.output.files import WriteError
 from mresim_phys.output.health import run_health
 from mresim_phys.output.recorders import Recorder, SnapshotSource, make_recorders, summarise
@@ -136,6 +136,7 @@ def record_run(
     reason = natural if natural is not None else INTERRUPTED
     summary = summarise(sim.scenario, sim.record, sim.milestones, elapsed, reason, sim.comm_totals)
     summary |= run_robustness(sim) | run_health(sim)
+    summary |= explorable_summary(sim.coverage, sim.record, sim.milestones)
     interrupted = reason == INTERRUPTED
     if interrupted:
         summary["signal"] = stop.name

@@ -35,6 +35,7 @@ from mresim_phys.snapshot import Snapshot
 from mresim_phys.viewer.frames import FrameMaker
 from mresim_phys.viewer.protocol import info_message
 from mresim_phys.viewer.timeline import Timeline
+from mresim_phys.world.explorable import Explorable
 
 KEYFRAME_EVERY = 50  # logged steps between keyframes: a seek replays fewer than this
 CHUNKS_KEPT = 3  # delta chunks kept decoded
@@ -42,8 +43,10 @@ DECODE_ERRORS = (AttributeError, KeyError, IndexError, TypeError, ValueError)
 
 
 def freeze(replay: Replay) -> bytes:
-    """The replay's state as compressed bytes (its log and cached views left out)."""
-    state = {k: v for k, v in vars(replay).items() if k not in ("log", "_maps")}
+    """The replay's state as compressed bytes (its log, cached views and explorable area
+    left out: the area is a function of the truth, rebuilt by :func:`thaw`)."""
+    left_out = ("log", "_maps", "explorable")
+    state = {k: v for k, v in vars(replay).items() if k not in left_out}
     return zlib.compress(pickle.dumps(state, protocol=pickle.HIGHEST_PROTOCOL), 1)
 
 
@@ -51,13 +54,18 @@ def thaw(data: bytes, log: RunLog) -> Replay:
     """A replay in the state :func:`freeze` saved, reading ``log``.
 
     Pickling turns views into copies, so the views a replay shares are made again: the
-    per-robot map views (rebuilt on demand) and a 'latest' coverage's view of the truth.
+    per-robot map views (rebuilt on demand) and a 'latest' coverage's view of the truth;
+    the explorable area is computed afresh on the truth (the same cells it followed).
     """
     replay = Replay.__new__(Replay)
     vars(replay).update(pickle.loads(zlib.decompress(data)))  # our own bytes, never a file
     replay.log, replay._maps = log, {}
+    truth = replay.truth.view(bool).reshape(replay.shape)
     if isinstance(replay.coverage, LatestCoverage):
-        replay.coverage.truth = replay.truth.view(bool).reshape(replay.shape)
+        replay.coverage.truth = truth
+    replay.explorable = Explorable(truth, replay.sights) if replay.sights else None
+    if replay.explorable is not None:
+        replay.coverage.reachable = replay.explorable.mask
     return replay
 
 
