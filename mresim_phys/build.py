@@ -303,7 +303,7 @@ class Setup:
     starts: list[tuple[float, float]]  # where the robots started (the reachable set's seeds)
     resolution: float | None  # metres per cell, for reports
     team_order: tuple[str, ...] = ()  # tie-break order of the robots in auctions
-    free_area: int = 0  # free cells of the map (the original's total area), known to robots
+    free_area: int = 0  # explorable cells at the start: the done rule's building, known to robots
     elements: list[MovingObstacle | Door | RandomDebris] = field(default_factory=list)
     terrain: TerrainGrid | None = None  # true speed factor per cell; None: no terrain
     prior: BeliefGrid | None = None  # the prior map the listed robots start with; None: none
@@ -390,7 +390,7 @@ def build_setup(scenario: Scenario) -> Setup:
         starts=starts,
         resolution=scenario.map.resolution or truth.resolution,
         team_order=team_order(scenario.robots, streams, vary),
-        free_area=int(np.count_nonzero(~truth.occupied)),
+        free_area=int(np.count_nonzero(explorable.mask)),
         elements=elements,
         terrain=terrain,
         prior=prior,

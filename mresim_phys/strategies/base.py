@@ -79,7 +79,7 @@ class RobotView:
     lost: frozenset[str] = frozenset()  # teammates silent for longer than the run's limit
     team_order: tuple[str, ...] = ()  # the team's tie-break order (from the seed), the same for all
     vary_with_seed: bool = True  # the scenario lets the seed vary the run (initial random steps)
-    free_area: int = 0  # free cells of the whole map, known before the mission (0: not known)
+    free_area: int = 0  # the team's explorable cells, known before the mission (0: not known)
     terrain: FloatArray | None = None  # known terrain speed factors (1: open or unsensed); None
     prior: BeliefGrid | None = None  # the map it knew before the mission; None: none
     battery: float | None = None  # its battery level left, a fraction of capacity; None: none

@@ -88,7 +88,7 @@ class FrontierParams(StrategyParams):
         le=1,
         description=(
             "Mission complete (return to the base) once the robot's own map holds this"
-            " fraction of the building's free area, as the original's"
+            " fraction of the team's explorable area (docs/explorable.md), as the original's"
             " TERRITORY_PERCENT_EXPLORED_GOAL; null: only when no frontier is left."
         ),
     )
