@@ -245,6 +245,11 @@ def summary_fields(summary: dict[str, Any]) -> dict[str, Any]:
         row[f"robots_{state}"] = counts.get(state, 0)
     row["robot_states"] = " ".join(f"{name}:{state}" for name, state in states.items())
     row["alive"] = summary.get("alive")
+    health = summary.get("health", {})
+    row["robots_idle_with_frontier"] = health.get("robots_idle_with_frontier")
+    row["idle_robot_steps"] = health.get("idle_robot_steps")
+    row["stuck_robot_steps"] = health.get("stuck_robot_steps")
+    row["final_explored_connected"] = summary.get("final_explored_connected")
     return row
 
 
@@ -253,7 +258,8 @@ COLUMNS = (
     "final_explored", "final_known_at_base",
     *(f"{what}_{level}_at" for level in MILESTONES for what in ("explored", "base")),
     "robots_active", "robots_done", "robots_error", "robots_failed", "robot_states", "alive",
-    "cpu_s",
+    "robots_idle_with_frontier", "idle_robot_steps", "stuck_robot_steps",
+    "final_explored_connected", "cpu_s",
 )  # fmt: skip
 
 
