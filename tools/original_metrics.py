@@ -34,6 +34,7 @@ THRESHOLDS = {"e50": 0.5, "e90": 0.9, "e95": 0.95}
 BASE_THRESHOLD = 0.95
 SLOW = 5.0  # cells moved in a step below which a robot counts as (nearly) standing
 EXPLORING = ("active", "error")  # our robot states that still explore
+INIT_CYCLES = 3  # the original's first cycles: a random walk, no frontier target
 
 
 class CompareError(Exception):
@@ -180,8 +181,9 @@ def read_original_output(path: Path) -> tuple[Curve, float | None]:
 
 def read_poslog(path: Path, home: tuple[float, float]) -> list[Track]:
     """The driver's ``--poslog`` (``cycle robot x y heading goal_x goal_y state``) as one
-    track per robot; a robot explores unless in its ``Initial`` random walk or going home
-    (its goal is the base's pixel ``home``: the original's mission complete)."""
+    track per robot; a robot explores unless in its first ``INIT_CYCLES`` (a random walk)
+    or going home (its goal is the base's pixel ``home``: the original's mission complete).
+    The state column does not tell: frontier exploration leaves every robot ``Initial``."""
     rows: dict[str, list[list[str]]] = {}
     for line in read_text(path).splitlines()[1:]:
         fields = line.split()
@@ -192,7 +194,7 @@ def read_poslog(path: Path, home: tuple[float, float]) -> list[Track]:
         positions = [(float(r[2]), float(r[3])) for r in robot_rows]
         goals = [None if r[5] == "-1" else (float(r[5]), float(r[6])) for r in robot_rows]
         exploring = [
-            r[7] != "Initial" and g != home for r, g in zip(robot_rows, goals, strict=True)
+            int(r[0]) > INIT_CYCLES and g != home for r, g in zip(robot_rows, goals, strict=True)
         ]
         moved = [0.0] + [math.dist(a, b) for a, b in itertools.pairwise(positions)]
         tracks.append(Track(positions, goals, exploring, moved))
