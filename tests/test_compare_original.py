@@ -65,6 +65,7 @@ def test_spread_and_ratio_report_the_count_reached_and_never() -> None:
     assert compare.spread([10, None, 30]) == "30 (10-30) [2/3]"
     assert compare.spread([None, None, 30]) == "never (30-30) [1/3]"
     assert compare.spread([None, None]) == "never [0/2]"
+    assert compare.spread([]) == "no runs"
     assert compare.ratio([10, 20, 30], [40, 40, 40]) == "0.50"
     assert compare.ratio([None, None, 30], [40, 40, 40]) == "-"
 
@@ -108,7 +109,8 @@ def test_the_poslog_gives_target_distances_and_slow_steps_while_exploring(
     assert metrics.slow_steps(a) == (0, 2)  # cycles 4, 5 explore, 10 px each
     assert metrics.slow_steps(b) == (2, 2)  # 2 px, then 0 px
     result = metrics.run_result(metrics.Curve([1], [10], [10], 100), tracks, None)
-    assert result.goal_distance == 40.0 and result.slow_share == 0.5
+    assert result.goal_distance == 40.0 and result.slow_exploring == 0.5
+    assert result.slow_returning == 1.0  # both stand still at cycle 6, away from home
 
 
 def write_our_run(run_dir: Path) -> None:
@@ -135,7 +137,8 @@ def test_our_run_folder_is_read_in_the_originals_denominator(tmp_path: Path) -> 
     assert result.final_explored == 0.4 and result.final_base == 0.4
     assert result.milestones == {"e50": None, "e90": None, "e95": None, "b95": None}
     assert result.goal_distance == 50.0  # from (10, 10) to (40, 50)
-    assert result.slow_share == 1.0  # its one exploring step moved 3 cells
+    assert result.slow_exploring == 1.0  # its one exploring step moved 3 cells
+    assert result.slow_returning == 1.0  # done at (13, 10), 13 cells from the base: slow
     assert result.wall_s == 2.0
     (tmp_path / "run" / "denominators.json").write_text("{}")
     with pytest.raises(metrics.CompareError, match="not a complete run"):

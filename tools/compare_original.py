@@ -6,9 +6,12 @@ the original (headless driver of ``/work/shared/original``, frontier greedy, Pro
 3 seeds) and ours (``mresim import-team``'s scenario, frontier, ``path_loss``; 5 seeds),
 then prints one Markdown table per map: median (min-max) over seeds of the steps to 50 /
 90 / 95 % explored and to 95 % known at base, the final fractions, the ratio ours /
-original of the medians, and two diagnostics: the median straight-line distance from a
-robot to the frontier target it just picked, and the share of a robot's exploring steps in
-which it moved less than 5 cells. Maps are read from the original's tree at run time
+original of the medians, and diagnostics: the median straight-line distance from a robot
+to the frontier target it just picked, and the share of robot-steps in which a robot moved
+less than 5 cells, while exploring and while going home (done, away from the base). Ours
+stop when every robot is done and home, or when neither fraction gained 0.1 % in 300
+steps; the original when all robots stand on the base pixel or nothing changed for
+``--sat`` cycles. Maps are read from the original's tree at run time
 (never copied); the raw outputs stay where ``--original-results`` / ``--ours-results``
 say (the original's runs found there are read, not rerun)::
 
@@ -66,6 +69,7 @@ from original_metrics import (  # noqa: E402  (a sibling script's module)
 
 DRIVER = Path("/work/shared/original")
 ORIGINAL_THRESHOLD = 1e-6  # our map threshold: only pure black is wall
+STALL = 300  # our runs stop when neither fraction gained 0.1 % in this many steps
 DEFAULT_CASES = (
     "environments/RAS2014/3.png=config/RAS2014/M3_L1_R8",
     "environments/RAS2014/4.png=config/RAS2014/M4_L1_R4",
@@ -144,7 +148,7 @@ def run_ours(case: Case, seed: int, steps: int, folder: Path) -> Path:
         "name": case.key,
         "seed": seed,
         "steps": steps,
-        "stop": {"all_done": True, "stalled_for": 100},
+        "stop": {"all_done": True, "stalled_for": STALL},
         "render": {"video": False, "final_png": True, "log": True, "plots": False},
     }
     source = str(case.team_path)
@@ -171,6 +175,8 @@ def rule_mismatch(occupied: np.ndarray[Any, Any], image: Path) -> int:
 
 def spread(values: Sequence[float | None], digits: int = 0) -> str:
     """``median (min-max)`` with the count reached when some runs never got there."""
+    if not values:
+        return "no runs"
     reached = [v for v in values if v is not None]
     middle = censored_median(values)
     text = "never" if middle is None else f"{middle:.{digits}f}"
@@ -194,7 +200,8 @@ ROWS: tuple[Row, ...] = (
     ("final explored", lambda r: r.final_explored, 3),
     ("final known at base", lambda r: r.final_base, 3),
     ("distance to a newly picked target (median, cells)", lambda r: r.goal_distance, 0),
-    ("share of exploring robot-steps moving < 5 cells", lambda r: r.slow_share, 3),
+    ("share of exploring robot-steps moving < 5 cells", lambda r: r.slow_exploring, 3),
+    ("share of robot-steps going home moving < 5 cells", lambda r: r.slow_returning, 3),
     ("steps run", lambda r: r.steps, 0),
     ("wall time per run (s)", lambda r: r.wall_s, 0),
 )

@@ -7,7 +7,8 @@ our run folders (``metrics.csv``, ``log/steps.jsonl``, ``summary.json`` and the 
 the original's ``totalArea`` (every non-obstacle pixel of its 800x600 grid), and one
 :class:`Track` per robot; :func:`run_result` turns them into the steps to 50 / 90 / 95 %
 explored and to 95 % at base (None: never), the final fractions and two diagnostics (the
-distance to each newly picked target, the share of exploring steps moving < 5 cells).
+distance to each newly picked target, the share of steps moving < 5 cells, exploring and
+going home).
 Our fractions are of R, the cells reachable from the starts: round(fraction * R) is the
 count, count / T the original's fraction. :func:`censored_median` puts a never after every
 reached value.
@@ -35,6 +36,7 @@ BASE_THRESHOLD = 0.95
 SLOW = 5.0  # cells moved in a step below which a robot counts as (nearly) standing
 EXPLORING = ("active", "error")  # our robot states that still explore
 INIT_CYCLES = 3  # the original's first cycles: a random walk, no frontier target
+HOME_RADIUS = 10.0  # cells from the base within which a robot that is done is parked
 
 
 class CompareError(Exception):
@@ -54,12 +56,14 @@ class Curve:
 @dataclass(frozen=True)
 class Track:
     """One robot through a run: per step its position, goal, whether it explores, and
-    the distance it moved in that step (index 0: the first recorded step)."""
+    the distance it moved in that step (index 0: the first recorded step); ``home`` is
+    the base station's position."""
 
     positions: list[tuple[float, float]]
     goals: list[tuple[float, float] | None]
     exploring: list[bool]
     moved: list[float]
+    home: tuple[float, float]
 
 
 @dataclass(frozen=True)
@@ -71,7 +75,8 @@ class RunResult:
     final_base: float
     steps: int
     goal_distance: float | None
-    slow_share: float | None
+    slow_exploring: float | None  # share of exploring robot-steps moving < SLOW
+    slow_returning: float | None  # the same for steps going home (away from the base)
     wall_s: float | None
 
 
@@ -134,24 +139,36 @@ def goal_pick_distances(track: Track) -> list[float]:
     return found
 
 
-def slow_steps(track: Track, below: float = SLOW) -> tuple[int, int]:
-    """(exploring steps moving less than ``below``, exploring steps) of one robot."""
-    moves = [m for m, e in zip(track.moved[1:], track.exploring[1:], strict=True) if e]
+def slow_steps(track: Track, returning: bool = False, below: float = SLOW) -> tuple[int, int]:
+    """(steps moving less than ``below``, steps) of one robot while exploring, or while
+    going home (not exploring, and more than ``HOME_RADIUS`` from the base at the step's
+    start: a robot parked at the base is not slow)."""
+    moves = []
+    for i in range(1, len(track.moved)):
+        away = math.dist(track.positions[i - 1], track.home) > HOME_RADIUS
+        if (not track.exploring[i] and away) if returning else track.exploring[i]:
+            moves.append(track.moved[i])
     return sum(m < below for m in moves), len(moves)
+
+
+def slow_share(tracks: Sequence[Track], returning: bool) -> float | None:
+    """The share of the team's robot-steps of one kind that moved less than ``SLOW``."""
+    counts = [slow_steps(track, returning) for track in tracks]
+    steps = sum(n for _, n in counts)
+    return sum(k for k, _ in counts) / steps if steps else None
 
 
 def run_result(curve: Curve, tracks: Sequence[Track], wall_s: float | None) -> RunResult:
     """Milestones, finals and diagnostics of one run."""
     picks = [d for track in tracks for d in goal_pick_distances(track)]
-    slow = [slow_steps(track) for track in tracks]
-    exploring = sum(n for _, n in slow)
     return RunResult(
         milestones(curve),
         curve.explored[-1] / curve.total,
         curve.base[-1] / curve.total,
         curve.steps[-1],
         statistics.median(picks) if picks else None,
-        sum(k for k, _ in slow) / exploring if exploring else None,
+        slow_share(tracks, returning=False),
+        slow_share(tracks, returning=True),
         wall_s,
     )
 
@@ -197,7 +214,7 @@ def read_poslog(path: Path, home: tuple[float, float]) -> list[Track]:
             int(r[0]) > INIT_CYCLES and g != home for r, g in zip(robot_rows, goals, strict=True)
         ]
         moved = [0.0] + [math.dist(a, b) for a, b in itertools.pairwise(positions)]
-        tracks.append(Track(positions, goals, exploring, moved))
+        tracks.append(Track(positions, goals, exploring, moved, home))
     return tracks
 
 
@@ -249,6 +266,7 @@ def read_ours_files(run_dir: Path) -> RunResult:
     names = [c.removeprefix("state_") for c in rows[0] if c.startswith("state_")]
     lines = [json.loads(x) for x in read_text(run_dir / "log" / "steps.jsonl").splitlines()]
     tracks = []
+    base = lines[0]["agents"][0]["position"]
     for i, name in enumerate(names, 1):
         agents = [line["agents"][i] for line in lines[: len(rows)]]
         tracks.append(
@@ -257,6 +275,7 @@ def read_ours_files(run_dir: Path) -> RunResult:
                 [None if a["goal"] is None else (a["goal"][0], a["goal"][1]) for a in agents],
                 [r[f"state_{name}"] in EXPLORING for r in rows],
                 [float(r[f"distance_{name}"]) for r in rows],
+                (base[0], base[1]),
             )
         )
     wall = read_json(run_dir / "summary.json").get("wall_time_s")
