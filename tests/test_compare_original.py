@@ -46,7 +46,7 @@ def test_milestones_are_the_first_step_at_or_past_each_threshold_none_if_never()
 
 
 def test_our_fractions_become_counts_of_the_originals_denominator() -> None:
-    # 80 % of our 500 reachable cells are 400 cells: 40 % of the original's 1000 pixels
+    # 80 % of our 500 explorable cells are 400 cells: 40 % of the original's 1000 pixels
     cells = metrics.to_original_cells(0.8, 500)
     assert cells == 400
     found = metrics.milestones(metrics.Curve([0, 1], [cells, 1000], [0, 500], 1000))
@@ -114,7 +114,7 @@ def test_the_poslog_gives_target_distances_and_slow_steps_while_exploring(
 
 
 def write_our_run(run_dir: Path) -> None:
-    """A two-step run folder of ours with one robot, 400 reachable cells of 1000."""
+    """A two-step run folder of ours with one robot, 400 explorable cells of 1000."""
     (run_dir / "log").mkdir(parents=True)
     (run_dir / "metrics.csv").write_text(
         "step,explored,known_at_base,distance_A,state_A\n"
@@ -127,7 +127,7 @@ def write_our_run(run_dir: Path) -> None:
     (run_dir / "log" / "steps.jsonl").write_text("\n".join(json.dumps(s) for s in steps))
     (run_dir / "summary.json").write_text('{"wall_time_s": 2.0}')
     (run_dir / "denominators.json").write_text(
-        '{"ours_reachable_cells": 400, "original_total_area": 1000}'
+        '{"ours_explorable_cells": 400, "original_total_area": 1000}'
     )
 
 
@@ -181,7 +181,7 @@ def test_the_tool_runs_ours_reads_the_originals_runs_and_writes_the_tables(
     counts = json.loads((tmp_path / "ours" / "tiny" / "seed-1" / "denominators.json").read_text())
     assert counts["original_total_area"] == np.count_nonzero(~rooms_grid())
     assert counts["pixels_the_wall_rules_disagree_on"] == 0
-    assert 0 < counts["ours_reachable_cells"] <= counts["original_total_area"]
+    assert 0 < counts["ours_explorable_cells"] <= counts["original_total_area"]
     text = out.read_text()
     assert "### tiny" in text and "| steps to 50 % explored | 2 |" in text
 

@@ -21,10 +21,12 @@ say (the original's runs found there are read, not rerun)::
 
 Denominator: every fraction is one of the original's ``totalArea`` T, all pixels of the
 800x600 map that are not obstacles (first image band != 0; a smaller image is centred and
-its margin is free), reachable or not. Our ``metrics.csv`` gives fractions of R, the free
-cells reachable from the robots' starts (``Coverage.total``, stored per run in
-``denominators.json``); a row's cell count is round(fraction * R), and that count / T is
-the fraction the original would report. Our map is read with threshold ``1e-6`` (only
+its margin is free), reachable or not. Our ``metrics.csv`` gives fractions of E, the
+explorable cells (free cells some robot can see from where its body can go: every cell a
+scan can mark free; ``Coverage.total``, summary.json's ``explorable_cells``, stored per run
+in ``denominators.json``); a row's cell count is round(fraction * E), and that count / T
+is the fraction the original would report (the original's joint area also counts every
+free pixel some robot saw). Our map is read with threshold ``1e-6`` (only
 pure black is wall, the original's rule), so both worlds have the same free pixels (the
 header of each table gives the number of pixels the two rules disagree on).
 
@@ -154,7 +156,7 @@ def run_ours(case: Case, seed: int, steps: int, folder: Path) -> Path:
     source = str(case.team_path)
     sim = Simulation(resolve_map_path(validate_scenario(data, source), ROOT, source))
     counts = {
-        "ours_reachable_cells": sim.coverage.total,
+        "ours_explorable_cells": sim.coverage.total,
         "original_total_area": original_total_area(case.map_path),
         "pixels_the_wall_rules_disagree_on": rule_mismatch(sim.world.occupied, case.map_path),
     }
@@ -292,8 +294,8 @@ def compare_case(
     runs = [run_ours(case, seed, args.steps, args.ours_results) for seed in args.seeds]
     counts = read_json(runs[0] / "denominators.json")
     note = (
-        f"the original's free pixels {counts['original_total_area']:,}, our reachable cells"
-        f" {counts['ours_reachable_cells']:,}; the two wall rules disagree on"
+        f"the original's free pixels {counts['original_total_area']:,}, our explorable cells"
+        f" {counts['ours_explorable_cells']:,}; the two wall rules disagree on"
         f" {counts['pixels_the_wall_rules_disagree_on']} pixels."
     )
     return original, [read_ours(run) for run in runs], note

@@ -9,8 +9,8 @@ the original's ``totalArea`` (every non-obstacle pixel of its 800x600 grid), and
 explored and to 95 % at base (None: never), the final fractions and two diagnostics (the
 distance to each newly picked target, the share of steps moving < 5 cells, exploring and
 going home).
-Our fractions are of R, the cells reachable from the starts: round(fraction * R) is the
-count, count / T the original's fraction. :func:`censored_median` puts a never after every
+Our fractions are of E, our explorable cells: round(fraction * E) is the count, count / T
+the original's fraction. :func:`censored_median` puts a never after every
 reached value.
 """
 
@@ -100,7 +100,7 @@ def original_total_area(image: Path) -> int:
 
 
 def to_original_cells(fraction: float, ours_total: int) -> int:
-    """Our fraction of ``ours_total`` reachable cells, back to a count of cells."""
+    """Our fraction of ``ours_total`` (explorable) cells, back to a count of cells."""
     return round(fraction * ours_total)
 
 
@@ -254,7 +254,7 @@ def read_ours(run_dir: Path) -> RunResult:
 def read_ours_files(run_dir: Path) -> RunResult:
     """:func:`read_ours` without the error wrapping."""
     counts = read_json(run_dir / "denominators.json")
-    ours, total = int(counts["ours_reachable_cells"]), int(counts["original_total_area"])
+    ours, total = int(counts["ours_explorable_cells"]), int(counts["original_total_area"])
     with open(run_dir / "metrics.csv", newline="", encoding="utf-8") as handle:
         rows = list(csv.DictReader(handle))
     curve = Curve(
