@@ -105,7 +105,8 @@ def take_step(
     """Move ``robot`` up to its speed along its path, sensing after each path point.
 
     A robot that reaches its goal with distance left to go this step asks its strategy
-    once more and goes on (once a step: a second goal reached waits for the next step);
+    once more and goes on (once a step: a second goal reached waits for the next step),
+    unless its strategy sends a payload (a protocol of one decision per exchange);
     ``given``: its path this step is a caller's decision, never replaced mid-step.
     ``sense`` may hold its scans back (``knowledge.scanfold.ScanQueue``) until ``settle``,
     which is called before anything here reads or writes the robot's map (a replan, a bump)
@@ -113,7 +114,9 @@ def take_step(
     """
     budget = robot.speed * factor_at(rules.terrain, robot.position)
     moved = False
-    replans = 0 if given else MID_STEP_REPLANS
+    # a strategy that talks through its payload (rendezvous, role swaps) runs a protocol of
+    # one decision per exchange: it is not asked again within the step
+    replans = 0 if given or robot.payload is not None else MID_STEP_REPLANS
     while budget > EPS:
         if len(robot.path) == 0:
             if replans == 0 or not robot.reached_goal:
