@@ -1,0 +1,39 @@
+"""Tests for tools/original_aisles.py: which aisles our robots enter, against pixel robots."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from types import ModuleType
+
+import numpy as np
+import pytest
+from tool_modules import load_tool
+
+aisles: ModuleType = load_tool("original_aisles")
+
+
+def two_rooms(gap: int) -> np.ndarray:
+    """Two 20x20 rooms in a wall mass, joined by a corridor ``gap`` pixels wide."""
+    occupied = np.ones((30, 60), dtype=bool)
+    occupied[5:25, 5:25] = False
+    occupied[5:25, 35:55] = False
+    occupied[14 : 14 + gap, 25:35] = False
+    return occupied
+
+
+def test_a_wide_corridor_lets_both_clearances_into_the_far_room() -> None:
+    count, (planner, body) = aisles.shares(two_rooms(4), (10, 10))
+    assert count == 2 * 400 + 4 * 10
+    assert planner == pytest.approx(1.0)
+    assert body == pytest.approx(1.0)
+
+
+def test_a_two_pixel_aisle_is_entered_by_the_body_but_not_by_the_planner() -> None:
+    count, (planner, body) = aisles.shares(two_rooms(2), (10, 10))
+    assert count == 2 * 400 + 2 * 10
+    assert planner < 0.6  # the far room is out of its reach
+    assert body == pytest.approx(1.0)
+
+
+def test_a_missing_original_tree_exits_2(tmp_path: Path) -> None:
+    assert aisles.main(["--original", str(tmp_path)]) == 2
