@@ -24,10 +24,14 @@ RUNS_COLUMNS = [
     "comm_bytes", "control_bytes", "mean_links", "latency_max", "latency_mean",
     "auc_explored", "auc_known_at_base", "alive_fraction", "base_deficit_at_end",
     "base_deficit_fraction_at_end", "failed_robots", "robots_idle_with_frontier",
-    "idle_robot_steps", "stuck_robot_steps",
+    "idle_robot_steps", "stuck_robot_steps", "explorable_cells", "connected_cells",
+    "final_explored_connected", "final_known_at_base_connected",
+    *(f"steps_to_{what}_connected_{level}" for what in ("explored", "known_at_base")
+      for level in (50, 90, 95)),
 ]  # fmt: skip
 STEPS_COLUMNS = [
-    "run_id", "step", "explored", "known_at_base", "distance", "alive", "links",
+    "run_id", "step", "explored", "known_at_base", "explored_connected",
+    "known_at_base_connected", "distance", "alive", "links",
     "comm_bytes", "control_links", "control_bytes", "latency_max", "latency_mean",
     "distance_A", "distance_B", "state_A", "state_B", "base_contact_A", "base_contact_B",
 ]  # fmt: skip
@@ -83,9 +87,8 @@ def assert_reported(code: int, err: str, folder: Path) -> None:
 
 
 def test_the_cases_cover_every_column(sweep: Path) -> None:
-    # the explorable-area columns (issue 28) are not yet among the cases: listed ones only
-    assert set(RUNS_COLUMNS) <= set(pd.read_parquet(sweep / "runs.parquet").columns)
-    assert set(STEPS_COLUMNS) <= set(pd.read_parquet(sweep / "steps.parquet").columns)
+    assert set(pd.read_parquet(sweep / "runs.parquet").columns) == set(RUNS_COLUMNS)
+    assert set(pd.read_parquet(sweep / "steps.parquet").columns) == set(STEPS_COLUMNS)
 
 
 @pytest.mark.parametrize(
