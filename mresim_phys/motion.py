@@ -106,7 +106,9 @@ def take_step(
 
     A robot that reaches its goal with distance left to go this step asks its strategy
     once more and goes on (once a step: a second goal reached waits for the next step),
-    unless its strategy sends a payload (a protocol of one decision per exchange);
+    unless its strategy sends a payload (a protocol of one decision per exchange) or
+    decides once per exchange by design (``ONE_DECISION_PER_STEP``, e.g. a chain's robots,
+    whose decisions read where their parents were at the last exchange);
     ``given``: its path this step is a caller's decision, never replaced mid-step.
     ``sense`` may hold its scans back (``knowledge.scanfold.ScanQueue``) until ``settle``,
     which is called before anything here reads or writes the robot's map (a replan, a bump)
@@ -116,7 +118,8 @@ def take_step(
     moved = False
     # a strategy that talks through its payload (rendezvous, role swaps) runs a protocol of
     # one decision per exchange: it is not asked again within the step
-    replans = 0 if given or robot.payload is not None else MID_STEP_REPLANS
+    once = given or robot.payload is not None or one_decision_per_step(robot)
+    replans = 0 if once else MID_STEP_REPLANS
     while budget > EPS:
         if len(robot.path) == 0:
             if replans == 0 or not robot.reached_goal:
@@ -136,6 +139,11 @@ def take_step(
     if moved and not rules.scan_every_point:
         sense(robot)
     settle()
+
+
+def one_decision_per_step(robot: Robot) -> bool:
+    """Whether the robot's strategy decides once a step by design (its class says so)."""
+    return bool(getattr(robot.strategy, "ONE_DECISION_PER_STEP", False))
 
 
 def move_towards(

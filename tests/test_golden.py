@@ -27,22 +27,8 @@ def test_every_shipped_scenario_has_golden_results() -> None:
     assert not missing, f"no golden results for {missing}: run `python tools/golden.py record`"
 
 
-# 22 (leader_follower) reproduces here, fresh numba caches too, but differed in a clean-clone
-# CI venv twice this session; the cause is not found yet (issue 28): not strict until it is.
-UNSETTLED = {"22_rooms_leader_follower"}
-
-
 @pytest.mark.slow
-@pytest.mark.parametrize(
-    "path",
-    [
-        pytest.param(p, marks=pytest.mark.xfail(strict=False, reason="see UNSETTLED"))
-        if p.stem in UNSETTLED
-        else p
-        for p in golden.SCENARIOS
-    ],
-    ids=lambda p: p.stem,
-)
+@pytest.mark.parametrize("path", golden.SCENARIOS, ids=lambda p: p.stem)
 def test_shipped_scenario_reproduces_its_golden_results(path: Path, tmp_path: Path) -> None:
     run_dir = golden.run_scenario(path, tmp_path / "run")
     assert golden.compare(path, run_dir) == []

@@ -9,8 +9,9 @@ robot without is the *leader* (the explorer) at the chain's end.
   ``comm_range * hops - 5`` cells of the base (``hops``: robots from the base down to
   it), as the original does.
 * A follower heads for its child's last reported position.
-* Every robot decides every step (``replan_interval: 1``; the leader searches frontiers
-  again every ``frontier_interval`` steps and plans to its chosen one in between) and
+* Every robot decides once every step (``replan_interval: 1``, and no second decision
+  within a step on reaching its goal; the leader searches frontiers again every
+  ``frontier_interval`` steps and plans to its chosen one in between) and
   keeps only the part of its path within ``comm_range - speed`` of its parent's last
   known position (the base's, or the parent robot's record), so no step takes it out of
   its parent's range while the parent stands.
@@ -62,6 +63,10 @@ class LeaderFollower(FrontierExploration):
 
     name = "leader_follower"
     Params: ClassVar[type[StrategyParams]] = LeaderFollowerParams
+    # its paths are cut at its parent's range as of the last exchange: a second decision
+    # within a step (motion's mid-step replan) sees the same cut, so the leader gave up
+    # every frontier of a stretched chain one after the other and parked (scenario 22)
+    ONE_DECISION_PER_STEP: ClassVar[bool] = True
     params: LeaderFollowerParams
 
     def __init__(self, params: LeaderFollowerParams) -> None:
