@@ -15,7 +15,7 @@ import pytest
 from mresim_phys import Simulation
 from mresim_phys.cli import main
 from mresim_phys.knowledge import health
-from mresim_phys.knowledge.frontier_reach import frontier_cells, frontier_check
+from mresim_phys.knowledge.frontier_reach import frontier_check
 from mresim_phys.knowledge.health import CHECK_EVERY, HealthWatch, RobotStep
 from mresim_phys.output.health import replayed_health, run_health
 from mresim_phys.output.runlog import RunLog
@@ -37,11 +37,25 @@ def known_room(rows: int = 30, cols: int = 40) -> np.ndarray:
     return belief
 
 
-def test_a_frontier_cell_is_free_beside_an_unknown_4_neighbour() -> None:
+def test_a_frontier_counts_as_exploration_finds_it_and_specks_do_not() -> None:
     belief = known_room()
-    belief[10, 20] = UNKNOWN
-    cells = set(map(tuple, np.argwhere(frontier_cells(belief))))
-    assert cells == {(9, 20), (11, 20), (10, 19), (10, 21)}  # not the diagonal ones
+    belief[10, 20] = UNKNOWN  # its 8 neighbours form a frontier cluster
+    assert frontier_check(belief, (5.5, 5.5), 1.0).frontier == 8
+    belief = known_room()
+    belief[1, 20] = UNKNOWN  # beside the wall: a cluster of its 5 free neighbours
+    belief[20:23, 1:3] = OCCUPIED
+    belief[21, 1:3] = UNKNOWN, FREE  # a notch: one free cell sees it, a speck
+    assert frontier_check(belief, (5.5, 5.5), 1.0).frontier == 5
+
+
+def test_frontier_cells_where_the_robot_has_been_do_not_count() -> None:
+    belief = known_room()
+    belief[10:14, 30:34] = UNKNOWN
+    safe = np.zeros(belief.shape, dtype=bool)
+    assert frontier_check(belief, (10.5, 10.5), 1.0, safe).reachable == 20
+    safe[5:20, 25:40] = True  # it stood there and scanned: the hole stayed
+    check = frontier_check(belief, (10.5, 10.5), 1.0, safe)
+    assert (check.frontier, check.reachable, check.reason) == (0, 0, "none left")
 
 
 def test_a_fully_known_room_has_none_left() -> None:
@@ -61,7 +75,7 @@ def test_cells_past_a_wall_are_behind_walls() -> None:
     belief[:, 20] = OCCUPIED  # a wall splits the room
     belief[10:14, 30:34] = UNKNOWN  # a hole in the right half's knowledge
     check = frontier_check(belief, (10.5, 10.5), 1.0)
-    assert check.frontier == 16 and check.reachable == 0 and check.behind_walls == 16
+    assert check.frontier == 20 and check.reachable == 0 and check.behind_walls == 20
     assert check.reason == "behind walls"
 
 
@@ -71,10 +85,10 @@ def test_cells_past_a_gap_narrower_than_the_body_are_closed_by_clearance() -> No
     belief[15:17, 20] = FREE  # a two-cell gap
     belief[10:14, 30:34] = UNKNOWN
     narrow = frontier_check(belief, (10.5, 10.5), 2.0)  # a body of radius 2 does not pass
-    assert narrow.reachable == 0 and narrow.closed_by_clearance == 16
+    assert narrow.reachable == 0 and narrow.closed_by_clearance == 20
     assert narrow.reason == "closed by clearance"
     small = frontier_check(belief, (10.5, 10.5), 0.5)
-    assert small.reachable == 16 and small.reason == "all reachable"
+    assert small.reachable == 20 and small.reason == "all reachable"
 
 
 def test_a_robot_with_no_room_for_its_body_reaches_nothing() -> None:

@@ -1,8 +1,15 @@
 """Frontier reach (phase 7, measure): which frontier cells of a robot's OWN map it could reach.
 
 The run-health record (``knowledge/health.py``) asks this of an idle or done robot: does
-its map still hold frontier cells, and could its body get next to them? Here a frontier
-cell is a FREE cell with an UNKNOWN 4-neighbour (cells outside the grid are not unknown).
+its map still hold frontier cells, and could its body get next to them? A frontier cell
+here is one that exploration would still go for: a cell of a frontier cluster of its map
+as the strategies find them (``knowledge.frontiers``: a FREE cell that sees an UNKNOWN
+8-neighbour) of at least :data:`MIN_CLUSTER` cells (the original's smallest frontier),
+outside the robot's safe space (where it, or a teammate it heard from, has been: the
+frontier cells there were scanned from close by and stayed, as a strategy's given-up
+frontiers do). Counting every FREE cell beside an UNKNOWN one, the record called robots
+idle "with reachable frontier cells" that were only one- or two-cell specks and frontiers
+their strategy had reached, faced and given up (ipa_office: every such cell, checked).
 
 Reach: the robot's passable cells at clearance = its body radius (the least margin it may
 use, ``planning.fields.passable_cells``: known FREE, every known wall at least that far),
@@ -28,9 +35,12 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from mresim_phys.knowledge.frontiers import frontiers_in
 from mresim_phys.planning.fields import MAX_SNAP, clearance_kernel, passable_cells, snap_to_passable
 from mresim_phys.planning.grid import Box, bbox
-from mresim_phys.types import FREE, UNKNOWN, BeliefGrid, BoolGrid
+from mresim_phys.types import FREE, BeliefGrid, BoolGrid
+
+MIN_CLUSTER = 3  # cells: smaller frontier clusters are not counted (the original's minimum)
 
 CLOSED, WALLED = "closed by clearance", "behind walls"
 
@@ -79,35 +89,32 @@ class FrontierCheck:
 NO_FRONTIER = FrontierCheck(0, 0, 0, 0)
 
 
-def frontier_cells(belief: BeliefGrid) -> BoolGrid:
-    """FREE cells with an UNKNOWN 4-neighbour (outside the grid is not unknown).
-
-    >>> b = np.array([[1, 1, 0], [1, 1, 1], [2, 0, 1]], dtype=np.uint8)
-    >>> frontier_cells(b).astype(int)
-    array([[0, 1, 0],
-           [0, 1, 1],
-           [0, 0, 1]])
-    """
-    unknown = belief == UNKNOWN
-    near = np.zeros_like(unknown)
-    near[1:] |= unknown[:-1]
-    near[:-1] |= unknown[1:]
-    near[:, 1:] |= unknown[:, :-1]
-    near[:, :-1] |= unknown[:, 1:]
-    out: BoolGrid = near & (belief == FREE)
+def unvisited_frontier(belief: BeliefGrid, box: Box, crop: Box, safe: BoolGrid | None) -> BoolGrid:
+    """Within ``crop``: the cells of frontier clusters of at least :data:`MIN_CLUSTER`
+    cells (``box``: the FREE cells' bounding box) outside the safe space ``safe``."""
+    found = frontiers_in(belief, box, MIN_CLUSTER)
+    out = np.zeros((crop[1] - crop[0], crop[3] - crop[2]), dtype=bool)
+    rows, cols = found.cells_rc[:, 0], found.cells_rc[:, 1]
+    if safe is not None:
+        keep = ~safe[rows, cols]
+        rows, cols = rows[keep], cols[keep]
+    out[rows - crop[0], cols - crop[2]] = True
     return out
 
 
 def frontier_check(
-    belief: BeliefGrid, position: tuple[float, float], radius: float
+    belief: BeliefGrid,
+    position: tuple[float, float],
+    radius: float,
+    safe: BoolGrid | None = None,
 ) -> FrontierCheck:
     """The frontier cells of ``belief`` and how many a robot of ``radius`` at ``position``
-    (world x, y in cells) could reach (module docstring)."""
+    (world x, y in cells) could reach (module docstring; ``safe``: its safe space)."""
     box = bbox(belief == FREE)
     if box is None:
         return NO_FRONTIER
     crop = grown(box, 1, belief.shape)
-    frontier = frontier_cells(belief[crop[0] : crop[1], crop[2] : crop[3]])
+    frontier = unvisited_frontier(belief, box, crop, safe)
     total = int(np.count_nonzero(frontier))
     if total == 0:
         return NO_FRONTIER

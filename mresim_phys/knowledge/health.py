@@ -31,7 +31,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any, Protocol
 
 from mresim_phys.knowledge.frontier_reach import FrontierCheck, frontier_check
-from mresim_phys.types import BeliefGrid, FloatArray
+from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray
 
 MOVE_EPS = 0.05  # cells: a robot that moved less in a step did not move
 CHECK_EVERY = 20  # steps between frontier checks of a robot that stays idle or done
@@ -54,6 +54,7 @@ class RobotStep:
     radius: float
     belief: BeliefGrid
     reason: str | None = None  # why its state changed this step (None: unknown)
+    safe: BoolGrid | None = None  # its safe space: where it (or a teammate it heard) has been
 
 
 class AgentLike(Protocol):
@@ -77,6 +78,8 @@ class AgentLike(Protocol):
     def belief(self) -> BeliefGrid: ...
     @property
     def state_reason(self) -> str | None: ...
+    @property
+    def safe(self) -> BoolGrid: ...
 
 
 def step_of(agent: AgentLike) -> RobotStep:
@@ -91,7 +94,13 @@ def step_of(agent: AgentLike) -> RobotStep:
         agent.radius,
         agent.belief,
         agent.state_reason,
+        agent.safe,
     )
+
+
+def check_of(robot: RobotStep) -> FrontierCheck:
+    """The frontier check of the robot's own map, where it stands."""
+    return frontier_check(robot.belief, robot.position, robot.radius, robot.safe)
 
 
 def activity_of(moved: float, has_path: bool, state: str) -> str:
@@ -212,7 +221,7 @@ class HealthWatch:
         if idle or robot.state == "done":
             due = health.last_check is None or step - health.last_check >= self.check_every
             if due:
-                health.check = frontier_check(robot.belief, robot.position, robot.radius)
+                health.check = check_of(robot)
                 health.last_check = step
         else:
             health.last_check, health.check = None, None
@@ -229,7 +238,7 @@ class HealthWatch:
 
     def report(self, robots: Sequence[RobotStep]) -> HealthReport:
         """The record at the end (``robots``: every robot at the last step)."""
-        ends = {r.name: frontier_check(r.belief, r.position, r.radius) for r in robots}
+        ends = {r.name: check_of(r) for r in robots}
         robots_now = {n: replace(h, done_at=list(h.done_at)) for n, h in self.robots.items()}
         return HealthReport(robots_now, ends, list(self.changes))
 
