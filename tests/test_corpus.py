@@ -17,8 +17,6 @@ from mresim_phys.scenario.readers import load_ros_map
 corpus: ModuleType = load_tool("corpus")
 MAPS = corpus.load_index()
 NAMES = [m.name for m in MAPS]
-RUN_STEPS = 150
-EXPLORED_FLOOR = 0.05  # every run of the slow matrix explores more than this share
 
 
 def test_index_lists_at_least_eight_maps_of_varied_kinds() -> None:
@@ -136,19 +134,62 @@ def test_rows_and_report_give_medians_and_robot_states(tmp_path: Path) -> None:
     assert cells[-1] == "active 3, error 3"
 
 
-@pytest.mark.slow
-def test_every_strategy_explores_every_map(tmp_path: Path) -> None:
-    jobs = corpus.make_jobs(MAPS, corpus.STRATEGIES, [2, 6], [1], RUN_STEPS, (0.5, 1.0))
-    rows = corpus.run_all(jobs, tmp_path, workers=2)
-    failed = [f"{r['map']} {r['strategy']} n{r['size']}: {r['error']}" for r in rows if r["error"]]
-    assert failed == []
-    low = [
-        f"{r['map']} {r['strategy']} n{r['size']}: {r['final_explored']}"
-        for r in rows
-        if r["final_explored"] <= EXPLORED_FLOOR
+def test_relays_waiting_are_not_idle_explorers() -> None:
+    job = corpus.Job(MAPS[0], "role_based", 3, 1, 40)
+    health = {
+        "R1": {"idle_with_frontier": 90},  # the relay, waiting for its explorer
+        "R2": {"idle_with_frontier": 12},
+        "R3": {"idle_with_frontier": 3},
+    }
+    fields = corpus.idle_fields({"health": {"robots": health}}, job)
+    assert fields == {"explorer_idle_with_frontier": 12, "idlest_explorer": "R2"}
+    frontier = corpus.Job(MAPS[0], "frontier", 3, 1, 40)
+    fields = corpus.idle_fields({"health": {"robots": health}}, frontier)
+    assert fields == {"explorer_idle_with_frontier": 90, "idlest_explorer": "R1"}
+
+
+def test_violations_name_what_breaks_the_invariant() -> None:
+    row = {"error": "", "final_explored": 0.97, "steps": 300, "strategy": "frontier",
+           "explorer_idle_with_frontier": corpus.IDLE_BOUND, "idlest_explorer": "R2"}  # fmt: skip
+    assert corpus.violations(row) == []
+    row |= {"final_explored": 0.9, "explorer_idle_with_frontier": corpus.IDLE_BOUND + 1}
+    assert corpus.violations(row) == [
+        "explored 0.9 after 300 steps",
+        f"R2 idled {corpus.IDLE_BOUND + 1} steps with reachable frontier cells",
     ]
-    assert low == []
-    assert len(rows) == len(MAPS) * 8
+    assert corpus.violations({**row, "error": "ValueError: x"}) == ["failed: ValueError: x"]
+    meeting = {**row, "final_explored": 0.97, "strategy": "role_based"}
+    assert corpus.violations(meeting) == []  # it may wait out a meeting
+
+
+# Runs of the slow matrix known to break the invariant (issue 28, open): (map, strategy, size)
+# -> why. A run listed here that holds the invariant fails the test too: take it off.
+SLIVERS = "SLAM laser fans: free wedges seen only along their axis (docs/real-maps.md)"
+DIAGONAL = "bump marks beside a diagonal wall shut a radius-1 robot in (docs/real-maps.md)"
+IDLE = "a radius-1 robot done with unvisited frontier cells in reach (not diagnosed yet)"
+KNOWN: dict[tuple[str, str, int], str] = {
+    ("ipa_office", "frontier", 3): SLIVERS,
+    ("ipa_office", "frontier", 6): IDLE,
+    ("ipa_office", "role_based", 3): SLIVERS,
+    ("ipa_office", "role_based", 6): f"{SLIVERS}; {IDLE}",
+    ("ipa_office", "utility_return", 3): IDLE,
+    ("mit_stata_basement", "utility_return", 3): DIAGONAL,
+}
+INVARIANT_SIZES = [3, 6]
+INVARIANT_STEPS = 1500  # a cap: a run stops when the base knows 95 % of the explorable area
+
+
+@pytest.mark.slow
+def test_the_invariant_holds_on_every_map(tmp_path: Path) -> None:
+    jobs = corpus.make_jobs(
+        MAPS, corpus.STRATEGIES, INVARIANT_SIZES, [1], INVARIANT_STEPS, (0.5, 1.0)
+    )
+    rows = corpus.run_all(jobs, tmp_path, workers=2)
+    assert len(rows) == len(MAPS) * len(corpus.STRATEGIES) * len(INVARIANT_SIZES)
+    broken = {(r["map"], r["strategy"], int(r["size"])): r["invariant"] or r["error"] for r in rows}
+    broken = {key: why for key, why in broken.items() if why}
+    assert {k: v for k, v in broken.items() if k not in KNOWN} == {}
+    assert sorted(set(KNOWN) - set(broken)) == []
 
 
 def test_the_command_line_refuses_unknown_maps_and_strategies(

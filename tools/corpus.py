@@ -5,8 +5,13 @@ hungarian --sizes 4,8 --seeds 3 --steps 600 --out DIR`` builds one scenario per 
 strategy, team size, seed) from ``maps/corpus/corpus.yaml`` (``DIR/scenarios/*.yaml``:
 each runs alone with ``mresim run``), runs them in-process as ``mresim run`` does (a
 process pool of ``--jobs``), and writes ``DIR/corpus.csv`` (one row per run: milestones,
-final explored and known at base, stop reason, steps, robot states at the end) and
-``DIR/corpus.md`` (per map, the medians over seeds of each strategy and size).
+final explored and known at base, stop reason, steps, robot states at the end, run
+health, how the run breaks the invariant) and ``DIR/corpus.md`` (per map, the medians over
+seeds of each strategy and size; the runs that break the invariant).
+
+The invariant (:func:`violations`, asserted by ``tests/test_corpus.py``'s slow test): a run
+explores at least 95 % of the explorable area, and no explorer idles more than 20 steps
+while its own map holds frontier cells it can reach (docs/run-health.md).
 ``python tools/corpus.py check`` checks the index: files, licences, starts.
 
 Robots are of the original MRESim's kind (radius 0.5 cells, wall margin 0.5) and metric
@@ -39,6 +44,9 @@ SENSOR_M, STEP_M, COMM_M = 8.0, 0.5, 20.0  # laser range, distance per step, rad
 RADIUS, WALL_MARGIN = 0.5, 0.5  # cells: the original's point-like robots
 MIN_CLEARANCE = 4.0  # cells from a start cell's boundary to the nearest obstacle cell
 MILESTONES = ("0.5", "0.9", "0.95")
+GOAL = 0.95  # the invariant: every run explores this share of the explorable area ...
+IDLE_BOUND = 20  # ... and no explorer idles longer with reachable frontier cells in its map,
+MEETING_WAIT = 60  # ... but a role_based explorer's wait at a meeting (role_based's `wait`)
 REQUIRED = ("name", "file", "kind", "source", "licence", "modified", "base", "starts")
 
 
@@ -207,11 +215,41 @@ def run_job(job: Job, out: Path) -> dict[str, Any]:
         (out / "errors" / f"{job.name}.log").write_text(traceback.format_exc(), encoding="utf-8")
         return {**job_fields(job), "error": f"{type(exc).__name__}: {exc}"[:300]}
     summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
-    return {
-        **job_fields(job),
-        **summary_fields(summary),
-        "cpu_s": round(time.process_time() - started, 1),
-    }
+    row = {**job_fields(job), **summary_fields(summary), **idle_fields(summary, job)}
+    return {**row, "invariant": "; ".join(violations(row)), "cpu_s": cpu_since(started)}
+
+
+def cpu_since(started: float) -> float:
+    """Process CPU seconds since ``started``."""
+    return round(time.process_time() - started, 1)
+
+
+def idle_fields(summary: dict[str, Any], job: Job) -> dict[str, Any]:
+    """The explorers' idle steps with reachable frontier cells (the worst one and who);
+    relays are left out: waiting at the base or a meeting point for their explorer is
+    their job (``strategies/role_based.py`` bounds it by its meeting times)."""
+    relays = {r["name"] for r in robots(job) if r.get("role") == "relay"}
+    health = summary.get("health", {}).get("robots", {})
+    idle = {n: int(h["idle_with_frontier"]) for n, h in health.items() if n not in relays}
+    worst = max(idle, key=lambda n: idle[n], default="")
+    return {"explorer_idle_with_frontier": idle.get(worst, 0), "idlest_explorer": worst}
+
+
+def violations(row: dict[str, Any]) -> list[str]:
+    """How a run breaks the corpus invariant (none: it holds): it explored at least
+    :data:`GOAL` of the explorable area, and no explorer idled more than
+    :data:`IDLE_BOUND` steps while its own map held frontier cells it could reach (a
+    role_based explorer may also wait out its meeting, :data:`MEETING_WAIT` steps more)."""
+    if row["error"]:
+        return [f"failed: {row['error']}"]
+    found = []
+    if float(row["final_explored"]) < GOAL:
+        found.append(f"explored {row['final_explored']} after {row['steps']} steps")
+    bound = IDLE_BOUND + (MEETING_WAIT if row["strategy"] == "role_based" else 0)
+    if int(row["explorer_idle_with_frontier"]) > bound:
+        who, steps = row["idlest_explorer"], row["explorer_idle_with_frontier"]
+        found.append(f"{who} idled {steps} steps with reachable frontier cells")
+    return found
 
 
 def job_fields(job: Job) -> dict[str, Any]:
@@ -259,7 +297,8 @@ COLUMNS = (
     *(f"{what}_{level}_at" for level in MILESTONES for what in ("explored", "base")),
     "robots_active", "robots_done", "robots_error", "robots_failed", "robot_states", "alive",
     "robots_idle_with_frontier", "idle_robot_steps", "stuck_robot_steps",
-    "final_explored_connected", "cpu_s",
+    "final_explored_connected", "explorer_idle_with_frontier", "idlest_explorer", "invariant",
+    "cpu_s",
 )  # fmt: skip
 
 
@@ -375,19 +414,20 @@ def map_table(rows: Sequence[dict[str, Any]]) -> str:
 
 
 def report(rows: Sequence[dict[str, Any]]) -> str:
-    """The Markdown report: one table per map, then every failed run."""
+    """The Markdown report: one table per map, then every run that failed or broke the
+    invariant (:func:`violations`)."""
     parts = ["# Corpus runs\n", "Medians over seeds; a milestone never reached is left out of"
              " its median, '(k/n)' says how many runs reached it.\n"]  # fmt: skip
     for name in dict.fromkeys(r["map"] for r in rows):
         mine = [r for r in rows if r["map"] == name]
         parts.append(f"## {name} ({mine[0]['kind']})\n\n{map_table(mine)}\n")
-    failed = [r for r in rows if r["error"]]
-    if failed:
-        parts.append("## Failed runs\n")
-        parts += [
-            f"- {r['map']} {r['strategy']} n{r['size']} seed {r['seed']}: {r['error']}"
-            for r in failed
-        ]
+    broken = [r for r in rows if r.get("invariant") or r["error"]]
+    parts.append(f"## Runs that break the invariant ({len(broken)} of {len(rows)})\n")
+    parts += [
+        f"- {r['map']} {r['strategy']} n{r['size']} seed {r['seed']}:"
+        f" {r.get('invariant') or r['error']}"
+        for r in broken
+    ]
     return "\n".join(parts) + "\n"
 
 
