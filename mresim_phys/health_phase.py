@@ -72,6 +72,6 @@ def robot_steps(
         old = watch.state_of(r.name)
         reason = None if r.state == old else change_reason(r, old, step, events)
         moving = (r.distance, len(r.path) > 0, r.can_move)
-        grids = (r.belief, reason, r.safe)
-        out.append(RobotStep(r.name, r.state, *moving, r.position, r.radius, *grids))
+        place = (r.position, r.radius, r.belief)
+        out.append(RobotStep(r.name, r.state, *moving, *place, reason=reason, safe=r.safe))
     return out

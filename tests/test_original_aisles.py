@@ -37,3 +37,13 @@ def test_a_two_pixel_aisle_is_entered_by_the_body_but_not_by_the_planner() -> No
 
 def test_a_missing_original_tree_exits_2(tmp_path: Path) -> None:
     assert aisles.main(["--original", str(tmp_path)]) == 2
+
+
+def test_a_diagonal_pinch_lets_pixel_robots_through_but_not_ours() -> None:
+    occupied = two_rooms(1)
+    occupied[14, 25:35] = True  # close the corridor, then open a zigzag of pixels that
+    for k in range(10):  # touch only at their corners
+        occupied[10 + k % 2, 25 + k] = False
+    count, (_, body) = aisles.shares(occupied, (10, 10))
+    assert count == 2 * 400 + 10  # 8-connected: the pixel robot goes through
+    assert body < 0.6  # ours does not: the far room is out of its reach

@@ -213,7 +213,8 @@ def run_job(job: Job, out: Path) -> dict[str, Any]:
     except Exception as exc:
         (out / "errors").mkdir(exist_ok=True)
         (out / "errors" / f"{job.name}.log").write_text(traceback.format_exc(), encoding="utf-8")
-        return {**job_fields(job), "error": f"{type(exc).__name__}: {exc}"[:300]}
+        error = f"{type(exc).__name__}: {exc}"[:300]
+        return {**job_fields(job), "error": error, "invariant": f"failed: {error}"}
     summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
     row = {**job_fields(job), **summary_fields(summary), **idle_fields(summary, job)}
     return {**row, "invariant": "; ".join(violations(row)), "cpu_s": cpu_since(started)}
@@ -421,11 +422,10 @@ def report(rows: Sequence[dict[str, Any]]) -> str:
     for name in dict.fromkeys(r["map"] for r in rows):
         mine = [r for r in rows if r["map"] == name]
         parts.append(f"## {name} ({mine[0]['kind']})\n\n{map_table(mine)}\n")
-    broken = [r for r in rows if r.get("invariant") or r["error"]]
+    broken = [r for r in rows if r.get("invariant")]
     parts.append(f"## Runs that break the invariant ({len(broken)} of {len(rows)})\n")
     parts += [
-        f"- {r['map']} {r['strategy']} n{r['size']} seed {r['seed']}:"
-        f" {r.get('invariant') or r['error']}"
+        f"- {r['map']} {r['strategy']} n{r['size']} seed {r['seed']}: {r['invariant']}"
         for r in broken
     ]
     return "\n".join(parts) + "\n"

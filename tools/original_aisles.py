@@ -3,9 +3,11 @@
 For every map of ``tools/compare_original.py``'s cases (and the library), the free pixels
 8-connected to the base pixel under the original's wall rule (only pure black is wall:
 where the original's pixel robots can go), and the share of them within 2 cells of a cell
-our robot's centre can reach from the base: planning at clearance ``radius + wall_margin``
-= 1.0 and with the body alone (radius 0.5, the relaxed clearance of
-``strategies/relax.py``). Prints the Markdown table of docs/differences-from-original.md::
+our robot's centre can reach from the base (4-connected positions, the explorable area's
+rule: a diagonal pinch between two wall pixels that touch at a corner lets a pixel robot
+through, not ours): planning at clearance ``radius + wall_margin`` = 1.0 and with the body
+alone (radius 0.5, the relaxed clearance of ``strategies/relax.py``). Prints the Markdown
+table of docs/differences-from-original.md::
 
     python tools/original_aisles.py --original /work/orig
 """
@@ -25,7 +27,8 @@ sys.path.insert(0, str(HERE))
 from compare_original import DEFAULT_CASES, case_of  # noqa: E402
 from original_metrics import CompareError, base_pixel, original_obstacles  # noqa: E402
 
-from mresim_phys.world.explorable import positions  # noqa: E402
+from mresim_phys.world.explorable import positions, start_seeds  # noqa: E402
+from mresim_phys.world.maps import connected_to  # noqa: E402
 
 CLEARANCES = (1.0, 0.5)  # planner (radius 0.5 + margin 0.5), body alone
 LOOK = cv2.getStructuringElement(cv2.MORPH_ELLIPSE, (5, 5))  # within 2 cells
@@ -36,25 +39,28 @@ HEADER = (
 EXTRA = ("environments/library.png=config/8robots_library",)
 
 
-def component(mask: np.ndarray, seed: tuple[int, int]) -> np.ndarray:
-    """The 8-connected component of ``mask`` holding ``seed`` (or the mask cell nearest it)."""
-    _, labels = cv2.connectedComponents(mask.astype(np.uint8), connectivity=8)
-    r, c = seed
-    if not mask[r, c]:
-        rows, cols = np.nonzero(mask)
-        k = int(np.argmin((rows - r) ** 2 + (cols - c) ** 2))
-        r, c = int(rows[k]), int(cols[k])
-    return np.asarray(labels == labels[r, c])
+def pixel_reach(occupied: np.ndarray, seed: tuple[int, int]) -> np.ndarray:
+    """The free pixels 8-connected to ``seed`` (row, col): where the original's robots go."""
+    _, labels = cv2.connectedComponents((~occupied).astype(np.uint8), connectivity=8)
+    return np.asarray(labels == labels[seed])
+
+
+def body_reach(occupied: np.ndarray, seed: tuple[int, int], clearance: float) -> np.ndarray:
+    """The positions of a body of radius ``clearance`` it reaches from the pixel ``seed``
+    (the explorable area's rule: ``world.explorable.start_seeds``, 4-connected)."""
+    places = positions(occupied, clearance)
+    seeds = start_seeds(occupied, places, (seed[1] + 0.5, seed[0] + 0.5))
+    return connected_to(places, np.array(seeds, dtype=np.intp).reshape(-1, 2))
 
 
 def shares(occupied: np.ndarray, seed: tuple[int, int]) -> tuple[int, list[float]]:
     """Free pixels a pixel robot reaches, and the share of them near our robot's reach."""
-    pixels = component(~occupied, seed)
+    pixels = pixel_reach(occupied, seed)
     out = []
     for clearance in CLEARANCES:
-        reach = component(positions(occupied, clearance), seed).astype(np.uint8)
-        near = cv2.dilate(reach, LOOK).astype(bool)
-        out.append(float(np.count_nonzero(near & pixels)) / float(np.count_nonzero(pixels)))
+        near = cv2.dilate(body_reach(occupied, seed, clearance).astype(np.uint8), LOOK)
+        reached = np.count_nonzero(near.astype(bool) & pixels)
+        out.append(float(reached) / float(np.count_nonzero(pixels)))
     return int(np.count_nonzero(pixels)), out
 
 
