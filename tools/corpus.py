@@ -9,7 +9,7 @@ final explored and known at base, stop reason, steps, robot states at the end, r
 health, how the run breaks the invariant) and ``DIR/corpus.md`` (per map, the medians over
 seeds of each strategy and size; the runs that break the invariant).
 
-The invariant (:func:`violations`, asserted by ``tests/test_corpus.py``'s slow test): a run
+The invariant (``corpus_report.violations``, asserted by ``tests/test_corpus.py``'s slow test): a run
 explores at least 95 % of the explorable area, and no explorer idles more than 20 steps
 while its own map holds frontier cells it can reach (docs/run-health.md).
 ``python tools/corpus.py check`` checks the index: files, licences, starts.
@@ -22,7 +22,6 @@ settings are turned into cells with each map's resolution: an 8 m laser over 180
 from __future__ import annotations
 
 import argparse
-import csv
 import json
 import sys
 import time
@@ -37,16 +36,16 @@ from typing import Any
 import numpy as np
 import yaml
 
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+from corpus_report import MILESTONES, report, violations, write_csv  # noqa: E402  (sibling)
+
 ROOT = Path(__file__).resolve().parent.parent
 INDEX = ROOT / "maps" / "corpus" / "corpus.yaml"
 STRATEGIES = ("frontier", "role_based", "utility_return", "hungarian")
 SENSOR_M, STEP_M, COMM_M = 8.0, 0.5, 20.0  # laser range, distance per step, radio reference
 RADIUS, WALL_MARGIN = 0.5, 0.5  # cells: the original's point-like robots
 MIN_CLEARANCE = 4.0  # cells from a start cell's boundary to the nearest obstacle cell
-MILESTONES = ("0.5", "0.9", "0.95")
-GOAL = 0.95  # the invariant: every run explores this share of the explorable area ...
-IDLE_BOUND = 20  # ... and no explorer idles longer with reachable frontier cells in its map,
-MEETING_WAIT = 60  # ... but a role_based explorer's wait at a meeting (role_based's `wait`)
 REQUIRED = ("name", "file", "kind", "source", "licence", "modified", "base", "starts")
 
 
@@ -236,23 +235,6 @@ def idle_fields(summary: dict[str, Any], job: Job) -> dict[str, Any]:
     return {"explorer_idle_with_frontier": idle.get(worst, 0), "idlest_explorer": worst}
 
 
-def violations(row: dict[str, Any]) -> list[str]:
-    """How a run breaks the corpus invariant (none: it holds): it explored at least
-    :data:`GOAL` of the explorable area, and no explorer idled more than
-    :data:`IDLE_BOUND` steps while its own map held frontier cells it could reach (a
-    role_based explorer may also wait out its meeting, :data:`MEETING_WAIT` steps more)."""
-    if row["error"]:
-        return [f"failed: {row['error']}"]
-    found = []
-    if float(row["final_explored"]) < GOAL:
-        found.append(f"explored {row['final_explored']} after {row['steps']} steps")
-    bound = IDLE_BOUND + (MEETING_WAIT if row["strategy"] == "role_based" else 0)
-    if int(row["explorer_idle_with_frontier"]) > bound:
-        who, steps = row["idlest_explorer"], row["explorer_idle_with_frontier"]
-        found.append(f"{who} idled {steps} steps with reachable frontier cells")
-    return found
-
-
 def job_fields(job: Job) -> dict[str, Any]:
     """The columns that name a run."""
     radii = "/".join(f"{r:g}" for r in job.radii)
@@ -290,17 +272,6 @@ def summary_fields(summary: dict[str, Any]) -> dict[str, Any]:
     row["stuck_robot_steps"] = health.get("stuck_robot_steps")
     row["final_explored_connected"] = summary.get("final_explored_connected")
     return row
-
-
-COLUMNS = (
-    "map", "kind", "strategy", "size", "seed", "radii", "error", "steps", "stop_reason",
-    "final_explored", "final_known_at_base",
-    *(f"{what}_{level}_at" for level in MILESTONES for what in ("explored", "base")),
-    "robots_active", "robots_done", "robots_error", "robots_failed", "robot_states", "alive",
-    "robots_idle_with_frontier", "idle_robot_steps", "stuck_robot_steps",
-    "final_explored_connected", "explorer_idle_with_frontier", "idlest_explorer", "invariant",
-    "cpu_s",
-)  # fmt: skip
 
 
 def make_jobs(
@@ -352,83 +323,6 @@ def run_all(
             if progress:
                 progress(row)
     return rows
-
-
-def write_csv(rows: Sequence[dict[str, Any]], path: Path) -> None:
-    """One line per run, :data:`COLUMNS` in order."""
-    with path.open("w", newline="", encoding="utf-8") as handle:
-        writer = csv.DictWriter(handle, fieldnames=COLUMNS, extrasaction="ignore")
-        writer.writeheader()
-        writer.writerows(rows)
-
-
-def median(values: Sequence[Any]) -> str:
-    """The median of the values that are set (milestones never reached are not), with how
-    many were set when some are missing; '-' when none is."""
-    given = [float(v) for v in values if v not in (None, "")]
-    if not given:
-        return "-"
-    text = f"{float(np.median(given)):.3g}"
-    return text if len(given) == len(values) else f"{text} ({len(given)}/{len(values)})"
-
-
-def tally(values: Iterable[Any]) -> str:
-    """'value x count' for each distinct value, most common first."""
-    return ", ".join(f"{v} x{n}" for v, n in Counter(values).most_common())
-
-
-TABLE_HEAD = (
-    "| strategy | size | runs | explored | known at base | explored 50% at | 90% at"
-    " | base 90% at | steps | stop | robots at the end |\n"
-    "|---|---|---|---|---|---|---|---|---|---|---|"
-)
-
-
-def group_cells(strategy: str, size: int, group: Sequence[dict[str, Any]]) -> list[str]:
-    """One table row: medians over the group's runs that did not fail."""
-    ok = [r for r in group if not r["error"]]
-    runs = f"{len(ok)}" + (f" ({len(group) - len(ok)} failed)" if len(ok) < len(group) else "")
-    states: Counter[str] = Counter()
-    for r in ok:
-        for state in ("active", "done", "error", "failed"):
-            states[state] += int(r[f"robots_{state}"])
-    columns = ("final_explored", "final_known_at_base", "explored_0.5_at", "explored_0.9_at")
-    return [
-        strategy,
-        str(size),
-        runs,
-        *(median([r[c] for r in ok]) for c in (*columns, "base_0.9_at", "steps")),
-        tally(r["stop_reason"] for r in ok),
-        ", ".join(f"{s} {n}" for s, n in states.items() if n),
-    ]
-
-
-def map_table(rows: Sequence[dict[str, Any]]) -> str:
-    """The Markdown table of one map's rows: medians over seeds per strategy and size."""
-    groups: dict[tuple[str, int], list[dict[str, Any]]] = {}
-    for row in rows:
-        groups.setdefault((row["strategy"], int(row["size"])), []).append(row)
-    lines = [TABLE_HEAD]
-    for (strategy, size), group in groups.items():
-        lines.append("| " + " | ".join(group_cells(strategy, size, group)) + " |")
-    return "\n".join(lines)
-
-
-def report(rows: Sequence[dict[str, Any]]) -> str:
-    """The Markdown report: one table per map, then every run that failed or broke the
-    invariant (:func:`violations`)."""
-    parts = ["# Corpus runs\n", "Medians over seeds; a milestone never reached is left out of"
-             " its median, '(k/n)' says how many runs reached it.\n"]  # fmt: skip
-    for name in dict.fromkeys(r["map"] for r in rows):
-        mine = [r for r in rows if r["map"] == name]
-        parts.append(f"## {name} ({mine[0]['kind']})\n\n{map_table(mine)}\n")
-    broken = [r for r in rows if r.get("invariant")]
-    parts.append(f"## Runs that break the invariant ({len(broken)} of {len(rows)})\n")
-    parts += [
-        f"- {r['map']} {r['strategy']} n{r['size']} seed {r['seed']}: {r['invariant']}"
-        for r in broken
-    ]
-    return "\n".join(parts) + "\n"
 
 
 def positive_ints(text: str) -> list[int]:
