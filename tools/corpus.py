@@ -9,9 +9,9 @@ final explored and known at base, stop reason, steps, robot states at the end, r
 health, how the run breaks the invariant) and ``DIR/corpus.md`` (per map, the medians over
 seeds of each strategy and size; the runs that break the invariant).
 
-The invariant (``corpus_report.violations``, asserted by ``tests/test_corpus.py``'s slow test): a run
-explores at least 95 % of the explorable area, and no explorer idles more than 20 steps
-while its own map holds frontier cells it can reach (docs/run-health.md).
+The invariant (``corpus_report.violations``, asserted by ``tests/test_corpus.py``'s slow
+test): a run explores at least 95 % of the explorable area, and no explorer idles more than
+20 steps while its own map holds frontier cells it can reach (docs/run-health.md).
 ``python tools/corpus.py check`` checks the index: files, licences, starts.
 
 Robots are of the original MRESim's kind (radius 0.5 cells, wall margin 0.5) and metric
