@@ -154,10 +154,10 @@ def test_violations_name_what_breaks_the_invariant() -> None:
     row = {"error": "", "final_explored": 0.97, "steps": 300, "strategy": "frontier",
            "explorer_idle_with_frontier": bound, "idlest_explorer": "R2"}  # fmt: skip
     assert corpus_report.violations(row) == []
-    row |= {"final_explored": 0.9, "explorer_idle_with_frontier": corpus_report.IDLE_BOUND + 1}
+    row |= {"final_explored": 0.9, "explorer_idle_with_frontier": bound + 1}
     assert corpus_report.violations(row) == [
         "explored 0.9 after 300 steps",
-        f"R2 idled {corpus_report.IDLE_BOUND + 1} steps with reachable frontier cells",
+        f"R2 idled {bound + 1} steps with reachable frontier cells",
     ]
     assert corpus_report.violations({**row, "error": "ValueError: x"}) == ["failed: ValueError: x"]
     meeting = {**row, "final_explored": 0.97, "strategy": "role_based"}

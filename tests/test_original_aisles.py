@@ -47,3 +47,10 @@ def test_a_diagonal_pinch_lets_pixel_robots_through_but_not_ours() -> None:
     count, (_, body) = aisles.shares(occupied, (10, 10))
     assert count == 2 * 400 + 10  # 8-connected: the pixel robot goes through
     assert body < 0.6  # ours does not: the far room is out of its reach
+
+
+def test_a_base_on_a_wall_or_off_the_map_is_an_error_not_a_count() -> None:
+    occupied = two_rooms(4)
+    for seed in ((0, 0), (500, 10)):  # the outer wall; below the map
+        with pytest.raises(aisles.CompareError, match="base pixel"):
+            aisles.shares(occupied, seed)

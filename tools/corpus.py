@@ -40,7 +40,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 from corpus_report import MILESTONES, report, violations, write_csv  # noqa: E402  (sibling)
 
-ROOT = Path(__file__).resolve().parent.parent
+ROOT = HERE.parent
 INDEX = ROOT / "maps" / "corpus" / "corpus.yaml"
 STRATEGIES = ("frontier", "role_based", "utility_return", "hungarian")
 SENSOR_M, STEP_M, COMM_M = 8.0, 0.5, 20.0  # laser range, distance per step, radio reference
@@ -212,8 +212,8 @@ def run_job(job: Job, out: Path) -> dict[str, Any]:
     except Exception as exc:
         (out / "errors").mkdir(exist_ok=True)
         (out / "errors" / f"{job.name}.log").write_text(traceback.format_exc(), encoding="utf-8")
-        error = f"{type(exc).__name__}: {exc}"[:300]
-        return {**job_fields(job), "error": error, "invariant": f"failed: {error}"}
+        failed = {**job_fields(job), "error": f"{type(exc).__name__}: {exc}"[:300]}
+        return {**failed, "invariant": "; ".join(violations(failed))}
     summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
     row = {**job_fields(job), **summary_fields(summary), **idle_fields(summary, job)}
     return {**row, "invariant": "; ".join(violations(row)), "cpu_s": cpu_since(started)}

@@ -40,7 +40,12 @@ EXTRA = ("environments/library.png=config/8robots_library",)
 
 
 def pixel_reach(occupied: np.ndarray, seed: tuple[int, int]) -> np.ndarray:
-    """The free pixels 8-connected to ``seed`` (row, col): where the original's robots go."""
+    """The free pixels 8-connected to ``seed`` (row, col): where the original's robots go.
+    CompareError when ``seed`` is off the map or a wall pixel (no robot starts there)."""
+    (r, c), (rows, cols) = seed, occupied.shape
+    if not (0 <= r < rows and 0 <= c < cols) or occupied[r, c]:
+        where = "off the map" if not (0 <= r < rows and 0 <= c < cols) else "a wall pixel"
+        raise CompareError(f"the base pixel (x {c}, y {r}) is {where}")
     _, labels = cv2.connectedComponents((~occupied).astype(np.uint8), connectivity=8)
     return np.asarray(labels == labels[seed])
 
@@ -74,7 +79,10 @@ def main(argv: list[str] | None = None) -> int:
         for spec in (*DEFAULT_CASES, *EXTRA):
             case = case_of(spec, args.original)
             x, y = base_pixel(case.team_path)
-            count, values = shares(original_obstacles(case.map_path), (int(y), int(x)))
+            try:
+                count, values = shares(original_obstacles(case.map_path), (int(y), int(x)))
+            except CompareError as exc:
+                raise CompareError(f"{case.team_path}: {exc}") from None
             cells = " | ".join(f"{v:.4f}" for v in values)
             print(f"| {case.key} | {count:,} | {cells} |")
     except CompareError as exc:
