@@ -14,6 +14,7 @@ from mresim_phys.agents import Agent, Robot
 from mresim_phys.knowledge.teammates import presumed_lost
 from mresim_phys.snapshot import AgentSnapshot, bool_view, points_or_none, read_only
 from mresim_phys.strategies import RobotView
+from mresim_phys.strategies.base import given_up_of
 from mresim_phys.strategies.relax import escape_clearance
 
 
@@ -105,6 +106,7 @@ def agent_snapshot(
         goal=robot.goal if robot else None,
         distance=robot.distance if robot else 0.0,
         skeleton=bool_view(info.get("skeleton")),
+        given_up=bool_view(given_up_of(robot.strategy)) if robot else None,
         rendezvous=points_or_none(info.get("rendezvous")),
         rv_candidates=points_or_none(info.get("rv_candidates")),
         rv_through_walls=points_or_none(info.get("rv_through_walls")),

@@ -22,6 +22,7 @@ from collections.abc import Sequence
 
 from mresim_phys.agents import Robot
 from mresim_phys.knowledge.health import HealthWatch, RobotStep
+from mresim_phys.strategies.base import given_up_of
 
 PARTS = frozenset(("drive", "sensor", "radio", "degraded"))  # a part's failure is no state
 
@@ -73,5 +74,10 @@ def robot_steps(
         reason = None if r.state == old else change_reason(r, old, step, events)
         moving = (r.distance, len(r.path) > 0, r.can_move)
         place = (r.position, r.radius, r.belief)
-        out.append(RobotStep(r.name, r.state, *moving, *place, reason=reason, safe=r.safe))
+        given_up = given_up_of(r.strategy)
+        out.append(
+            RobotStep(
+                r.name, r.state, *moving, *place, reason=reason, safe=r.safe, given_up=given_up
+            )
+        )
     return out

@@ -66,6 +66,7 @@ class AgentSnapshot:
     battery: float | None = None  # battery level left, a fraction of capacity; None: none
     activity: str = ""  # working / idle / stuck this step ("": not assessed; knowledge.health)
     state_reason: str | None = None  # why ``state`` changed this step (None: it did not)
+    given_up: BoolGrid | None = None  # frontier cells its strategy tried in vain, gave up
 
 
 @dataclass(frozen=True)

@@ -214,7 +214,7 @@ def test_the_log_stores_footprints_once_and_moves_only_when_they_change(
 ) -> None:
     assert main(["run", str(scenario), "--out", str(tmp_path), "--quiet", "--no-plots"]) == 0
     meta = json.loads((tmp_path / "log" / "meta.json").read_text())
-    assert meta["version"] == 5
+    assert meta["version"] == 6
     assert [(m["name"], m["kind"], m["shape"]) for m in meta["movables"]] == [
         ("cart", "obstacle", [4, 4]),
         ("gate", "door", [16, 2]),
@@ -286,8 +286,9 @@ def test_static_frames_are_unchanged(
     """Frames of shipped static scenarios do not change with the world layers: they equal
     the same frame drawn without them, and the reference frames in tests/data (first
     written by the code of commit 1cc4d1a, before the world layers existed; re-rendered when
-    the frontier rule changed the runs themselves, and when the legend gained the done,
-    idle and stuck glyphs and labels that would overlap were placed apart)."""
+    the frontier rule changed the runs themselves, when the legend gained the done,
+    idle and stuck glyphs and labels that would overlap were placed apart, and when rays
+    grazing a wall corner stopped marking the free cell beyond it as wall)."""
     sim = Simulation.from_yaml(ROOT / "scenarios" / f"{name}.yaml", steps=steps)
     for _ in range(steps):
         sim.step()

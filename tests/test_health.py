@@ -20,6 +20,8 @@ from mresim_phys.knowledge.health import CHECK_EVERY, HealthWatch, RobotStep
 from mresim_phys.output.health import replayed_health, run_health
 from mresim_phys.output.runlog import RunLog
 from mresim_phys.strategies import Decision
+from mresim_phys.strategies.base import RobotView
+from mresim_phys.strategies.relax import frontier_reachable
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 
 ScenarioFile = Callable[..., Path]
@@ -272,3 +274,67 @@ def test_a_log_without_reasons_replays_them_as_not_logged(
 def parked_team() -> dict[str, Any]:
     team = {"speed": 2, "radius": 1.0, "sensor": {"range": 30}, "comm_range": 20}
     return {**team, "strategy": "health_plugins:Parked"}
+
+
+@pytest.mark.parametrize("seed", range(20))
+def test_a_frontier_health_calls_reachable_is_one_the_relaxed_strategy_finds(seed: int) -> None:
+    """Health's 'idle with reachable frontier cells' accuses a robot only when its strategy,
+    relaxed to its body radius, would find a frontier target, and every time it would: on
+    random rooms of walls and unknown patches the two answers agree."""
+    rng = np.random.default_rng(seed)
+    belief = known_room(40, 50)
+    for _ in range(40):  # walls and unknown patches of random size and place
+        r, c = rng.integers(1, 38), rng.integers(1, 48)
+        h, w = rng.integers(1, 4), rng.integers(1, 4)
+        belief[r : r + h, c : c + w] = OCCUPIED if rng.random() < 0.5 else UNKNOWN
+    free = np.argwhere(belief == FREE)
+    radius = float(rng.choice([0.5, 1.0, 1.5]))
+    for row, col in free[rng.choice(len(free), 10, replace=False)]:
+        position = (col + 0.5, row + 0.5)
+        view = RobotView(
+            step=10, name="A", position=position, heading=0.0, belief=belief, radius=radius,
+            clearance=radius + 0.5, speed=2.0, sensor_range=30.0, role="explorer",
+            base_position=position, teammates={}, rng=np.random.default_rng(0),
+        )  # fmt: skip
+        reachable = frontier_check(belief, position, radius).reachable > 0
+        assert reachable == frontier_reachable(view, radius)
+
+
+def test_frontier_cells_the_strategy_gave_up_do_not_count() -> None:
+    """Cells tried from two spots in vain (``strategies/giveup.py``) are left out before
+    clustering, as the strategy leaves them: what remains of their cluster is a speck."""
+    belief = known_room()
+    belief[10:14, 30:34] = UNKNOWN  # a hole: a 20-cell frontier ring
+    given_up = np.zeros(belief.shape, dtype=bool)
+    assert frontier_check(belief, (10.5, 10.5), 1.0, None, given_up).reachable == 20
+    given_up[9:15, 29:35] = True
+    given_up[9, 29:31] = False  # two cells left: below the smallest cluster
+    check = frontier_check(belief, (10.5, 10.5), 1.0, None, given_up)
+    assert (check.frontier, check.reason) == (0, "none left")
+
+
+def test_given_up_cells_travel_through_the_run_log(
+    scenario_file: ScenarioFile, tmp_path: Path
+) -> None:
+    """The health record replayed from a log leaves out the same given-up cells as the
+    live run: the strategy's given_up grid is logged with each robot."""
+    from mresim_phys.output.logwriter import RunLogWriter
+    from mresim_phys.strategies.giveup import Tried
+
+    sim = Simulation.from_yaml(scenario_file(robots=ONE_ROBOT, steps=12))
+    live = []
+    with RunLogWriter(tmp_path / "log", sim.snapshot(), name="tiny", seed=3) as writer:
+        for n in range(12):
+            sim.step()
+            if n == 4:  # as if A had tried a frontier from two spots in vain
+                strategy = sim.robots[0].strategy
+                tried = Tried.empty(sim.robots[0].belief.shape)
+                tried.given_up[20:30, 50:60] = True
+                strategy._tried = tried  # type: ignore[union-attr]
+            writer.write(sim.snapshot())
+            live.append(sim.snapshot().robots[0].given_up)
+    replayed = [s.robots[0].given_up for s in RunLog.open(tmp_path / "log").snapshots()][1:]
+    assert all(g is None for g in live[:4]) and all(g is None for g in replayed[:4])
+    for got, expected in zip(replayed[4:], live[4:], strict=True):
+        assert got is not None and expected is not None
+        assert np.array_equal(got, expected) and int(got.sum()) == 100

@@ -206,20 +206,27 @@ def test_robots_on_one_spot_agree_on_who_takes_which_frontier() -> None:
     assert goals["A"] != goals["B"]
 
 
-def test_reaching_an_unresolved_frontier_gives_up_only_the_cells_near_it() -> None:
-    """A long frontier: the cells near where the robot stood go, the far ones stay."""
+def test_an_unresolved_frontier_is_tried_from_another_spot_then_given_up_near_it() -> None:
+    """A long frontier: one try from a spot sets the cells near it aside (chased again,
+    from elsewhere, when nothing else is left); a second try gives up the cells near both
+    spots, the far ones stay."""
     from mresim_phys.knowledge.frontiers import find_frontiers
-    from mresim_phys.strategies.frontier import give_up
+    from mresim_phys.strategies.giveup import Tried
 
     belief = np.full((20, 100), FREE, dtype=np.uint8)
     belief[:2, :] = UNKNOWN  # a 100-cell frontier along the top (row 2)
     frontiers = find_frontiers(belief)
     assert len(frontiers) == 1
-    ignored = np.zeros(belief.shape, dtype=bool)
-    give_up(ignored, frontiers.cells_rc, (5.5, 2.5), radius=10.0)
-    assert ignored[2, :15].all() and not ignored[2, 16:].any()
-    left = find_frontiers(belief, exclude=ignored)
-    assert len(left) == 1 and left.cells_rc[:, 1].min() > 15
+    tried = Tried.empty(belief.shape)
+    tried.failed(frontiers.cells_rc, (5.5, 3.5), radius=10.0)
+    assert not tried.given_up.any() and tried.spots[3, 5] and not tried.spots[3, 8]
+    assert tried.set_aside[2, :15].all() and not tried.set_aside[2, 15:].any()
+    spared = tried.target_cells(np.ones(belief.shape, dtype=bool))
+    assert not spared[3, 5] and spared[3, 8]
+    tried.failed(frontiers.cells_rc, (8.5, 3.5), radius=10.0)
+    assert tried.given_up[2, :15].all() and not tried.given_up[2, 15:].any()
+    left = find_frontiers(belief, exclude=tried.given_up)
+    assert len(left) == 1 and left.cells_rc[:, 1].min() == 15
 
 
 def test_a_robot_whose_map_holds_the_goal_fraction_goes_home() -> None:

@@ -89,10 +89,17 @@ class FrontierCheck:
 NO_FRONTIER = FrontierCheck(0, 0, 0, 0)
 
 
-def unvisited_frontier(belief: BeliefGrid, box: Box, crop: Box, safe: BoolGrid | None) -> BoolGrid:
+def unvisited_frontier(
+    belief: BeliefGrid,
+    box: Box,
+    crop: Box,
+    safe: BoolGrid | None,
+    given_up: BoolGrid | None = None,
+) -> BoolGrid:
     """Within ``crop``: the cells of frontier clusters of at least :data:`MIN_CLUSTER`
-    cells (``box``: the FREE cells' bounding box) outside the safe space ``safe``."""
-    found = frontiers_in(belief, box, MIN_CLUSTER)
+    cells (``box``: the FREE cells' bounding box; the ``given_up`` cells left out before
+    clustering, as the strategy leaves them) outside the safe space ``safe``."""
+    found = frontiers_in(belief, box, MIN_CLUSTER, given_up)
     out = np.zeros((crop[1] - crop[0], crop[3] - crop[2]), dtype=bool)
     rows, cols = found.cells_rc[:, 0], found.cells_rc[:, 1]
     if safe is not None:
@@ -107,14 +114,16 @@ def frontier_check(
     position: tuple[float, float],
     radius: float,
     safe: BoolGrid | None = None,
+    given_up: BoolGrid | None = None,
 ) -> FrontierCheck:
     """The frontier cells of ``belief`` and how many a robot of ``radius`` at ``position``
-    (world x, y in cells) could reach (module docstring; ``safe``: its safe space)."""
+    (world x, y in cells) could reach (module docstring; ``safe``: its safe space;
+    ``given_up``: the cells its strategy tried in vain and gave up)."""
     box = bbox(belief == FREE)
     if box is None:
         return NO_FRONTIER
     crop = grown(box, 1, belief.shape)
-    frontier = unvisited_frontier(belief, box, crop, safe)
+    frontier = unvisited_frontier(belief, box, crop, safe, given_up)
     total = int(np.count_nonzero(frontier))
     if total == 0:
         return NO_FRONTIER

@@ -55,6 +55,7 @@ class RobotStep:
     belief: BeliefGrid
     reason: str | None = None  # why its state changed this step (None: unknown)
     safe: BoolGrid | None = None  # its safe space: where it (or a teammate it heard) has been
+    given_up: BoolGrid | None = None  # frontier cells its strategy tried in vain and gave up
 
 
 class AgentLike(Protocol):
@@ -80,6 +81,8 @@ class AgentLike(Protocol):
     def state_reason(self) -> str | None: ...
     @property
     def safe(self) -> BoolGrid: ...
+    @property
+    def given_up(self) -> BoolGrid | None: ...
 
 
 def step_of(agent: AgentLike) -> RobotStep:
@@ -95,12 +98,13 @@ def step_of(agent: AgentLike) -> RobotStep:
         agent.belief,
         agent.state_reason,
         agent.safe,
+        agent.given_up,
     )
 
 
 def check_of(robot: RobotStep) -> FrontierCheck:
     """The frontier check of the robot's own map, where it stands."""
-    return frontier_check(robot.belief, robot.position, robot.radius, robot.safe)
+    return frontier_check(robot.belief, robot.position, robot.radius, robot.safe, robot.given_up)
 
 
 def activity_of(moved: float, has_path: bool, state: str) -> str:

@@ -81,12 +81,13 @@ def integrate_scan(
     ranges = np.ascontiguousarray(scan.ranges, dtype=np.float64)
     wall_hit = np.ascontiguousarray(scan.wall_hit, dtype=np.bool_)
     ox, oy, max_range = float(scan.origin[0]), float(scan.origin[1]), float(scan.max_range)
+    normals = np.ascontiguousarray(scan.normals, dtype=np.float64)
     row0, col0, free = _fold_alone(
         ox,
         oy,
         angles,
         ranges,
-        np.ascontiguousarray(scan.normals, dtype=np.float64),
+        normals,
         wall_hit,
         max_range,
         belief,
@@ -97,8 +98,9 @@ def integrate_scan(
         return None
     if observed is not None:
         refresh_seen(
-            ox, oy, angles, ranges, wall_hit, max_range, free, row0, col0, belief, observed, step
-        )
+            ox, oy, angles, ranges, normals, wall_hit, max_range, free, row0, col0, belief,
+            observed, step,
+        )  # fmt: skip
     return Update(row0, col0, free.view(bool))
 
 
@@ -125,11 +127,21 @@ def _fold_alone(
 
 
 @njit(cache=True, nogil=True)
+def hit_cell(ex: float, ey: float, ux: float, uy: float, nx: float, ny: float) -> tuple[int, int]:
+    """(row, col) of the wall cell a ray ending at (ex, ey) hit: across the surface
+    (against its normal), on the ray's side of any other cell boundary through the end
+    point. A ray that grazes a wall corner ends on two boundaries: the cell just past the
+    end point along the ray is then the free one diagonally beyond the corner."""
+    return math.floor(ey - 1e-3 * ny - 1e-6 * uy), math.floor(ex - 1e-3 * nx - 1e-6 * ux)
+
+
+@njit(cache=True, nogil=True)
 def refresh_seen(
     ox: float,
     oy: float,
     angles: FloatArray,
     ranges: FloatArray,
+    normals: FloatArray,
     wall_hit: BoolGrid,
     max_range: float,
     free: BeliefGrid,
@@ -158,7 +170,7 @@ def refresh_seen(
         if wall_hit[k] and ranges[k] < max_range:
             ux, uy = math.cos(angles[k]), math.sin(angles[k])
             ex, ey = ox + ranges[k] * ux, oy + ranges[k] * uy
-            c, r = math.floor(ex + 1e-3 * ux), math.floor(ey + 1e-3 * uy)
+            r, c = hit_cell(ex, ey, ux, uy, normals[k, 0], normals[k, 1])
             if 0 <= r < rows and 0 <= c < cols:
                 belief[r, c] = OCCUPIED
                 observed[r, c] = step
@@ -213,10 +225,10 @@ def fold_scan(
     on_wall = wall_hit & (ranges < max_range)
     for k in range(n - 1):
         if on_wall[k] and on_wall[k + 1]:
-            mark_face(belief, normals, ex, ey, k)
+            mark_face(belief, normals, ex, ey, ux, uy, k)
     for k in range(n):
         if on_wall[k]:
-            c, r = math.floor(ex[k] + 1e-3 * ux[k]), math.floor(ey[k] + 1e-3 * uy[k])
+            r, c = hit_cell(ex[k], ey[k], ux[k], uy[k], normals[k, 0], normals[k, 1])
             if 0 <= r < rows and 0 <= c < cols:
                 belief[r, c] = OCCUPIED
     radius2 = safe_radius * safe_radius
@@ -388,7 +400,13 @@ def chord_band(
 
 @njit(cache=True, nogil=True)
 def mark_face(
-    belief: BeliefGrid, normals: FloatArray, ex: FloatArray, ey: FloatArray, k: int
+    belief: BeliefGrid,
+    normals: FloatArray,
+    ex: FloatArray,
+    ey: FloatArray,
+    ux: FloatArray,
+    uy: FloatArray,
+    k: int,
 ) -> None:
     """Mark OCCUPIED (where UNKNOWN) the run of cells joining hits k and k+1 on one face.
 
@@ -405,8 +423,8 @@ def mark_face(
         or max(abs(nx), abs(ny)) <= NEAR_PARALLEL
     ):
         return
-    ca, ra = math.floor(ex[k] - 0.5 * nx), math.floor(ey[k] - 0.5 * ny)
-    cb, rb = math.floor(ex[k + 1] - 0.5 * nx), math.floor(ey[k + 1] - 0.5 * ny)
+    ra, ca = hit_cell(ex[k], ey[k], ux[k], uy[k], nx, ny)
+    rb, cb = hit_cell(ex[k + 1], ey[k + 1], ux[k + 1], uy[k + 1], nx, ny)
     rows, cols = belief.shape
     horizontal = ra == rb
     first, last = (ca, cb) if horizontal else (ra, rb)

@@ -18,6 +18,12 @@ from numba import njit
 from mresim_phys.planning.fields import DistanceField
 from mresim_phys.types import BoolGrid, FloatArray, IntArray
 
+# cells beyond a robot's clearance a frontier target may be from its frontier (centre to
+# centre): a frontier cell beside a wall is about that far from the nearest cell the robot
+# may stand on, so it stands close enough to see round the corner a shadow falls behind
+# (at 2 it stopped short of wall corners, saw nothing new and gave the frontier up: the
+# original's 12x12_rooms)
+REACH_SLACK = 1.0
 _EARLIER = ((0, -1), (-1, 0), (-1, -1), (-1, 1))  # 8-neighbours before a cell in raster order
 
 

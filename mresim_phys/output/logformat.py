@@ -39,8 +39,8 @@ import numpy as np
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
 from mresim_phys.types import FloatArray, IntArray
 
-FORMAT, VERSION = "mresim-runlog", 5
-READABLE = (1, 2, 3, 4, 5)  # versions the reader reads (how 1 differs: docs/run-log-format.md)
+FORMAT, VERSION = "mresim-runlog", 6
+READABLE = (1, 2, 3, 4, 5, 6)  # versions the reader reads (how 1 differs: docs/run-log-format.md)
 NEW, NONE = -1, -2  # PointsField codes: the points are stored; the field is None
 Parts = dict[str, list[np.ndarray]]
 Chunk = dict[str, np.ndarray]
@@ -308,6 +308,7 @@ AGENT_GRIDS = (
     GridField("belief", values=True),
     GridField("safe", values=False),
     GridField("skeleton", values=False, optional=True),
+    GridField("given_up", values=False, optional=True),  # absent from logs of version 5 or older
 )
 AGENT_POINTS = (
     PointsField("path"),

@@ -44,7 +44,7 @@ from mresim_phys.planning.grid import Box, bbox, remember_window
 from mresim_phys.planning.topological import TopologicalPlanner
 from mresim_phys.plugin import Family, PluginParams
 from mresim_phys.registry import Registry
-from mresim_phys.types import FREE, BeliefGrid, FloatArray
+from mresim_phys.types import FREE, BeliefGrid, BoolGrid, FloatArray
 
 
 class StrategyParams(PluginParams):
@@ -327,6 +327,14 @@ def heading_for(context: PlanContext, point: tuple[float, float], **fields: Any)
     path = context.path_towards(*point)
     goal = (float(path[-1, 0]), float(path[-1, 1])) if len(path) else context.view.position
     return Decision(path=path, goal=goal, **fields)
+
+
+def given_up_of(strategy: object) -> BoolGrid | None:
+    """The frontier cells a strategy has tried in vain and given up, if it says (an
+    optional ``given_up`` attribute, as ``frontier`` and the strategies built on it have):
+    run health does not count them as frontier the robot could still explore."""
+    grid = getattr(strategy, "given_up", None)
+    return grid if isinstance(grid, np.ndarray) else None
 
 
 HOME_TOLERANCE = 1.5  # cells: a done robot this close to its home point stays put

@@ -14,10 +14,11 @@ path search bounded to 1.5 times the straight-line estimate, widened only if nee
 With nothing reachable left to explore the robot returns to the base: ``done``.
 
 On arriving, the robot turns to face the frontier (its laser covers only 180
-degrees) and scans; the cells of a frontier it reached without resolving
-(unknown cells it cannot see into) within ``give_up_radius`` of where it stood are
-remembered and no longer count as frontier for it, like the original's "bad
-frontiers"; the rest of that cluster stays a frontier. Ties in the auction go by
+degrees) and scans. A frontier it reached without resolving (unknown cells it cannot
+see into from there) is tried again from another spot; its cells within
+``give_up_radius`` of two spots tried in vain no longer count as frontier for it, like
+the original's "bad frontiers" (``strategies/giveup.py``); the rest of that cluster
+stays a frontier. Ties in the auction go by
 the team's seeded order (``RobotView.team_order``), so robots that see equal bids
 agree on the winner. The first ``init_cycles`` steps are the original's
 random-walk steps.
@@ -32,7 +33,7 @@ from pydantic import Field
 
 from mresim_phys.knowledge.frontiers import Frontiers, any_frontier, frontiers_in
 from mresim_phys.knowledge.prior import walled_in
-from mresim_phys.knowledge.targets import TargetFinder
+from mresim_phys.knowledge.targets import REACH_SLACK, TargetFinder
 from mresim_phys.knowledge.teammates import TeammateInfo
 from mresim_phys.plugin import Plugin
 from mresim_phys.strategies.auction import (
@@ -53,6 +54,7 @@ from mresim_phys.strategies.base import (
     plan_context,
     return_to_base,
 )
+from mresim_phys.strategies.giveup import Tried
 from mresim_phys.strategies.random_walk import random_step
 from mresim_phys.types import FREE, BeliefGrid, BoolGrid, FloatArray, IntArray
 
@@ -107,13 +109,17 @@ class FrontierParams(StrategyParams):
         gt=0,
         description=(
             "On reaching a frontier that is still there after facing it, its cells within"
-            " this distance (cells) are given up by this robot."
+            " this distance (cells) count a try: set aside until no untried frontier is"
+            " left, then tried from another spot, given up after two tries (giveup.py)."
         ),
     )
     reach: float | None = Field(
         None,
         gt=0,
-        description="How far (cells) a target may be from its frontier; default: clearance + 2.",
+        description=(
+            "How far (cells) a target may be from its frontier; default: clearance + 1"
+            " (knowledge.targets.REACH_SLACK)."
+        ),
     )
 
 
@@ -128,7 +134,7 @@ class FrontierExploration(Plugin):
 
     def __init__(self, params: FrontierParams) -> None:
         self.params = params
-        self._ignored: BoolGrid | None = None
+        self._tried: Tried | None = None
         self._chasing: IntArray | None = None
         self._home: tuple[float, float] | None = None
         self._goal_was_met = False  # the done rule sent this robot home
@@ -141,24 +147,21 @@ class FrontierExploration(Plugin):
             step = random_step(view, context)
             if step is not None:
                 return step
-        frontiers = self._frontiers(view, context)
-        reach = self.params.reach or view.clearance + 2.0
-        fields = context.fields_staged(self.params.horizon * view.sensor_range)
+        frontiers = self._frontiers(view, context, self._tried_cells(view).set_aside)
+        reach = self.params.reach or view.clearance + REACH_SLACK
         goal_met = len(frontiers) > 0 and self._goal_met(view)
-        searching = len(frontiers) > 0 and not goal_met
-        finder = TargetFinder.of(frontiers, context.passable, reach)
-        for limit, field, final in fields if searching else ():
-            targets, costs = finder.targets(field, final)
-            candidates = self._candidates(frontiers, costs)
-            if len(candidates) and self._settled(frontiers, costs, candidates, limit):
-                break
-        else:
+        found = self._search(frontiers, context, reach) if not goal_met else None
+        if found is None and not goal_met and self._tried_cells(view).set_aside.any():
+            frontiers = self._frontiers(view, context, self._tried_cells(view).given_up)
+            found = self._search(frontiers, context, reach, retry=True)
+        if found is None:
             self._chasing = None
             reason = GOAL_MET if goal_met else NO_FRONTIER
             decision = return_to_base(view, context, self._home, reason)
             self._home = decision.goal
             return decision
         self._home = None
+        targets, costs, candidates = found
         chosen = self._auction(view, context, frontiers, targets, costs, candidates)
         chasing = self._chasing = frontiers.cells_rc[frontiers.cluster_of == chosen]
         row, col = (int(v) for v in targets[chosen])
@@ -170,6 +173,14 @@ class FrontierExploration(Plugin):
             look_at=nearest_cell_centre(chasing, row, col),
             info=info,
         )
+
+    @property
+    def given_up(self) -> BoolGrid | None:
+        """The frontier cells this robot tried from two spots in vain and gave up
+        (``giveup``); None before it tried any. Run health leaves them out."""
+        if self._tried is None or not self._tried.given_up.any():
+            return None
+        return self._tried.given_up
 
     def replan_on_contact(self, belief: BeliefGrid) -> bool:
         """Replan after a contact when no cell of the chased frontier is frontier any more.
@@ -207,18 +218,45 @@ class FrontierExploration(Plugin):
         self._goal_was_met = self._goal_was_met or met
         return met
 
-    def _frontiers(self, view: RobotView, context: PlanContext) -> Frontiers:
-        """This robot's frontier clusters, without the cells it has given up on (nor, with
-        a prior map, those behind which the plan shows only walls)."""
-        if self._ignored is None:
-            self._ignored = np.zeros(view.belief.shape, dtype=bool)
+    def _tried_cells(self, view: RobotView) -> Tried:
+        """What this robot tried in vain (``giveup``); a frontier it has just reached and
+        still holds counts a try."""
+        if self._tried is None:
+            self._tried = Tried.empty(view.belief.shape)
         if view.reached_goal and self._chasing is not None:
-            give_up(self._ignored, self._chasing, view.position, self.params.give_up_radius)
-        exclude = self._ignored
+            self._tried.failed(self._chasing, view.position, self.params.give_up_radius)
+            self._chasing = None
+        return self._tried
+
+    def _frontiers(self, view: RobotView, context: PlanContext, tried: BoolGrid) -> Frontiers:
+        """This robot's frontier clusters without the ``tried`` cells (nor, with a prior
+        map, those behind which the plan shows only walls)."""
+        exclude = tried
         if view.prior is not None:  # the plan shows only walls behind these cells
             exclude = exclude | walled_in(view.belief, view.prior)
         size = self.params.min_frontier_size
         return frontiers_in(view.belief, context.free_box, size, exclude)
+
+    def _search(
+        self, frontiers: Frontiers, context: PlanContext, reach: float, retry: bool = False
+    ) -> tuple[IntArray, FloatArray, IntArray] | None:
+        """(targets, costs, candidates) of the best reachable frontiers, the search out to
+        a growing horizon; None if no frontier is reachable. A ``retry`` (of frontiers set
+        aside, ``giveup``) takes no target on a spot tried in vain."""
+        if len(frontiers) == 0:
+            return None
+        cells = context.passable
+        if retry and self._tried is not None:
+            cells = self._tried.target_cells(cells)
+        finder = TargetFinder.of(frontiers, cells, reach)
+        for limit, field, final in context.fields_staged(
+            self.params.horizon * context.view.sensor_range
+        ):
+            targets, costs = finder.targets(field, final)
+            candidates = self._candidates(frontiers, costs)
+            if len(candidates) and self._settled(frontiers, costs, candidates, limit):
+                return targets, costs, candidates
+        return None
 
     def _candidates(self, frontiers: Frontiers, costs: FloatArray) -> IntArray:
         """Indices of the best reachable frontiers, best first."""
@@ -284,20 +322,6 @@ class FrontierExploration(Plugin):
             ),
             key=lambda t: t.name,
         )
-
-
-def give_up(
-    ignored: BoolGrid, chasing: IntArray, position: tuple[float, float], radius: float
-) -> None:
-    """Mark the cells of the chased frontier within ``radius`` of ``position`` as given up.
-
-    The robot stood there, faced the frontier and scanned: the frontier cells near it
-    that are still frontier cannot be resolved from where it can go. Cells of the same
-    cluster farther away were never tried and stay.
-    """
-    x, y = position
-    near = np.hypot(chasing[:, 0] + 0.5 - y, chasing[:, 1] + 0.5 - x) <= radius
-    ignored[chasing[near, 0], chasing[near, 1]] = True
 
 
 def nearest_cell_centre(cells_rc: IntArray, row: int, col: int) -> tuple[float, float]:

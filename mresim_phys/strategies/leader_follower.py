@@ -43,7 +43,7 @@ from mresim_phys.strategies.base import (
     plan_context,
 )
 from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams
-from mresim_phys.types import FloatArray
+from mresim_phys.types import BoolGrid, FloatArray
 
 LEADER_MARGIN = 5.0  # cells: the original's frontier radius is comm_range * hops - 5
 
@@ -112,8 +112,9 @@ class LeaderFollower(FrontierExploration):
     def _out_of_reach(self) -> None:
         """The leader's frontier lies beyond its parent's range along its path: give up
         that frontier (its cells) and search again at the next decision."""
-        if self._chasing is not None and self._ignored is not None:
-            self._ignored[self._chasing[:, 0], self._chasing[:, 1]] = True
+        if self._chasing is not None and self._tried is not None:
+            rows, cols = self._chasing[:, 0], self._chasing[:, 1]
+            self._tried.given_up[rows, cols] = self._tried.set_aside[rows, cols] = True
         self._goal, self._searched = None, -(10**9)
 
     def _follow(self, view: RobotView, context: PlanContext) -> Decision:
@@ -148,9 +149,9 @@ class LeaderFollower(FrontierExploration):
         kept: FloatArray = path[:stop]
         return kept
 
-    def _frontiers(self, view: RobotView, context: PlanContext) -> Frontiers:
+    def _frontiers(self, view: RobotView, context: PlanContext, tried: BoolGrid) -> Frontiers:
         """The leader's frontiers, less those beyond the chain's reach from the base."""
-        found = super()._frontiers(view, context)
+        found = super()._frontiers(view, context, tried)
         if view.hops <= 0 or len(found) == 0:
             return found
         radius = view.comm_range * view.hops - LEADER_MARGIN

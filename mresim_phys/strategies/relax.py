@@ -9,7 +9,9 @@ as the mission-complete rule, is kept), and the robot's map holds a frontier its
 reach at the least clearance (its radius: touching walls, never through one), the strategy
 is asked again with the margin relaxed in :data:`LEVELS` steps towards the radius; the
 first answer that is not done is taken. ``done`` thus means: no frontier reachable under
-any margin the robot may use.
+any margin the robot may use. A done robot that its margin keeps from the way home (it
+came where it stands at a relaxed clearance) heads home at the least relaxed clearance
+that opens the way (:func:`_home_relaxed`), instead of parking out of the base's reach.
 
 A collision that taught the robot's map nothing (a diagonal move past a wall corner
 its map already holds) marks the robot ``escaping`` (``agents.Robot.escape_from``): until
@@ -27,14 +29,23 @@ falsely where the rays pass; a robot truly shut in keeps looking, and counts as 
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 import numpy as np
 
 from mresim_phys.knowledge.frontiers import frontiers_in
-from mresim_phys.knowledge.targets import TargetFinder
+from mresim_phys.knowledge.targets import REACH_SLACK, TargetFinder
 from mresim_phys.planning.fields import clearance_kernel
-from mresim_phys.strategies.base import NO_FRONTIER, Decision, RobotView, Strategy, plan_context
+from mresim_phys.strategies.base import (
+    HOME_TOLERANCE,
+    NO_FRONTIER,
+    Decision,
+    RobotView,
+    Strategy,
+    heading_for,
+    plan_context,
+)
 from mresim_phys.strategies.random_walk import random_step
 from mresim_phys.types import OCCUPIED, BeliefGrid, FloatArray
 
@@ -56,6 +67,8 @@ def decide(strategy: Strategy, view: RobotView) -> Decision:
         decision = _random_escape(view) or decision
     if decision.done and decision.info.get("reason") == NO_FRONTIER and boxed_in(view):
         return look_around(view)
+    if decision.done and len(decision.path) <= 1:
+        decision = _home_relaxed(view, decision)
     if view.clearance <= HALF_CELL and len(decision.path) > 1:
         return replace(decision, path=uncut_corners(decision.path, view.belief))
     return decision
@@ -92,6 +105,23 @@ def _relaxed(strategy: Strategy, view: RobotView, decision: Decision) -> Decisio
         relaxed = strategy.decide(replace(view, clearance=view.clearance - share * margin))
         if not relaxed.done:
             return replace(relaxed, info={**relaxed.info, "clearance_reason": RELAXED})
+    return decision
+
+
+def _home_relaxed(view: RobotView, decision: Decision) -> Decision:
+    """A done robot that its margin keeps from the way home (it came where it stands at a
+    relaxed clearance) heads home at a smaller one, in :data:`LEVELS` steps; it used to
+    park where it stood, out of the base's reach (ipa_office: 'mission complete' and parked
+    for 256 steps with its map undelivered and frontiers in reach)."""
+    if math.dist(view.position, view.base_position) <= HOME_TOLERANCE:
+        return decision
+    margin = view.clearance - view.radius
+    info = {**decision.info, "clearance_reason": RELAXED}
+    for share in LEVELS if margin > 1e-9 else ():
+        context = plan_context(replace(view, clearance=view.clearance - share * margin))
+        home = heading_for(context, view.base_position, done=True, info=info)
+        if len(home.path) > 1:
+            return home
     return decision
 
 
@@ -146,12 +176,13 @@ def look_around(view: RobotView) -> Decision:
 
 def frontier_reachable(view: RobotView, clearance: float, size: int = DEFAULT_MIN_SIZE) -> bool:
     """Whether the robot's map holds a frontier cluster of ``size`` cells or more that the
-    robot reaches (within ``clearance + 2`` cells) on the cells ``clearance`` from its walls."""
+    robot reaches (within ``clearance + REACH_SLACK`` cells) on the cells ``clearance`` from
+    its walls."""
     context = plan_context(replace(view, clearance=clearance))
     frontiers = frontiers_in(view.belief, context.free_box, size)
     if len(frontiers) == 0:
         return False
-    finder = TargetFinder.of(frontiers, context.passable, clearance + 2.0)
+    finder = TargetFinder.of(frontiers, context.passable, clearance + REACH_SLACK)
     _, costs = finder.targets(context.field)
     return bool(np.isfinite(costs).any())
 

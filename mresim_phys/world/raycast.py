@@ -11,7 +11,9 @@ occupied cell (likewise in y). A ray that passes exactly through a cell corner
 (to within 1e-9 cells, e.g. a 45 degree ray from a cell centre) stops there if any
 of the three cells beyond the corner is occupied: a ray does not slip between two
 diagonally touching wall cells, and a ray grazing a wall corner touches it, as a
-segment query touches a segment's end point; likewise a ray running exactly along a cell
+segment query touches a segment's end point (its normal faces the cell it touched: across
+that cell's side, or diagonally back when only the diagonal cell is a wall, so the map
+marks that cell, ``knowledge.mapping.hit_cell``); likewise a ray running exactly along a cell
 boundary line (a robot on a whole coordinate looking along an axis) touches the cells on
 both sides of it. Outside the map is wall.
 
@@ -33,6 +35,7 @@ from mresim_phys.types import BoolGrid, FloatArray
 CORNER_EPS = 1e-9  # crossings closer than this (in ray length) pass through a cell corner
 AXIS_EPS = 1e-12  # a direction component below this runs along a grid line
 NO_TWIN = -(2**31)  # no twin row or column
+DIAGONAL = math.sqrt(0.5)  # a corner's normal component, towards the ray
 
 
 @njit(cache=True, nogil=True)
@@ -95,8 +98,10 @@ def _grid_hit(
         else:  # through a corner: stop if any of the three cells beyond it is a wall
             if _occupied(grid, row, col + sx):
                 return t, float(-sx), 0.0
-            if _occupied(grid, row + sy, col) or _occupied(grid, row + sy, col + sx):
+            if _occupied(grid, row + sy, col):
                 return t, 0.0, float(-sy)
+            if _occupied(grid, row + sy, col + sx):  # only the diagonal cell: its corner
+                return t, -sx * DIAGONAL, -sy * DIAGONAL
             col += sx
             row += sy
             bx += sx
