@@ -132,14 +132,15 @@ def test_area_under_known_curves() -> None:
 
 def far_failure(scenario_file: ScenarioFile, **changes: Any) -> Path:
     """Two robots in the two rooms of the rooms map, radios too short to reach each other
-    or the base: B's map is its own when it fails at step 40."""
+    or the base: B's map is its own when it fails at step 25 (by step 30 B has crossed
+    into A's room and met it)."""
     data: dict[str, Any] = {
         "robots": [
             {"name": "A", "start": [8, 20], "heading_deg": 0},
             {"name": "B", "start": [70, 45], "heading_deg": 180},
         ],
         "steps": 70,
-        "events": [{"step": 40, "fail": "B"}],
+        "events": [{"step": 25, "fail": "B"}],
         "communication": {"model": "disk"},
         "team": {"speed": 2, "radius": 1.0, "sensor": {"range": 30}, "comm_range": 6},
         "base_station": {"position": [8, 30], "comm_range": 6},
@@ -149,13 +150,13 @@ def far_failure(scenario_file: ScenarioFile, **changes: Any) -> Path:
 
 def test_knowledge_lost_in_a_run_equals_a_dense_count(scenario_file: ScenarioFile) -> None:
     sim = Simulation.from_yaml(far_failure(scenario_file))
-    while sim.t < 40:
+    while sim.t < 25:
         sim.step()
     reach = sim.coverage.reachable
     a, b = (r.belief == FREE for r in sim.robots)
     base = sim.base.belief == FREE
     failure = sim.failures.failures[0]
-    assert (failure.step, failure.robot) == (40, "B")
+    assert (failure.step, failure.robot) == (25, "B")
     assert failure.unreported == np.count_nonzero(b & reach & ~base)
     assert failure.knowledge_lost == np.count_nonzero(b & reach & ~base & ~a)
     assert failure.knowledge_lost > 0  # the test means something
@@ -243,7 +244,7 @@ def test_replayed_failure_views_equal_the_live_ones(
     for got, want in zip(RunLog.open(tmp_path / "log").snapshots(), snaps, strict=True):
         assert_same_snapshot(got, want)
     last = snaps[-1]
-    assert last.failures == ((40, "B"),)
+    assert last.failures == ((25, "B"),)
     assert last.lost_knowledge is not None and last.lost_knowledge.any()
     assert snaps[39].lost_knowledge is None
     assert any(a.presumed_lost for a in last.agents)

@@ -96,11 +96,23 @@ def test_each_robot_explores_its_wedge_and_neighbours_meet(
 
 
 def test_a_failed_robots_wedge_is_shared_out(tmp_path: Path, scenario_file: MakeScenario) -> None:
+    """B fails at step 30 and is presumed lost 40 steps later: while A and C hear from each
+    other, they share the 90 degrees, 45 each (a robot that has not heard from the other
+    for 40 steps presumes it lost too and takes the whole span, so the split is checked
+    while both count each other; it shows from A's next replan on)."""
     path = open_field(
         tmp_path, scenario_file, events=[{"step": 30, "fail": "B"}],
         simulation={"presume_lost_after": 40},
     )  # fmt: skip
-    sim, _ = run(path)
-    spans = {r.name: r.strategy._span for r in sim.robots}  # type: ignore[attr-defined]
-    assert math.isclose(spans["A"][1] - spans["A"][0], math.radians(45))  # two share 90 degrees
+    sim = Simulation.from_yaml(path)
+    shared = []
+    while not sim.finished():
+        sim.step()
+        a = sim.robots[0]
+        heard_c = a.teammates.get("C")
+        if sim.t > 75 and heard_c is not None and sim.t - heard_c.step <= 30:
+            span = a.strategy._span  # type: ignore[attr-defined]
+            shared.append(math.isclose(span[1] - span[0], math.radians(45)))
+    # two share 90 degrees while they count each other (from the replan after contact)
+    assert len(shared) >= 20 and sum(shared) >= 0.8 * len(shared)
     assert sim.record.explored >= 0.9 and sim.t < 1500  # nobody waited for B forever

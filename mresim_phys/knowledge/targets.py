@@ -8,6 +8,7 @@ search (``planning.dial``) are each read by the compiled pass alone.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import lru_cache
 from typing import Protocol
@@ -18,12 +19,6 @@ from numba import njit
 from mresim_phys.planning.fields import DistanceField
 from mresim_phys.types import BoolGrid, FloatArray, IntArray
 
-# cells beyond a robot's clearance a frontier target may be from its frontier (centre to
-# centre): a frontier cell beside a wall is about that far from the nearest cell the robot
-# may stand on, so it stands close enough to see round the corner a shadow falls behind
-# (at 2 it stopped short of wall corners, saw nothing new and gave the frontier up: the
-# original's 12x12_rooms)
-REACH_SLACK = 1.0
 _EARLIER = ((0, -1), (-1, 0), (-1, -1), (-1, 1))  # 8-neighbours before a cell in raster order
 
 
@@ -40,6 +35,23 @@ class Clusters(Protocol):
 
     def __len__(self) -> int:
         """How many clusters."""
+
+
+def target_reach(clearance: float) -> float:
+    """How far (cells, centre to centre) a frontier target may be from its frontier, for a
+    robot that keeps ``clearance`` from walls: the farthest a frontier cell in a wall's
+    corner lies from the nearest cell such a robot may stand on (``sqrt(2) * (clearance +
+    0.5)``), and never under ``clearance + 1`` (a cell beside a straight wall).
+
+    No farther: at ``clearance + 2`` robots stopped short of wall corners, saw nothing of the
+    shadow behind them and gave it up (the original's 12x12_rooms: every robot ``done`` at
+    25 % explored); no nearer: at ``clearance + 1`` robots of radius 2 left the frontier in a
+    room's corners for good.
+
+    >>> round(target_reach(1.0), 2), round(target_reach(2.5), 2), target_reach(0.25)
+    (2.12, 4.24, 1.25)
+    """
+    return max(clearance + 1.0, math.sqrt(2.0) * (clearance + 0.5))
 
 
 def _disc(reach: float) -> IntArray:

@@ -33,7 +33,7 @@ from pydantic import Field
 
 from mresim_phys.knowledge.frontiers import Frontiers, any_frontier, frontiers_in
 from mresim_phys.knowledge.prior import walled_in
-from mresim_phys.knowledge.targets import REACH_SLACK, TargetFinder
+from mresim_phys.knowledge.targets import TargetFinder, target_reach
 from mresim_phys.knowledge.teammates import TeammateInfo
 from mresim_phys.plugin import Plugin
 from mresim_phys.strategies.auction import (
@@ -117,8 +117,8 @@ class FrontierParams(StrategyParams):
         None,
         gt=0,
         description=(
-            "How far (cells) a target may be from its frontier; default: clearance + 1"
-            " (knowledge.targets.REACH_SLACK)."
+            "How far (cells) a target may be from its frontier; default: max(clearance + 1,"
+            " 1.41 (clearance + 0.5)), knowledge.targets.target_reach."
         ),
     )
 
@@ -148,7 +148,7 @@ class FrontierExploration(Plugin):
             if step is not None:
                 return step
         frontiers = self._frontiers(view, context, self._tried_cells(view).set_aside)
-        reach = self.params.reach or view.clearance + REACH_SLACK
+        reach = self.params.reach or target_reach(view.clearance)
         goal_met = len(frontiers) > 0 and self._goal_met(view)
         found = self._search(frontiers, context, reach) if not goal_met else None
         if found is None and not goal_met and self._tried_cells(view).set_aside.any():

@@ -35,7 +35,7 @@ from dataclasses import replace
 import numpy as np
 
 from mresim_phys.knowledge.frontiers import frontiers_in
-from mresim_phys.knowledge.targets import REACH_SLACK, TargetFinder
+from mresim_phys.knowledge.targets import TargetFinder, target_reach
 from mresim_phys.planning.fields import clearance_kernel
 from mresim_phys.strategies.base import (
     HOME_TOLERANCE,
@@ -176,13 +176,13 @@ def look_around(view: RobotView) -> Decision:
 
 def frontier_reachable(view: RobotView, clearance: float, size: int = DEFAULT_MIN_SIZE) -> bool:
     """Whether the robot's map holds a frontier cluster of ``size`` cells or more that the
-    robot reaches (within ``clearance + REACH_SLACK`` cells) on the cells ``clearance`` from
+    robot reaches (within ``target_reach(clearance)`` cells) on the cells ``clearance`` from
     its walls."""
     context = plan_context(replace(view, clearance=clearance))
     frontiers = frontiers_in(view.belief, context.free_box, size)
     if len(frontiers) == 0:
         return False
-    finder = TargetFinder.of(frontiers, context.passable, clearance + REACH_SLACK)
+    finder = TargetFinder.of(frontiers, context.passable, target_reach(clearance))
     _, costs = finder.targets(context.field)
     return bool(np.isfinite(costs).any())
 
