@@ -241,7 +241,7 @@ def test_replayed_regions_pass_through_obstacles_radio_passes_through(tmp_path: 
         obstacles=[rover],
         random_debris={"rate": 0.3, "size": [2, 4]},
     )
-    assert_replay_equals_live(path, tmp_path / "run", (10, 20, 33, 47, 60))
+    assert_replay_equals_live(path, tmp_path / "run", (10, 20, 33, 38))  # all done at 39
 
 
 def assert_replay_equals_live(scenario: Path, out: Path, steps: tuple[int, ...]) -> None:
