@@ -60,23 +60,38 @@ def components(sim: Simulation) -> dict[str, int]:
     return group
 
 
-def test_swaps_are_agreed_one_per_step_among_robots_in_contact() -> None:
+def offers_seen(sim: Simulation, name: str) -> dict[str, str]:
+    """The offers a robot hears over its links: offerer -> the teammate it offers to."""
+    seen = {}
+    for other in sim.robot(name).links:
+        payload = sim.robot(other).payload if other != "base" else None
+        if isinstance(payload, SwitchPayload) and payload.offer is not None:
+            seen[other] = payload.offer[0]
+    return seen
+
+
+def test_swaps_are_agreed_one_at_a_time_among_robots_that_hear_each_other() -> None:
     sim = Simulation(load_scenario(SCENARIO, steps=200))
+    order = list(sim.setup.team_order)  # the tie-break order the offers rank by
     accepted = {r.name: None for r in sim.robots}
     offers = acceptances = 0
     while not sim.finished():
+        heard = {r.name: offers_seen(sim, r.name) for r in sim.robots}
         sim.step()
-        group = components(sim)
-        takers = []
+        swaps = []
         for robot in sim.robots:
             strategy = robot.strategy
             assert isinstance(strategy, RoleSwitch) and isinstance(robot.payload, SwitchPayload)
             offers += robot.payload.offer is not None
             if strategy.accepted != accepted[robot.name]:
-                takers.append(group[robot.name])
+                assert strategy.accepted is not None
+                offerer = strategy.accepted[0]
+                swaps += [robot.name, offerer]
+                earlier = [o for o in heard[robot.name] if order.index(o) < order.index(offerer)]
+                assert not earlier  # it heard no offer ranking before the one it took
                 accepted[robot.name] = strategy.accepted
-        acceptances += len(takers)
-        assert len(takers) == len(set(takers))  # one swap per step in each group in contact
+        acceptances += len(swaps) // 2
+        assert len(swaps) == len(set(swaps))  # no robot is in two swaps in one step
     assert offers and acceptances >= 2
     playing = sorted(r.strategy.acting for r in sim.robots)  # type: ignore[attr-defined]
     assert playing == sorted(r.name for r in sim.robots)  # every position played once

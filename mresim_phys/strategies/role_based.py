@@ -16,7 +16,9 @@ the relay's parent the base.
   checks whether it must head back to be there in time; at the point it waits for the
   relay until ``wait`` steps after the agreed time; a relay that has not come (late,
   failed) leaves it to report in person: it returns to the base, then explores on.
-* The **relay** takes the agreement whenever it is linked with its explorer, carries
+* The **relay** holds still for its first :data:`START_HOLD` steps (state ``start``, as the
+  original's relays wait in ``Initial``), so that its explorer's first agreement reaches
+  it before they part. It takes the agreement whenever it is linked with its explorer, carries
   what it got to the base (until its data has reached the base), goes to the point and
   waits until ``wait + backup_wait`` steps after the agreed time. An explorer that never
   comes is given up: the relay explores greedily until it meets its explorer again.
@@ -53,6 +55,7 @@ IMPROVED_CANDIDATES = 4  # the nearest junctions scored (the original's 4)
 MIN_MEETING_DELAY = 60  # steps: the earliest meeting after an agreement (the original)
 EXPLORE_TIME = 75  # steps the explorer gets at its frontier (FRONTIER_MIN_EXPLORE_TIME)
 RV_REPLAN_INTERVAL = 15  # steps: multi-point points are recomputed at most this often
+START_HOLD = 2  # steps a relay without an agreement holds still at the start (the original)
 
 
 class RoleBasedParams(FrontierParams):
@@ -130,6 +133,8 @@ class RoleBased(FrontierExploration):
         met = self.partner in links and not self._linked
         self._linked = self.partner in links
         meeting = self.meeting
+        if self.state == "start":
+            return True
         if met or (meeting is None and self.state == "explore"):
             return met
         if self.state in ("carry", "home"):
@@ -262,7 +267,7 @@ class RoleBased(FrontierExploration):
     # ---------------------------------------------------------------- relay
 
     def _relay(self, view: RobotView) -> Decision:
-        """carry -> to_rv -> wait -> (explorer met: carry) or (given up: explore)."""
+        """start -> carry -> to_rv -> wait -> (explorer met: carry) or (given up: explore)."""
         mate = self._explorer_record(view)
         if mate is not None and mate.name in view.links:
             agreement = self.agreement_of(mate)
@@ -274,6 +279,10 @@ class RoleBased(FrontierExploration):
             self.state = "to_rv" if meeting is not None else "explore"
         if meeting is not None:
             self._advance_relay(view, meeting)
+        if meeting is None and self.state in ("explore", "start"):
+            self.state = "start" if view.step <= START_HOLD else "explore"
+            if self.state == "start":
+                return Decision(goal=view.position)
         if self.state == "carry":
             return self._go(view, view.base_position, None)
         if self.meeting is not None and self.state in ("to_rv", "wait"):

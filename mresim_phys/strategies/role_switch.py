@@ -14,8 +14,10 @@ the other's goal, when ``max(a1, a2) > max(b1, b2)``.
   takes it at its next decision (if it is free: not waiting at a meeting, not switched
   within ``min_between`` steps, no earlier-ranked offer in sight) and says so; the offerer
   swaps once it hears the acceptance, and drops the offer once it hears the teammate
-  decided without it. Robots in contact see the same offers, so at most one swap happens
-  per step among them (the original: one per step in the whole team).
+  decided without it. A robot never takes an offer while it hears one ranking before it,
+  and is in at most one swap a step, so robots that all hear each other swap one pair a
+  step; two pairs that only hear each other through a third robot may swap in the same
+  step (offers travel one hop; the original, central, swaps one pair a step in the team).
 * **Second rule, two relays**: two relays linked while both carry news to the same
   parent: the one with the shorter trip back to its meeting point turns back and the
   other carries both maps on (each decides the same from the same records).
