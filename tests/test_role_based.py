@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 import pytest
+import yaml
 
 from mresim_phys.errors import ScenarioError
 from mresim_phys.sim import Simulation
@@ -56,11 +57,37 @@ def test_the_relay_carries_the_explorers_news_to_the_base(scenario_file: MakeSce
     sim, states, at_base = run(pair_scenario(scenario_file))
     relay_states = [s for _, s, _ in states]
     assert "carry" in relay_states and "wait" in relay_states  # shuttles and waits
-    explorer = sim.robot("E")
-    assert isinstance(explorer.payload, Rendezvous)  # the agreement travels with its record
     assert sim.record.known_at_base >= 0.95  # the goal is reached within the cap
     _, _, greedy = run(pair_scenario(scenario_file, "frontier"))
     assert at_base > greedy  # the base learns earlier than with greedy exploration
+
+
+@pytest.mark.parametrize("rendezvous", ["basic", "multi_point"])
+def test_a_pair_never_parts_holding_different_meetings(
+    scenario_file: MakeScenario, rendezvous: str
+) -> None:
+    path = pair_scenario(scenario_file)
+    data = yaml.safe_load(path.read_text())
+    data["team"] |= {
+        "comm_range": 6,
+        "strategy": {"name": "role_based", "params": {"rendezvous": rendezvous}},
+    }
+    data["base_station"]["comm_range"] = 6
+    data["communication"] = {"model": "path_loss" if rendezvous == "multi_point" else "disk"}
+    path.write_text(yaml.safe_dump(data))
+    sim = Simulation.from_yaml(path)
+    relay, explorer = sim.robot("R"), sim.robot("E")
+    partings = proposals = 0
+    linked = "R" in explorer.links
+    while not sim.finished():
+        sim.step()
+        proposals += isinstance(explorer.payload, Rendezvous)  # it travels with the record
+        if linked and "R" not in explorer.links:  # their last exchange failed: they part
+            partings += 1
+            mine, theirs = explorer.strategy.meeting, relay.strategy.meeting  # type: ignore[attr-defined]
+            assert mine is not None and mine == theirs
+        linked = "R" in explorer.links
+    assert partings >= 2 and proposals
 
 
 def test_a_relay_gives_up_an_explorer_that_never_comes(scenario_file: MakeScenario) -> None:

@@ -7,7 +7,11 @@ team's hierarchy pairs robots: an explorer's ``parent`` is its relay (``role: re
 the relay's parent the base.
 
 * The **explorer** explores greedily (as ``frontier``). Whenever it is linked with its
-  relay it fixes their next meeting (:class:`Rendezvous`, sent with its record): the
+  relay it proposes their next meeting (:class:`Rendezvous`, sent with its record). Both
+  decide at every step of contact: the relay takes the proposal the last exchange
+  brought, and the explorer, seeing that exchange succeeded, binds itself to the same
+  one, so the pair never parts holding different meetings (a proposal whose exchange
+  failed binds neither). The
   point is its frontier target if that lies more than :data:`MIN_RV_DISTANCE` cells away,
   else where it stands (``rendezvous: improved``: the best skeleton junction near that
   frontier, :func:`improved_point`); the time is ``now + max(60, the relay's trip to the base and on
@@ -115,7 +119,8 @@ class RoleBased(FrontierExploration):
 
     def __init__(self, params: RoleBasedParams) -> None:
         super().__init__(params)
-        self.meeting: Rendezvous | None = None
+        self.meeting: Rendezvous | None = None  # the meeting that binds it
+        self.proposal: Rendezvous | None = None  # explorer: the next meeting it proposes
         self.state = "explore"
         self.partner: str | None = None  # its relay (explorer) or explorer (relay)
         self.speed = 1.0
@@ -131,7 +136,9 @@ class RoleBased(FrontierExploration):
         if self.partner is None:
             return False
         met = self.partner in links and not self._linked
-        self._linked = self.partner in links
+        was_linked, self._linked = self._linked, self.partner in links
+        if self._linked or was_linked:  # agreements are exchanged at every step of contact
+            return True
         meeting = self.meeting
         if self.state == "start":
             return True
@@ -192,18 +199,22 @@ class RoleBased(FrontierExploration):
     def _explorer(self, view: RobotView) -> Decision:
         relay = view.parent or ""
         explored: Decision | None = None
-        if relay in view.links:  # together: fix the next meeting, explore on
+        sent, self.proposal = self.proposal, None
+        if relay in view.links:  # together: agree the next meeting, explore on
             explored = super().decide(view)
-            self.state, self.meeting = "explore", self._agree(view, relay, explored)
+            # the exchange that links them carried what it proposed last, and the relay
+            # (deciding at every step of contact) takes it now: it binds both
+            self.state, self.meeting = "explore", sent or self.meeting
+            self.proposal = self._agree(view, relay, explored)
         meeting = self.meeting
         if meeting is not None:
             self._advance_explorer(view, meeting)
         if self.meeting is not None and self.state in ("to_rv", "wait"):
-            return self._go(view, self.meeting.point, self.meeting)
+            return self._go(view, self.meeting.point, self.proposal)
         if self.state == "home":
             return self._go(view, view.base_position, None)
         explored = explored or super().decide(view)
-        return replace(explored, payload=self.meeting)
+        return replace(explored, payload=self.proposal)
 
     def _advance_explorer(self, view: RobotView, meeting: Rendezvous) -> None:
         """explore -> to_rv -> wait -> (relay met: explore) or (relay late: home -> explore)."""

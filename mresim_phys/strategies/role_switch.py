@@ -66,6 +66,7 @@ class SwitchPayload(Payload):
     rendezvous: Rendezvous | None = None
     offer: tuple[str, int] | None = None
     accept: tuple[str, int] | None = None
+    proposal: Rendezvous | None = None  # an explorer's proposed next meeting (role_based)
 
 
 def switch_payload(record: TeammateInfo | None) -> SwitchPayload | None:
@@ -258,7 +259,7 @@ class RoleSwitch(RoleBased):
         self.known[theirs.acting] = (view.step, view.name)
         self.acting = theirs.acting
         self.position = (theirs.role, theirs.parent, theirs.children)
-        self.meeting = theirs.rendezvous or self.meeting
+        self.meeting, self.proposal = theirs.rendezvous or self.meeting, None
         self.state = theirs.state  # its state and goal go with the position, as the original's
         self.last_switch, self.swaps, self._multi = view.step, self.swaps + 1, None
         self.taken_goal = goal if theirs.role != "relay" else None
@@ -289,13 +290,14 @@ class RoleSwitch(RoleBased):
     def agreement_of(self, record: TeammateInfo) -> Rendezvous | None:
         """A role switch teammate's agreement travels inside its :class:`SwitchPayload`."""
         theirs = switch_payload(record)
-        return theirs.rendezvous if theirs is not None else super().agreement_of(record)
+        return theirs.proposal if theirs is not None else super().agreement_of(record)
 
     def _send(self, view: RobotView, decision: Decision, offer: tuple[str, int] | None) -> Decision:
         role, parent, children = ("explorer", None, ()) if self.free else self.position
         payload = SwitchPayload(
-            self.acting, role, parent, children, self.state, self.meeting, offer, self.accepted
-        )
+            self.acting, role, parent, children, self.state, self.meeting, offer, self.accepted,
+            self.proposal,
+        )  # fmt: skip
         info = {**decision.info, "acting": self.acting, "swaps": self.swaps}
         info["parent"] = self._acting_view(view).parent  # the hierarchy layer draws it
         new_role = role if role != view.role else None
