@@ -179,6 +179,7 @@ SLIVERS = (
 )
 KNOWN: dict[tuple[str, str, int], str] = {
     ("ipa_office", "frontier", 6): SLIVERS,
+    ("ipa_office", "role_based", 3): SLIVERS,
     ("ipa_office", "role_based", 6): SLIVERS,
 }
 INVARIANT_SIZES = [3, 6]
