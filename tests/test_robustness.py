@@ -5,6 +5,7 @@ from __future__ import annotations
 import json
 from collections.abc import Callable
 from pathlib import Path
+from types import SimpleNamespace
 from typing import Any
 
 import cv2
@@ -15,6 +16,7 @@ from test_runlog import assert_same_snapshot, record_run
 from mresim_phys.cli import main
 from mresim_phys.knowledge.robustness import FailureWatch, FaultState
 from mresim_phys.metrics import normalised_area
+from mresim_phys.output.robustness import SIDES, comparison
 from mresim_phys.output.runlog import RunLog, recompute_metrics
 from mresim_phys.render import DEFAULT_STYLE
 from mresim_phys.sim import Simulation
@@ -189,6 +191,10 @@ def test_paired_run_baseline_equals_the_run_without_failures(
     assert diff["final_explored"] == pytest.approx(
         paired_summary["final_explored"] - alone["final_explored"]
     )
+    for name in ("explored", "known_at_base"):
+        key, sides = f"steps_to_{name}_0.9", [report[s][f"steps_to_{name}"]["0.9"] for s in SIDES]
+        expected = None if None in sides else sides[0] - sides[1]
+        assert diff[key] == expected
     header = (tmp_path / "paired" / "metrics.csv").read_text().splitlines()[0].split(",")
     assert header[-3:] == ["failures", "knowledge_lost", "lost_unrecovered"]
     assert "failures" not in (tmp_path / "clean" / "metrics.csv").read_text().splitlines()[0]
@@ -263,3 +269,25 @@ def test_failure_frames_replay_exactly(scenario_file: ScenarioFile, tmp_path: Pa
         frames[step] = live
     red = [int(np.all(f[:60] == DEFAULT_STYLE.banner, axis=-1).sum()) for f in frames.values()]
     assert red[0] == 0 and red[1] > 1000 and red[2] == 0  # the banner line, for a while
+
+
+def censoring_sim(steps: int, reached: int | None) -> SimpleNamespace:
+    """A finished run as ``comparison`` reads it: steps, milestones, curves, record."""
+    milestones = {"0.9": reached}
+    return SimpleNamespace(
+        record=SimpleNamespace(step=steps, explored=0.8, known_at_base=0.7),
+        milestones=SimpleNamespace(explored=milestones, known_at_base=milestones),
+        curves=SimpleNamespace(explored=[0.1] * steps, known_at_base=[0.1] * steps),
+    )
+
+
+def test_a_threshold_never_reached_has_no_difference_or_ratio() -> None:
+    """A censored time is never turned into a number (the step cap + 1 was, before)."""
+    never, reached = censoring_sim(400, None), censoring_sim(300, 120)
+    report = comparison(never, reached)  # type: ignore[arg-type]
+    for name in ("explored", "known_at_base"):
+        key = f"steps_to_{name}_0.9"
+        assert report["difference"][key] is None and report["ratio"][key] is None
+        assert f"run: {key}" in report["never"]
+    both = comparison(censoring_sim(400, 150), reached)  # type: ignore[arg-type]
+    assert both["difference"]["steps_to_explored_0.9"] == 30 and not both["never"]

@@ -8,9 +8,9 @@ the end) and the ``failures`` list (``knowledge.robustness``).
 A paired run (``mresim run --paired`` or ``simulation.paired: true``) then runs the same
 scenario and seed with every fault switched off (``scenario.faults.without_faults``) in
 the same process and writes ``robustness.json``: the baseline's figures, the run's, their
-differences (run minus baseline) and ratios (run / baseline). Steps to a threshold never
-reached count as the larger run's last step plus one in differences and ratios (and are
-flagged). Areas are compared over the common horizon: the longer run's step count, the
+differences (run minus baseline) and ratios (run / baseline). A threshold never reached
+is censored: its difference and ratio are null (never a number made up from the step cap)
+and ``never`` lists it. Areas are compared over the common horizon: the longer run's step count, the
 shorter curve holding its last value (a run stopped by a rule keeps what it knew).
 Formulas: docs/robustness.md.
 """
@@ -105,8 +105,10 @@ def comparison(run: Simulation, base: Simulation) -> dict[str, Any]:
         steps = [getattr(sim.milestones, name)["0.9"] for sim in (run, base)]
         sides = zip(SIDES, steps, strict=True)
         out["never"] += [f"{side}: {key}" for side, v in sides if v is None]
-        a, b = (horizon + 1 if v is None else v for v in steps)
-        compare(out, key, a, b)
+        if None in steps:  # censored: the run needed more than it had, by an unknown amount
+            out["difference"][key] = out["ratio"][key] = None
+        else:
+            compare(out, key, *steps)
         areas = [normalised_area(curve(sim.curves, name), horizon) for sim in (run, base)]
         compare(out, f"auc_{name}", *areas)
         compare(out, f"final_{name}", getattr(run.record, name), getattr(base.record, name))

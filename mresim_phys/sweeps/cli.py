@@ -15,7 +15,7 @@ from mresim_phys.errors import MresimError
 from mresim_phys.run_args import comma_separated, positive_int, whole_number
 from mresim_phys.sweeps.study import Study  # no pandas, pyarrow or matplotlib behind it
 
-NEEDED = ("pandas", "pyarrow", "matplotlib", "scipy")
+NEEDED = ("pandas", "pyarrow", "matplotlib", "scipy", "statsmodels")
 
 
 def require_extra(dask: bool = False) -> None:
@@ -89,6 +89,13 @@ def add_compare_flags(parser: argparse.ArgumentParser) -> None:
         " final_explored); the first is plotted",
     )
     parser.add_argument("--reference", help="the reference arm: its label or one of its values")
+    parser.add_argument(
+        "--detect",
+        type=float,
+        metavar="DIFF",
+        help="robustness contrast: report the seeds needed to detect a contrast of DIFF"
+        " (in the metric's units) at 80 %% power (default: the observed contrast)",
+    )
     parser.add_argument("--svg", action="store_true", help="SVG figures too")
 
 
@@ -179,16 +186,18 @@ def compare_command(args: argparse.Namespace) -> int:
     from mresim_phys.sweeps.compare import run_compare
 
     for path in run_compare(
-        args.sweep_dir, args.by, args.metric, args.out, args.reference, args.svg
+        args.sweep_dir, args.by, args.metric, args.out, args.reference, args.svg, args.detect
     ):
         print(path)
     return 0
 
 
 def robustness_command(args: argparse.Namespace) -> int:
-    """``mresim robustness``: build the failure study, sweep it, compare it."""
+    """``mresim robustness``: build the failure study, sweep it, compare it; print the
+    robustness contrast first."""
     require_extra(args.dask is not None)
-    from mresim_phys.sweeps.compare import run_compare
+    from mresim_phys.sweeps.compare import compare_sweep
+    from mresim_phys.sweeps.report_tables import headline_lines
     from mresim_phys.sweeps.robustness import robustness_study
     from mresim_phys.sweeps.study import parse_study
 
@@ -199,7 +208,12 @@ def robustness_command(args: argparse.Namespace) -> int:
     args.out = args.out or Path("sweeps") / study.name
     status = sweep_and_report(study, args.scenario, text, args)
     by = ["team.strategy", "failures"]
-    for path in run_compare(args.out, by, args.metric, None, args.reference, args.svg):
+    paths, headline = compare_sweep(
+        args.out, by, args.metric, None, args.reference, args.svg, args.detect
+    )
+    if headline is not None:
+        print("\n".join(headline_lines(headline.section, headline.axis)))
+    for path in paths:
         print(path)
     return status
 

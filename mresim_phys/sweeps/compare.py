@@ -16,14 +16,18 @@ from typing import Any
 import pandas as pd
 
 from mresim_phys.errors import MresimError
+from mresim_phys.sweeps.censored_figures import plot_contrast, plot_km_degradation, plot_survival
+from mresim_phys.sweeps.contrast import Design, contrasts
 from mresim_phys.sweeps.figures import (
     fault_axis,
     plot_curves,
     plot_degradation,
     plot_distribution,
 )
-from mresim_phys.sweeps.report import Section, write_reports
+from mresim_phys.sweeps.report import Headline, write_reports
+from mresim_phys.sweeps.report_tables import Section
 from mresim_phys.sweeps.stats import Grouping, arm_groups, compare_metric
+from mresim_phys.sweeps.survival import is_time_to_event
 from mresim_phys.sweeps.sweep_input import Sweep, damaged, need, numbers, read_sweep
 from mresim_phys.sweeps.tables import RUNS_TABLE
 
@@ -37,6 +41,7 @@ DEFAULT_METRICS = (
     "idle_robot_steps",
     "stuck_robot_steps",
 )
+HEADLINE = "auc_known_at_base"  # the robustness contrast opening the report, when chosen
 
 
 def resolve_column(name: str, columns: list[str], what: str) -> str:
@@ -98,19 +103,35 @@ def run_compare(
     out: Path | None = None,
     reference: str | None = None,
     svg: bool = False,
+    detect: float | None = None,
 ) -> list[Path]:
     """Figures and report of the sweep in ``folder``; the files written."""
+    return compare_sweep(folder, by, metrics, out, reference, svg, detect)[0]
+
+
+def compare_sweep(
+    folder: Path,
+    by: list[str] | None = None,
+    metrics: list[str] | None = None,
+    out: Path | None = None,
+    reference: str | None = None,
+    svg: bool = False,
+    detect: float | None = None,
+) -> tuple[list[Path], Headline | None]:
+    """:func:`run_compare`'s files and the report's headline robustness contrast."""
     sweep = read_sweep(folder)
     out = Path(out) if out is not None else sweep.folder / "compare"
     grouping = grouping_for(sweep, by, reference)
     chosen = choose_metrics(sweep, metrics)
+    design = contrast_design(grouping, fault_axis(sweep.axes))
     try:
-        sections = [Section(m, *compare_metric(sweep.runs, m, grouping)) for m in chosen]
-        figures = plot_curves(sweep.runs, sweep.steps, grouping, out, svg)
-        figures += plot_distribution(sweep.runs, chosen[0], grouping, out, svg)
-        fault = fault_axis(sweep.axes)
-        if fault is not None:
-            figures += plot_degradation(sweep.runs, chosen[0], fault, grouping, out, svg)
+        sections = [section(sweep.runs, m, grouping, design, detect) for m in chosen]
+        headline = pick_headline(sections, design)
+        figures = draw(sweep.runs, sweep.steps, chosen[0], grouping, design, out, svg)
+        if headline is not None:
+            figures += plot_contrast(
+                headline.section.contrasts, headline.section.metric, headline.axis, out, svg
+            )
     except (KeyError, ValueError, TypeError, IndexError) as exc:  # values of other kinds
         detail = " ".join(str(exc).split())[:200]
         raise damaged(
@@ -119,7 +140,72 @@ def run_compare(
             f" ({type(exc).__name__}: {detail})",
         ) from None
     pictures = [p for p in figures if p.suffix == ".png"]
-    return [*figures, *write_reports(out, sweep.runs, grouping, sections, pictures, sweep.title)]
+    written = write_reports(out, sweep.runs, grouping, sections, pictures, sweep.title, headline)
+    return [*figures, *written], headline
+
+
+def section(
+    runs: pd.DataFrame,
+    metric: str,
+    grouping: Grouping,
+    design: Design | None,
+    detect: float | None,
+) -> Section:
+    """One metric's figures, comparisons and (with a fault axis) robustness contrasts."""
+    found = (
+        [] if design is None else contrasts(runs, metric, design, grouping_label(design), detect)
+    )
+    return Section(metric, *compare_metric(runs, metric, grouping), found)
+
+
+def draw(
+    runs: pd.DataFrame,
+    steps: pd.DataFrame,
+    metric: str,
+    grouping: Grouping,
+    design: Design | None,
+    out: Path,
+    svg: bool,
+) -> list[Path]:
+    """The curves, the distribution of ``metric`` and its degradation over the fault axis
+    (Kaplan-Meier figures for a steps-to-threshold metric)."""
+    figures = plot_curves(runs, steps, grouping, out, svg)
+    timed = is_time_to_event(metric)
+    figures += (plot_survival if timed else plot_distribution)(runs, metric, grouping, out, svg)
+    if design is not None:
+        degrade = plot_km_degradation if timed else plot_degradation
+        figures += degrade(runs, metric, design.axis, grouping, out, svg)
+    return figures
+
+
+def contrast_design(grouping: Grouping, axis: str | None) -> Design | None:
+    """The robustness contrast's design when the arms are split by a fault axis: the other
+    ``by`` columns form the groups; the reference arm's level is the baseline."""
+    if axis is None or axis not in grouping.by:
+        return None
+    baseline = grouping.reference[grouping.by.index(axis)]
+    groups = [c for c in grouping.by if c != axis] or ["scenario"]
+    return Design(axis, groups, grouping.pair_keys, baseline)
+
+
+def grouping_label(design: Design) -> Any:
+    """``strategy=frontier`` for a group of the design's group columns."""
+
+    def label(key: tuple[Any, ...]) -> str:
+        return ", ".join(
+            f"{c.rsplit('.', 1)[-1]}={v}" for c, v in zip(design.groups, key, strict=True)
+        )
+
+    return label
+
+
+def pick_headline(sections: list[Section], design: Design | None) -> Headline | None:
+    """The robustness contrast that opens the report: auc_known_at_base's when chosen,
+    else the first metric's; none without a fault axis or a second group."""
+    if design is None or not any(s.contrasts for s in sections):
+        return None
+    chosen = next((s for s in sections if s.metric == HEADLINE), sections[0])
+    return Headline(chosen, design.axis) if chosen.contrasts else None
 
 
 def choose_metrics(sweep: Sweep, metrics: list[str] | None) -> list[str]:

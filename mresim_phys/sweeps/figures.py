@@ -3,11 +3,13 @@
 * ``curves``: explored and known-at-base against the step, the mean of each arm with its
   95 % confidence band, clipped to [0, 1] (a run that stopped early keeps its last value to
   the longest run's end, as a run stopped by a rule keeps what it knew);
-* ``distribution``: a box plot of a metric per arm (thresholds never reached count as the
-  run's last step + 1, see ``sweeps/stats.py``);
+* ``distribution``: a box plot of a metric per arm, over the runs that have a value;
 * ``degradation``: for a fault axis (``failures`` or a ``faults.*`` path), the metric's
   mean and 95 % interval against the axis value, one line per group of the other
   ``--by`` columns (the strategies).
+
+A steps-to-threshold metric is censored and never averaged: its distribution and
+degradation figures are Kaplan-Meier figures (``sweeps/censored_figures.py``).
 
 Each figure is written as PNG (and SVG when asked) with the Agg backend.
 """
@@ -90,13 +92,12 @@ def plot_distribution(
     """A box plot of ``metric`` per arm."""
     groups = arm_groups(runs, grouping)
     fig, ax = plt.subplots(figsize=(max(5.0, 1.2 * len(groups) + 2), 4.5))
-    data = [metric_values(g, metric).to_numpy() for _, g in groups]
+    data = [metric_values(g, metric).dropna().to_numpy() for _, g in groups]
     ax.boxplot(data, showmeans=True)
     ax.set_xticks(range(1, len(groups) + 1), [grouping.label(k) for k, _ in groups])
     ax.tick_params(axis="x", labelrotation=20, labelsize=8)
     ax.set_ylabel(metric)
-    note = " (not reached = last step + 1)" if metric.startswith("steps_to_") else ""
-    ax.set_title(f"{metric} per arm{note}")
+    ax.set_title(f"{metric} per arm")
     ax.grid(alpha=0.3, axis="y")
     return save(fig, out, f"distribution_{metric}", svg)
 
@@ -117,7 +118,7 @@ def plot_degradation(
     for key, group in done.groupby(others, sort=False, dropna=False):
         means, lows, highs = [], [], []
         for level in levels:
-            values = metric_values(group[same(group[axis], level)], metric).to_numpy()
+            values = metric_values(group[same(group[axis], level)], metric).dropna().to_numpy()
             mean, low, high = band(values.reshape(-1, 1)) if len(values) else ([np.nan],) * 3
             means.append(mean[0])
             lows.append(low[0])

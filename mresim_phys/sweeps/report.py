@@ -1,9 +1,13 @@
 """Sweep report (sweeps, compare): ``report.md`` and ``report.html`` (figures embedded).
 
-One table per metric: each arm's done runs, mean, median, 95 % CI, thresholds not reached
-and failed runs (an arm whose runs all failed is there too);
-then the paired differences against the reference arm (pairs, mean and median
-difference, Wilcoxon W and p, rank-biserial effect size); then every failed or lost run
+When the sweep has a fault axis, the report opens with its answer to "is A more robust
+than B": the robustness contrast of the headline metric (``sweeps/contrast.py``). Then
+one section per metric: for a metric every run has, each arm's runs, mean, median, 95 % CI
+and failed runs, and the paired differences against the reference arm (pairs, mean and
+median difference, Wilcoxon W and p, rank-biserial effect size); for a steps-to-threshold
+metric, each arm's runs, reached and not reached (count and share), the Kaplan-Meier median
+with its 95 % CI, and log-rank tests against the reference arm; then the metric's
+contrasts. An arm whose runs all failed is there too. Then every failed or lost run
 (lost: its worker, disk or connection failed; ``mresim sweep`` runs it again) with its
 error and log. The opening paragraph counts done, failed and lost runs and the runs run
 again after a lost or failed attempt. Numbers are shown with four significant digits.
@@ -13,69 +17,24 @@ from __future__ import annotations
 
 import base64
 import html
-import math
 from dataclasses import dataclass
 from pathlib import Path
 
 import pandas as pd
 
 from mresim_phys.output.files import write_text_atomic
-from mresim_phys.sweeps.stats import ArmFigures, Grouping, Paired
+from mresim_phys.sweeps.report_tables import (
+    Section,
+    arm_table,
+    contrast_table,
+    contrast_text,
+    pair_table,
+)
+from mresim_phys.sweeps.stats import Grouping
+from mresim_phys.sweeps.survival import is_time_to_event
 from mresim_phys.sweeps.worker import DONE, FAILED, LOST
 
-ARM_HEAD = ["arm", "runs", "mean", "median", "95 % CI", "not reached", "failed"]
-PAIR_HEAD = ["arm", "pairs", "mean diff", "median diff", "Wilcoxon W", "p", "effect size r"]
 Table = list[list[str]]
-
-
-@dataclass(frozen=True)
-class Section:
-    """One metric's figures."""
-
-    metric: str
-    arms: list[ArmFigures]
-    pairs: list[Paired]
-
-
-def num(value: float) -> str:
-    """A number with four significant digits ('-' for NaN).
-
-    >>> num(1234.567), num(0.012345), num(float("nan"))
-    ('1235', '0.01235', '-')
-    """
-    return "-" if math.isnan(value) else f"{value:.4g}"
-
-
-def arm_table(section: Section) -> Table:
-    """Rows of the per-arm table."""
-    return [
-        [
-            a.arm,
-            str(a.n),
-            num(a.mean),
-            num(a.median),
-            f"[{num(a.ci_low)}, {num(a.ci_high)}]",
-            str(a.not_reached),
-            str(a.failed),
-        ]
-        for a in section.arms
-    ]
-
-
-def pair_table(section: Section) -> Table:
-    """Rows of the paired-differences table."""
-    return [
-        [
-            p.arm,
-            str(p.pairs),
-            num(p.mean_diff),
-            num(p.median_diff),
-            num(p.statistic),
-            num(p.p_value),
-            num(p.effect),
-        ]
-        for p in section.pairs
-    ]
 
 
 def failed_table(runs: pd.DataFrame) -> Table:
@@ -133,12 +92,24 @@ def html_table(head: list[str], rows: Table) -> str:
     return f"<table><thead><tr>{cells}</tr></thead><tbody>{body}</tbody></table>"
 
 
+Block = tuple[str, str | tuple[list[str], Table]]
+CENSORED = (
+    "Times to a threshold are censored when a run never reached it (at its last step): per"
+    " arm the share not reached, the Kaplan-Meier median and its 95 % interval; the log-rank"
+    " test against the reference arm. No mean is taken over them."
+)
+
+
 def blocks(
-    runs: pd.DataFrame, grouping: Grouping, sections: list[Section], title: str
-) -> list[tuple[str, str | tuple[list[str], Table]]]:
+    runs: pd.DataFrame,
+    grouping: Grouping,
+    sections: list[Section],
+    title: str,
+    headline: Headline | None = None,
+) -> list[Block]:
     """The report as (kind, content) blocks: heading, text or table."""
     failed = failed_table(runs)
-    out: list[tuple[str, str | tuple[list[str], Table]]] = [
+    out: list[Block] = [
         ("h1", f"Sweep {title}"),
         (
             "p",
@@ -148,17 +119,50 @@ def blocks(
             f" pairs share {', '.join(grouping.pair_keys)} (common random numbers).",
         ),
     ]
+    if headline is not None:
+        out += headline_blocks(headline)
     for section in sections:
-        out += [("h2", section.metric), ("table", (ARM_HEAD, arm_table(section)))]
-        if section.pairs:
-            out += [("p", f"Paired differences (arm - reference) of {section.metric}:")]
-            out += [("table", (PAIR_HEAD, pair_table(section)))]
+        out += section_blocks(section, headline.axis if headline else None)
     out += [("h2", "Failed and lost runs")]
     out += (
         [("table", (["run", "arm", "seed", "status", "error", "log"], failed))]
         if failed
         else [("p", "None.")]
     )
+    return out
+
+
+@dataclass(frozen=True)
+class Headline:
+    """The report's opening answer: the robustness contrast of one metric over the fault
+    axis."""
+
+    section: Section
+    axis: str
+
+
+def headline_blocks(headline: Headline) -> list[Block]:
+    """ "Is A more robust than B?": the contrast table of the headline metric, first."""
+    section = headline.section
+    return [
+        ("h2", f"Is A more robust than B? ({section.metric} against {headline.axis})"),
+        ("p", contrast_text(section, headline.axis)),
+        ("table", contrast_table(section)),
+    ]
+
+
+def section_blocks(section: Section, axis: str | None) -> list[Block]:
+    """One metric's heading, per-arm table, comparisons and contrasts."""
+    out: list[Block] = [("h2", section.metric)]
+    if is_time_to_event(section.metric):
+        out.append(("p", CENSORED))
+    out.append(("table", arm_table(section)))
+    if section.pairs:
+        kind = "Log-rank tests" if is_time_to_event(section.metric) else "Paired differences"
+        out += [("p", f"{kind} (arm against the reference arm) of {section.metric}:")]
+        out += [("table", pair_table(section))]
+    if section.contrasts and axis is not None:
+        out += [("p", contrast_text(section, axis)), ("table", contrast_table(section))]
     return out
 
 
@@ -169,9 +173,10 @@ def write_reports(
     sections: list[Section],
     pictures: list[Path],
     title: str,
+    headline: Headline | None = None,
 ) -> list[Path]:
     """Write report.md and report.html into ``out``; their paths."""
-    parts = blocks(runs, grouping, sections, title)
+    parts = blocks(runs, grouping, sections, title, headline)
     md: list[str] = []
     page: list[str] = []
     for kind, content in parts:

@@ -1,9 +1,10 @@
 """Sweep statistics (sweeps, compare): per-arm figures and paired differences.
 
-Arms are the groups of ``runs.parquet`` by the ``--by`` columns. Per arm and metric:
-runs, mean, median and the 95 % confidence interval of the mean (Student's t). A
-steps-to-threshold metric a run never reached counts as that run's last step + 1 (it
-needed more than it had) and the arm says how many were not reached. Paired differences
+Arms are the groups of ``runs.parquet`` by the ``--by`` columns. Per arm and metric that
+every run has (areas, fractions, counts): runs, mean, median and the 95 % confidence
+interval of the mean (Student's t). A steps-to-threshold metric is a time to an event,
+censored when never reached: it has Kaplan-Meier medians and log-rank tests instead
+(``sweeps/survival.py``) and is never averaged. Paired differences
 against the reference arm use the common random numbers: a run is paired with the
 reference run of the same base scenario, seed and other axis values, the difference is
 run minus reference, tested by the Wilcoxon signed-rank test (``scipy.stats.wilcoxon``,
@@ -23,6 +24,14 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from mresim_phys.sweeps.survival import (
+    ArmSurvival,
+    LogRank,
+    arm_survival,
+    horizon_of,
+    is_time_to_event,
+    log_rank,
+)
 from mresim_phys.sweeps.worker import DONE
 
 Key = tuple[object, ...]
@@ -38,7 +47,6 @@ class ArmFigures:
     median: float
     ci_low: float
     ci_high: float
-    not_reached: int
     failed: int = 0
 
 
@@ -56,16 +64,9 @@ class Paired:
 
 
 def metric_values(runs: pd.DataFrame, metric: str) -> pd.Series:
-    """``metric`` of the done runs; a threshold never reached counts as steps + 1."""
-    values = pd.to_numeric(runs[metric], errors="coerce").astype(float)
-    if metric.startswith("steps_to_"):
-        values = values.fillna(runs["steps"].astype(float) + 1)
+    """``metric`` of the runs as numbers (a missing value stays NaN: never imputed)."""
+    values: pd.Series = pd.to_numeric(runs[metric], errors="coerce").astype(float)
     return values
-
-
-def not_reached(runs: pd.DataFrame, metric: str) -> int:
-    """How many runs never reached a steps-to-threshold metric."""
-    return int(runs[metric].isna().sum()) if metric.startswith("steps_to_") else 0
 
 
 def mean_ci(values: np.ndarray) -> tuple[float, float]:
@@ -79,15 +80,15 @@ def mean_ci(values: np.ndarray) -> tuple[float, float]:
 
 
 def arm_figures(label: str, all_runs: pd.DataFrame, metric: str) -> ArmFigures:
-    """An arm's n, mean, median, 95 % CI, not-reached and failed counts."""
+    """An arm's n, mean, median, 95 % CI and failed count (runs without a value of
+    ``metric`` are left out of n)."""
     runs = all_runs[all_runs["status"] == DONE]
     failed = len(all_runs) - len(runs)
-    values = metric_values(runs, metric).to_numpy()
+    values = metric_values(runs, metric).dropna().to_numpy()
     low, high = mean_ci(values)
     mean = float(np.mean(values)) if len(values) else math.nan
     median = float(np.median(values)) if len(values) else math.nan
-    reached = not_reached(runs, metric)
-    return ArmFigures(label, len(values), mean, median, low, high, reached, failed)
+    return ArmFigures(label, len(values), mean, median, low, high, failed)
 
 
 def rank_biserial(diffs: np.ndarray) -> float:
@@ -123,7 +124,7 @@ def paired(
     """``runs`` against ``reference``, paired on ``keys`` (scenario, seed, other axes)."""
     left = runs[keys].assign(value=metric_values(runs, metric).to_numpy())
     right = reference[keys].assign(ref=metric_values(reference, metric).to_numpy())
-    both = left.merge(right, on=keys, how="inner")
+    both = left.merge(right, on=keys, how="inner").dropna(subset=["value", "ref"])
     diffs = (both["value"] - both["ref"]).to_numpy(dtype=float)
     if not len(diffs):
         return Paired(label, 0, math.nan, math.nan, math.nan, math.nan, math.nan)
@@ -161,22 +162,29 @@ def arm_groups(
     return [(k if isinstance(k, tuple) else (k,), g) for k, g in groups]
 
 
-def compare_metric(
-    runs: pd.DataFrame, metric: str, grouping: Grouping
-) -> tuple[list[ArmFigures], list[Paired]]:
-    """Per-arm figures and paired differences against the reference arm for ``metric``."""
-    figures = [
-        arm_figures(grouping.label(k), g, metric) for k, g in arm_groups(runs, grouping, False)
-    ]
+Arms = list[ArmFigures] | list[ArmSurvival]
+Pairs = list[Paired] | list[LogRank]
+
+
+def compare_metric(runs: pd.DataFrame, metric: str, grouping: Grouping) -> tuple[Arms, Pairs]:
+    """Per-arm figures and the comparisons with the reference arm for ``metric``: for a
+    steps-to-threshold metric Kaplan-Meier figures and log-rank tests, else means and
+    paired Wilcoxon tests."""
+    every = arm_groups(runs, grouping, False)
     groups = arm_groups(runs, grouping)
     reference = next((g for k, g in groups if same_key(k, grouping.reference)), None)
+    others = [(grouping.label(k), g) for k, g in groups if not same_key(k, grouping.reference)]
+    if is_time_to_event(metric):
+        end = horizon_of(runs)
+        survival = [arm_survival(grouping.label(k), g, metric, end) for k, g in every]
+        ranks = (
+            [] if reference is None else [log_rank(n, g, reference, metric, end) for n, g in others]
+        )
+        return survival, ranks
+    figures = [arm_figures(grouping.label(k), g, metric) for k, g in every]
     pairs = []
     if reference is not None:
-        pairs = [
-            paired(grouping.label(k), g, reference, metric, grouping.pair_keys)
-            for k, g in groups
-            if not same_key(k, grouping.reference)
-        ]
+        pairs = [paired(n, g, reference, metric, grouping.pair_keys) for n, g in others]
     return figures, pairs
 
 
