@@ -43,8 +43,9 @@ def pixel_reach(occupied: np.ndarray, seed: tuple[int, int]) -> np.ndarray:
     """The free pixels 8-connected to ``seed`` (row, col): where the original's robots go.
     CompareError when ``seed`` is off the map or a wall pixel (no robot starts there)."""
     (r, c), (rows, cols) = seed, occupied.shape
-    if not (0 <= r < rows and 0 <= c < cols) or occupied[r, c]:
-        where = "off the map" if not (0 <= r < rows and 0 <= c < cols) else "a wall pixel"
+    inside = 0 <= r < rows and 0 <= c < cols
+    if not inside or occupied[r, c]:
+        where = "a wall pixel" if inside else "off the map"
         raise CompareError(f"the base pixel (x {c}, y {r}) is {where}")
     _, labels = cv2.connectedComponents((~occupied).astype(np.uint8), connectivity=8)
     return np.asarray(labels == labels[seed])

@@ -147,12 +147,13 @@ class FrontierExploration(Plugin):
             step = random_step(view, context)
             if step is not None:
                 return step
-        frontiers = self._frontiers(view, context, self._tried_cells(view).set_aside)
+        tried = self._tried_cells(view)
+        frontiers = self._frontiers(view, context, tried.set_aside)
         reach = self.params.reach or target_reach(view.clearance)
         goal_met = len(frontiers) > 0 and self._goal_met(view)
         found = self._search(frontiers, context, reach) if not goal_met else None
-        if found is None and not goal_met and self._tried_cells(view).set_aside.any():
-            frontiers = self._frontiers(view, context, self._tried_cells(view).given_up)
+        if found is None and not goal_met and tried.set_aside.any():
+            frontiers = self._frontiers(view, context, tried.given_up)
             found = self._search(frontiers, context, reach, retry=True)
         if found is None:
             self._chasing = None

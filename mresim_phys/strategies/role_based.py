@@ -135,15 +135,14 @@ class RoleBased(FrontierExploration):
         or (checked every ``check_interval`` steps) it must head for the meeting now."""
         if self.partner is None:
             return False
-        met = self.partner in links and not self._linked
         was_linked, self._linked = self._linked, self.partner in links
         if self._linked or was_linked:  # agreements are exchanged at every step of contact
             return True
         meeting = self.meeting
         if self.state == "start":
             return True
-        if met or (meeting is None and self.state == "explore"):
-            return met
+        if meeting is None and self.state == "explore":
+            return False
         if self.state in ("carry", "home"):
             return "base" in links
         assert meeting is not None
