@@ -61,13 +61,20 @@ def simulation_overrides(args: argparse.Namespace) -> dict[str, Any]:
     return {"simulation": given} if given else {}
 
 
+def duration(summary: dict[str, Any]) -> str:
+    """`` (16.8 s)`` when the run is given in seconds too (``physical``), else ``""``."""
+    physical = summary.get("physical")
+    return f" ({physical['duration_s']:g} s)" if isinstance(physical, dict) else ""
+
+
 def summary_line(sim: Simulation, outcome: Outcome, plotted: bool) -> str:
     """The one line ``mresim run`` prints at the end."""
     scenario, summary, out_dir = sim.scenario, outcome.summary, outcome.out_dir
     reason = outcome.reason + (f" by {outcome.signal}" if outcome.signal else "")
     paired = scenario.simulation.paired
     return (
-        f"{scenario.name} seed {scenario.seed}: {summary['steps']} steps ({reason}),"
+        f"{scenario.name} seed {scenario.seed}: {summary['steps']} steps{duration(summary)}"
+        f" ({reason}),"
         f" explored {summary['final_explored']:.3f}, at base"
         f" {summary['final_known_at_base']:.3f}, {summary['wall_time_s']:.1f} s -> {out_dir}"
         + (f"; video {outcome.video}" if outcome.video else "")

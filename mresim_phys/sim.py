@@ -355,6 +355,7 @@ class Simulation:
             links=self.links.copy(),
             events=tuple(self.events_now),
             resolution=self.setup.resolution,
+            dt=self.scenario.dt,
             comm=CommSummary(
                 self.record.comm_bytes,
                 self.comm.control_links.copy() if self.network.control else None,

@@ -140,6 +140,7 @@ class Snapshot:
     links: np.ndarray  # (n, n) bool, same order as agents
     events: tuple[str, ...] = ()
     resolution: float | None = None
+    dt: float | None = None  # seconds per step (scenario dt); None: the run is in steps only
     comm: CommSummary = field(default_factory=CommSummary)
     world_version: int = 0  # World.version: bumped by every change of the truth
     latest: bool = False  # robots' maps hold each cell's latest observation (belief: latest)

@@ -288,7 +288,8 @@ def test_static_frames_are_unchanged(
     written by the code of commit 1cc4d1a, before the world layers existed; re-rendered when
     the frontier rule changed the runs themselves, when the legend gained the done,
     idle and stuck glyphs and labels that would overlap were placed apart, and when rays
-    grazing a wall corner stopped marking the free cell beyond it as wall)."""
+    grazing a wall corner stopped marking the free cell beyond it as wall; and when maps
+    of known resolution gained a scale bar)."""
     sim = Simulation.from_yaml(ROOT / "scenarios" / f"{name}.yaml", steps=steps)
     for _ in range(steps):
         sim.step()

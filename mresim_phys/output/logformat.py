@@ -139,6 +139,7 @@ SNAPSHOT_ELSEWHERE += ("movables", "rubble", "gave_way", "terrain", "prior")  # 
 SNAPSHOT_ELSEWHERE += ("hazards",)  # in truth.npz
 SNAPSHOT_ELSEWHERE += ("latest",)  # meta.json "beliefs"
 SNAPSHOT_ELSEWHERE += ("sights",)  # meta.json "sights" (output.logmeta)
+SNAPSHOT_ELSEWHERE += ("dt",)  # meta.json "dt", written when the scenario gives it
 RECOMPUTED = ("explored", "known_at_base", "alive", "lost_knowledge", "failures")  # replayed
 AGENT_RECOMPUTED = ("activity",)  # replayed by the run-health watch (knowledge.health)
 

@@ -12,6 +12,7 @@ in a replay.
 from __future__ import annotations
 
 import json
+import math
 from pathlib import Path
 from typing import Any
 
@@ -57,6 +58,12 @@ def whole(value: Any, least: int) -> bool:
     return isinstance(value, int) and not isinstance(value, bool) and value >= least
 
 
+def positive(value: Any) -> bool:
+    """Whether ``value`` is a finite number (not a bool) > 0."""
+    number = isinstance(value, int | float) and not isinstance(value, bool)
+    return number and math.isfinite(value) and value > 0
+
+
 def is_point(value: Any) -> bool:
     """Whether ``value`` is an ``[x, y]`` pair of numbers."""
     return (
@@ -76,6 +83,10 @@ def meta_problem(meta: dict[str, Any]) -> str | None:
             return f"{key} {meta[key]!r} is not a whole number >= {least}"
     if not isinstance(meta["name"], str):
         return f"name {meta['name']!r} is not a text"
+    for key in ("resolution", "dt"):  # metres per cell, seconds per step: optional
+        value = meta.get(key)
+        if value is not None and not positive(value):
+            return f"{key} {value!r} is not a positive number"
     if not isinstance(agents, list) or not agents:
         return f"agents {agents!r} is not a list of agents"
     for agent in agents:

@@ -69,6 +69,8 @@ def new_meta(
         meta["fault_columns"] = True
     if first.sights:
         meta["sights"] = [sight_meta(s) for s in first.sights]
+    if first.dt is not None:  # a run given in seconds too (scenario dt)
+        meta["dt"] = first.dt
     return meta
 
 

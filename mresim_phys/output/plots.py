@@ -14,6 +14,8 @@ plotting is skipped with a message.
 
 from __future__ import annotations
 
+import json
+import math
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -25,6 +27,7 @@ from mresim_phys.output.rundata import RunEvent, read_metrics, run_events, run_l
 
 FIGURE_SIZE = (8.0, 4.5)
 DPI = 120
+Units = tuple[float | None, float | None]  # (seconds per step, metres per cell)
 LEVELS = (0.5, 0.9, 0.95)  # the milestones of summary.json
 
 
@@ -58,12 +61,49 @@ def plot_runs(run_dirs: list[Path], out_dir: Path) -> list[Path]:
     for run_dir in run_dirs:
         df = read_metrics(run_dir)
         runs.append(PlottedRun(run_label(run_dir), df, run_events(run_dir, df)))
+    units = shared_units(run_dirs)
     make_parent(out_dir / "exploration.png")
     return [
-        draw_exploration(runs, out_dir / "exploration.png"),
-        draw_distance(runs, out_dir / "distance.png"),
-        draw_links(runs, out_dir / "links.png"),
+        draw_exploration(runs, out_dir / "exploration.png", units),
+        draw_distance(runs, out_dir / "distance.png", units),
+        draw_links(runs, out_dir / "links.png", units),
     ]
+
+
+def run_units(run_dir: Path) -> tuple[float | None, float | None]:
+    """(seconds per step, metres per cell) of a run given in seconds (summary.json's
+    ``physical`` block, ``output/physical.py``); None where it has none or it is damaged."""
+    try:
+        summary = json.loads((run_dir / "summary.json").read_text(encoding="utf-8"))
+        block = summary.get("physical", {}) if isinstance(summary, dict) else {}
+    except (OSError, ValueError):
+        return None, None
+    found = [block.get(k) if isinstance(block, dict) else None for k in ("dt_s", "resolution_m")]
+    dt, resolution = (v if positive(v) else None for v in found)
+    return dt, resolution
+
+
+def positive(value: Any) -> bool:
+    """A finite number > 0 (not a bool)."""
+    number = isinstance(value, int | float) and not isinstance(value, bool)
+    return number and math.isfinite(value) and value > 0
+
+
+def shared_units(run_dirs: list[Path]) -> tuple[float | None, float | None]:
+    """The runs' common (dt, resolution); None for one they do not all share."""
+    found = {run_units(d) for d in run_dirs}
+    dts, resolutions = {f[0] for f in found}, {f[1] for f in found}
+    return (
+        next(iter(dts)) if len(dts) == 1 else None,
+        next(iter(resolutions)) if len(resolutions) == 1 else None,
+    )
+
+
+def seconds_axis(ax: Any, dt: float | None) -> None:
+    """A second x axis on top in seconds, for runs given in seconds."""
+    if dt is not None:
+        top = ax.secondary_xaxis("top", functions=(lambda s: s * dt, lambda t: t / dt))
+        top.set_xlabel(f"seconds (dt {dt:g} s)")
 
 
 def new_axes(title: str, ylabel: str) -> tuple[Any, Any]:
@@ -121,10 +161,11 @@ def draw_levels(ax: Any) -> None:
         )
 
 
-def draw_exploration(runs: list[PlottedRun], path: Path) -> Path:
+def draw_exploration(runs: list[PlottedRun], path: Path, units: Units = (None, None)) -> Path:
     """Explored (solid) and known at base (dashed) fractions vs step, one colour per run,
     with the milestone levels and each run's failures and blackouts."""
     fig, ax = new_axes("Exploration", "fraction of reachable free space")
+    seconds_axis(ax, units[0])
     for i, run in enumerate(runs):
         colour, df = f"C{i % 10}", run.df
         ax.plot(df["step"], df["explored"], color=colour, label=f"{run.label}: explored")
@@ -141,9 +182,14 @@ def draw_exploration(runs: list[PlottedRun], path: Path) -> Path:
     return save(fig, ax, path)
 
 
-def draw_distance(runs: list[PlottedRun], path: Path) -> Path:
-    """Distance travelled by every robot vs step."""
+def draw_distance(runs: list[PlottedRun], path: Path, units: Units = (None, None)) -> Path:
+    """Distance travelled by every robot vs step (and metres, given a resolution)."""
     fig, ax = new_axes("Distance travelled", "cells")
+    seconds_axis(ax, units[0])
+    res = units[1]
+    if res is not None:
+        right = ax.secondary_yaxis("right", functions=(lambda c: c * res, lambda m: m / res))
+        right.set_ylabel(f"metres ({res:g} m per cell)")
     styles = ["-", "--", ":", "-."]
     for i, run in enumerate(runs):
         label, df = run.label, run.df
@@ -159,9 +205,10 @@ def draw_distance(runs: list[PlottedRun], path: Path) -> Path:
     return save(fig, ax, path)
 
 
-def draw_links(runs: list[PlottedRun], path: Path) -> Path:
+def draw_links(runs: list[PlottedRun], path: Path, units: Units = (None, None)) -> Path:
     """Linked pairs (solid) and alive robots (dotted) vs step, and failures and blackouts."""
     fig, ax = new_axes("Communication links", "count")
+    seconds_axis(ax, units[0])
     for i, run in enumerate(runs):
         colour, label, df = f"C{i % 10}", run.label, run.df
         draw_events(ax, run, colour)

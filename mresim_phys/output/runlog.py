@@ -247,6 +247,7 @@ class Replay:
             truth=self.truth_grid,
             agents=tuple(agents),
             resolution=self.log.meta.get("resolution"),
+            dt=self.log.meta.get("dt"),
             terrain=self.log.terrain,
             prior=self.log.prior,
             hazards=self.log.hazards,

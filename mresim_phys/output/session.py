@@ -29,6 +29,7 @@ from pathlib import Path
 from mresim_phys.metrics import StepRecord, explorable_summary
 from mresim_phys.output.files import WriteError
 from mresim_phys.output.health import run_health
+from mresim_phys.output.physical import physical_summary
 from mresim_phys.output.recorders import Recorder, SnapshotSource, make_recorders, summarise
 from mresim_phys.output.robustness import check_paired, run_robustness, write_robustness
 from mresim_phys.output.rundir import StagedRun
@@ -137,6 +138,7 @@ def record_run(
     summary = summarise(sim.scenario, sim.record, sim.milestones, elapsed, reason, sim.comm_totals)
     summary |= run_robustness(sim) | run_health(sim)
     summary |= explorable_summary(sim.coverage, sim.record, sim.milestones)
+    summary |= physical_summary(sim)  # seconds and metres, when the scenario gives dt
     interrupted = reason == INTERRUPTED
     if interrupted:
         summary["signal"] = stop.name

@@ -24,6 +24,7 @@ from mresim_phys.render.labels import Label, place_labels
 from mresim_phys.render.layers import LayerSpec
 from mresim_phys.render.legend import legend_band
 from mresim_phys.render.legend import world_legend as world_legend
+from mresim_phys.render.scale_bar import draw_scale_bar
 from mresim_phys.render.style import AA, BGR, FONT, ONE, SHIFT, Style
 
 if TYPE_CHECKING:
@@ -90,9 +91,16 @@ class Overlay:
                     draw_ring(image, at, size, style.partial)
                 draw_text(image, *next(labels), colours[i], style)
         if "header" in on:
-            draw_header(image, snap, style)
+            draw_header(image, snap, style, snap.dt)
+        legend = 0
         if "legend" in on:
-            self._paste_legend(image, tuple(r.name for r in snap.robots), world_legend(snap, on))
+            legend = self._paste_legend(image, tuple(r.name for r in snap.robots),
+                                        world_legend(snap, on))  # fmt: skip
+        if "scale_bar" in on and snap.resolution is not None:
+            rows, cols = snap.truth.shape
+            height = min(round(rows * self.scale), image.shape[0] - legend)
+            draw_scale_bar(image, (round(cols * self.scale), height), self.scale,
+                           snap.resolution, style)  # fmt: skip
 
     def _labels(
         self,
@@ -212,13 +220,15 @@ class Overlay:
 
     def _paste_legend(
         self, image: np.ndarray, names: tuple[str, ...], extras: tuple[str, ...]
-    ) -> None:
+    ) -> int:
+        """The legend band over the bottom of ``image``; its height in pixels."""
         key = (names, extras)
         if self._legend is None or self._legend[0] != key:
             band = legend_band(image.shape[1], names, self.layers, self.style, extras)
             self._legend = (key, band)
         band = self._legend[1][-image.shape[0] :]
         image[image.shape[0] - band.shape[0] :] = band
+        return int(band.shape[0])
 
 
 def robot_triangles(
@@ -309,10 +319,12 @@ def draw_text(
     cv2.putText(image, text, org, FONT, style.font_scale, colour, 1, AA)
 
 
-def draw_header(image: np.ndarray, snap: Snapshot, style: Style) -> None:
-    """Step, explored %, known at base % and alive robots, in a band at the top; below it,
-    for ``BANNER_STEPS`` steps after a failure, a red line naming it."""
-    text = f"step {snap.step}   explored {snap.explored:.1%}   at base {snap.known_at_base:.1%}"
+def draw_header(image: np.ndarray, snap: Snapshot, style: Style, dt: float | None = None) -> None:
+    """Step (and its time, given ``dt`` seconds per step), explored %, known at base % and
+    alive robots, in a band at the top; below it, for ``BANNER_STEPS`` steps after a
+    failure, a red line naming it."""
+    when = f"step {snap.step}" + (f" ({snap.step * dt:.1f} s)" if dt is not None else "")
+    text = f"{when}   explored {snap.explored:.1%}   at base {snap.known_at_base:.1%}"
     text += f"   robots {snap.alive}/{len(snap.robots)}"
     (_, th), base = cv2.getTextSize(text, FONT, style.font_scale, 1)
     cv2.rectangle(image, (0, 0), (image.shape[1], th + base + 5), style.header_bg, -1)

@@ -32,6 +32,7 @@ from mresim_phys.scenario.schema import (
     Scenario,
     refresh_event_union,
 )
+from mresim_phys.scenario.units import to_cells
 from mresim_phys.strategies import STRATEGIES
 from mresim_phys.world.events import EVENTS, CollapseParams
 from mresim_phys.world.shapes import MaskRegion, Region
@@ -48,15 +49,26 @@ def load_scenario(path: str | Path, **overrides: Any) -> Scenario:
     """
     source = Path(path)
     own = read_yaml_mapping(source)
+    folder = source.resolve().parent
     overriding = any(value is not None for value in overrides.values())
     if overriding:  # otherwise the validation below is of the file's own values
-        check_own_values(own, str(source))
+        check_own_values(own_in_cells(own, str(source), folder), str(source))
     data = apply_overrides(own, overrides, str(source))
+    data = to_cells(data, str(source), folder)  # units: m -> cells (scenario/units.py)
     scenario = validate_scenario(data, str(source))
     if not overriding:
         check_event_steps(scenario, str(source))
-    scenario = resolve_map_path(scenario, source.resolve().parent, str(source))
-    return resolve_mask_paths(scenario, source.resolve().parent)
+    scenario = resolve_map_path(scenario, folder, str(source))
+    return resolve_mask_paths(scenario, folder)
+
+
+def own_in_cells(own: dict[str, Any], source: str, folder: Path) -> dict[str, Any]:
+    """The file's own values in cells, for :func:`check_own_values`; as they are when they
+    cannot be converted alone (an override gives the ``dt`` that metres need)."""
+    try:
+        return to_cells(own, source, folder)
+    except ScenarioError:
+        return {k: v for k, v in own.items() if k != "units"}
 
 
 def check_own_values(data: dict[str, Any], source: str) -> None:

@@ -328,6 +328,19 @@ class Scenario(Strict):
     name: Name = Field(description=f"Names the output folder: {NAME_RULE}.")
     seed: int = Field(0, ge=0, le=2**63 - 1, description="Seeds every random stream of the run.")
     steps: int = Field(3000, ge=1, description="Hard cap on the number of steps.")
+    units: Literal["cells", "m"] = Field(
+        "cells",
+        description="cells: positions, lengths and speeds in cells and cells per step;"
+        " m: in metres and metres per second, positions in the map frame (origin applied,"
+        " y up), headings counter-clockwise (needs dt and a map resolution).",
+    )
+    dt: float | None = Field(
+        None,
+        gt=0,
+        le=3600,
+        description="Seconds per step: results are given in seconds (and metres, with a"
+        " map resolution) beside steps (and cells). Needed by units: m.",
+    )
     stop: StopSpec = Field(default_factory=StopSpec, description="Early stop rules.")
     map: MapSpec = Field(description="The ground-truth map.")
     base_station: BaseStationSpec = Field(description="Where the base station stands.")
