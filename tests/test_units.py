@@ -18,9 +18,9 @@ from mresim_phys.cli import main
 from mresim_phys.output.runlog import RunLog
 from mresim_phys.render.scale_bar import draw_scale_bar, round_length
 from mresim_phys.render.style import Style
+from mresim_phys.scenario.frame import MapFrame
 from mresim_phys.scenario.load import load_scenario
 from mresim_phys.scenario.readers import load_map
-from mresim_phys.scenario.units import MapFrame
 
 REPO = Path(__file__).resolve().parent.parent
 WAREHOUSE = REPO / "maps" / "warehouse.yaml"  # 300 x 200 cells of 0.05 m, origin (-7.5, -5)

@@ -14,7 +14,7 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING, Any
 
-from mresim_phys.scenario.units import MapFrame
+from mresim_phys.scenario.frame import MapFrame
 
 if TYPE_CHECKING:
     from mresim_phys.sim import Simulation
