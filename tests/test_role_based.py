@@ -20,6 +20,7 @@ from mresim_phys.strategies.role_based import Rendezvous, improved_point
 from mresim_phys.types import FREE, OCCUPIED
 
 MakeScenario = Callable[..., Path]
+REPO = Path(__file__).resolve().parent.parent
 PAIR = [
     {"name": "R", "start": [10, 30], "role": "relay", "parent": "base"},
     {"name": "E", "start": [12, 34], "parent": "R"},
@@ -139,3 +140,23 @@ def test_an_improved_pair_still_reaches_its_goal(scenario_file: MakeScenario) ->
     sim, states, _ = run(pair_scenario(scenario_file, team=improved))
     assert "carry" in [relay for _, relay, _ in states]
     assert sim.record.known_at_base >= 0.95
+
+
+def test_partners_that_meet_late_never_set_out_for_the_old_meeting() -> None:
+    """Scenario 23, seed 10: the second pair met after their meeting's time for one step at
+    a time, kept the old meeting, and shuttled between its point and the base from step
+    ~200 until the run stalled at 78.9 % explored (step 688). Now a meeting whose time has
+    passed binds neither partner once they meet, and the base gets its 95 %."""
+    sim = Simulation.from_yaml(REPO / "scenarios" / "23_rooms_role_based.yaml", seed=10)
+    overdue_trips = 0
+    while not sim.finished():
+        sim.step()
+        for robot in sim.robots:
+            meeting = getattr(robot.strategy, "meeting", None)
+            state = getattr(robot.strategy, "state", "")
+            params = robot.strategy.params  # type: ignore[attr-defined]
+            patience = params.wait + (params.backup_wait if robot.role == "relay" else 0)
+            late = meeting is not None and sim.t > meeting.step + patience + 1
+            overdue_trips += state == "to_rv" and late
+    assert sim.stop_reason() == "known_at_base" and sim.t < 400
+    assert overdue_trips == 0
