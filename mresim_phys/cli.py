@@ -36,6 +36,7 @@ from mresim_phys.run_args import (
     comma_separated,
     draw_plots,
     non_negative_int,
+    positive_float,
     positive_int,
     render_overrides,
     simulation_overrides,
@@ -196,17 +197,6 @@ def add_render_flags(parser: argparse.ArgumentParser) -> None:
         metavar="STEPS",
         help="write PNG frames at these steps, e.g. 100,500",
     )
-
-
-def positive_float(text: str) -> float:
-    """argparse type: a number > 0."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text}")
-    return value
 
 
 def step_list(text: str) -> list[int]:

@@ -140,6 +140,9 @@ def test_compare_by_one_axis_and_its_errors(
     text = (tmp_path / "c" / "report.md").read_text(encoding="utf-8")
     assert "reference arm strategy=random_walk" in text and "pairs share scenario, seed," in text
     assert set(report_rows(text, "auc_explored")) == {"strategy=frontier", "strategy=random_walk"}
+    with pytest.raises(SystemExit) as bad:  # argparse: one line naming the flag, status 2
+        main(["compare", str(robustness), "--detect", "0"])
+    assert bad.value.code == 2 and "expected a number > 0" in capsys.readouterr().err
     assert main(["compare", str(robustness), "--by", "stratgy"]) == 2
     assert "did you mean 'strategy'" in capsys.readouterr().err.lower()
     assert main(["compare", str(tmp_path)]) == 2

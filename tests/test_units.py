@@ -194,3 +194,13 @@ def test_the_scale_bar_is_as_long_as_its_label_says() -> None:
     bar_row = image[200 - 8 - 1]
     black = np.flatnonzero((bar_row == 0).all(axis=1))
     assert black.max() - black.min() == round(2.0 / resolution * px_per_cell)
+
+
+def test_validate_scenario_turns_a_mapping_in_metres_into_cells() -> None:
+    """The public entry for scenarios given as data converts too: metres never pass for
+    cells because a scenario came as a mapping rather than a file."""
+    from mresim_phys.scenario.load import validate_scenario
+
+    scenario = validate_scenario(in_metres(), "<data>")
+    assert scenario.robots[0].start == (245.0, 60.0)
+    assert scenario.units == "cells" and scenario.team.speed == 3.0

@@ -54,8 +54,7 @@ def load_scenario(path: str | Path, **overrides: Any) -> Scenario:
     if overriding:  # otherwise the validation below is of the file's own values
         check_own_values(own_in_cells(own, str(source), folder), str(source))
     data = apply_overrides(own, overrides, str(source))
-    data = to_cells(data, str(source), folder)  # units: m -> cells (scenario/units.py)
-    scenario = validate_scenario(data, str(source))
+    scenario = validate_scenario(data, str(source), folder)
     if not overriding:
         check_event_steps(scenario, str(source))
     scenario = resolve_map_path(scenario, folder, str(source))
@@ -104,9 +103,14 @@ def check_event_steps(scenario: Scenario, source: str) -> None:
         )
 
 
-def validate_scenario(data: dict[str, Any], source: str = "<scenario>") -> Scenario:
-    """Schema-validate ``data`` and each plugin's params; errors name ``source``."""
+def validate_scenario(
+    data: dict[str, Any], source: str = "<scenario>", folder: Path | None = None
+) -> Scenario:
+    """Schema-validate ``data`` and each plugin's params; errors name ``source``. A scenario
+    in metres (``units: m``) is turned into cells first, its map read from ``folder``
+    (default the working folder) when its path is relative (``scenario/units.py``)."""
     refresh_event_union()
+    data = to_cells(data, source, folder if folder is not None else Path.cwd())
     try:
         scenario = Scenario.model_validate(data)
     except ValidationError as exc:

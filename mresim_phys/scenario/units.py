@@ -97,6 +97,11 @@ def event(data: Any, conv: Converter) -> Any:
     return out
 
 
+def present(out: dict[str, Any], given: dict[str, Any]) -> dict[str, Any]:
+    """``out`` without the keys a conversion added as None (the scenario left them out)."""
+    return {k: v for k, v in out.items() if v is not None or k in given}
+
+
 def listed(value: Any, convert: Callable[[Any, int], Any]) -> Any:
     """Each entry of a list converted (``convert(entry, index)``)."""
     return [convert(v, i) for i, v in enumerate(value)] if isinstance(value, list) else value
@@ -112,7 +117,7 @@ def faults(data: Any, conv: Converter) -> Any:
     battery = mapping(out.get("battery"))
     if battery is not None and "per_cell" in battery:
         out["battery"] = {**battery, "per_cell": conv.per_length(battery["per_cell"])}
-    return {k: v for k, v in out.items() if v is not None or k in entry}
+    return present(out, entry)
 
 
 def region_of(data: Any, conv: Converter) -> Any:
@@ -144,7 +149,7 @@ def world(data: dict[str, Any], conv: Converter) -> dict[str, Any]:
             "regions": listed(terrain.get("regions"), lambda r, _: conv.region(r)),
         }
     out["faults"] = faults(out.get("faults"), conv)
-    return {k: v for k, v in out.items() if v is not None or k in data}
+    return present(out, data)
 
 
 def agents(data: dict[str, Any], conv: Converter) -> dict[str, Any]:
@@ -157,9 +162,7 @@ def agents(data: dict[str, Any], conv: Converter) -> dict[str, Any]:
         base = {**base, "position": conv.point(base.get("position"))}
         if "comm_range" in base:
             base["comm_range"] = conv.length(base["comm_range"])
-        out["base_station"] = {
-            k: v for k, v in base.items() if v is not None or k in data["base_station"]
-        }
+        out["base_station"] = present(base, data["base_station"])
     comm = mapping(out.get("communication"))
     control = mapping(comm.get("control")) if comm is not None else None
     if comm is not None and control is not None and "range" in control:
@@ -172,7 +175,7 @@ def agents(data: dict[str, Any], conv: Converter) -> dict[str, Any]:
     if simulation is not None and jitter is not None and "position" in jitter:
         moved = {**jitter, "position": conv.length(jitter["position"])}
         out["simulation"] = {**simulation, "start_jitter": moved}
-    return {k: v for k, v in out.items() if v is not None or k in data}
+    return present(out, data)
 
 
 def to_cells(data: dict[str, Any], source: str, folder: Path) -> dict[str, Any]:

@@ -21,18 +21,16 @@ from typing import Any
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
+from scipy import stats
 
 from mresim_phys.sweeps.contrast import Contrast, higher_is_better
-from mresim_phys.sweeps.figures import same, save
+from mresim_phys.sweeps.figures import fault_lines, finish_degradation, same, save
 from mresim_phys.sweeps.stats import Grouping, arm_groups
 from mresim_phys.sweeps.survival import arm_survival, censored, event_times, horizon_of
-from mresim_phys.sweeps.worker import DONE
 
 
 def km_steps(data: Any) -> tuple[np.ndarray, np.ndarray]:
     """The Kaplan-Meier curve as step-plot points, from step 0 at 1."""
-    from scipy import stats
-
     if data.num_censored() == len(data):
         return np.array([0.0]), np.array([1.0])
     curve = stats.ecdf(data).sf
@@ -68,13 +66,10 @@ def plot_km_degradation(
     runs: pd.DataFrame, metric: str, axis: str, grouping: Grouping, out: Path, svg: bool
 ) -> list[Path]:
     """The Kaplan-Meier median of ``metric`` and its interval against the fault axis."""
-    others = [c for c in grouping.by if c != axis] or ["scenario"]
-    done = runs[runs["status"] == DONE]
-    levels = list(dict.fromkeys(done[axis].tolist()))
+    levels, lines = fault_lines(runs, axis, grouping)
     end = horizon_of(runs)
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    for key, group in done.groupby(others, sort=False, dropna=False):
-        label = ", ".join(str(k) for k in (key if isinstance(key, tuple) else (key,)))
+    for label, group in lines:
         points = [arm_survival(label, group[same(group[axis], v)], metric, end) for v in levels]
         top = max((p.longest for p in points if p.n), default=1.0)
         medians = [min(p.median, top) for p in points]
@@ -93,12 +88,10 @@ def plot_km_degradation(
             )
             if math.isinf(p.median):
                 ax.plot(i, top, "^", color=line.get_color(), markersize=9)
-    ax.set_xticks(range(len(levels)), ["none" if v != v or v is None else str(v) for v in levels])
-    ax.set_xlabel(axis)
-    ax.set_ylabel(f"{metric} (Kaplan-Meier median, 95 % CI)")
-    ax.set_title(f"{metric} against {axis} (^ median not reached)")
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
+    ylabel = f"{metric} (Kaplan-Meier median, 95 % CI)"
+    finish_degradation(
+        fig, ax, levels, axis, ylabel, f"{metric} against {axis} (^ median not reached)"
+    )
     return save(fig, out, f"degradation_{metric}", svg)
 
 

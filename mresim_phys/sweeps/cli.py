@@ -12,7 +12,7 @@ import importlib.util
 from pathlib import Path
 
 from mresim_phys.errors import MresimError
-from mresim_phys.run_args import comma_separated, positive_int, whole_number
+from mresim_phys.run_args import comma_separated, positive_float, positive_int, whole_number
 from mresim_phys.sweeps.study import Study  # no pandas, pyarrow or matplotlib behind it
 
 NEEDED = ("pandas", "pyarrow", "matplotlib", "scipy", "statsmodels")
@@ -91,7 +91,7 @@ def add_compare_flags(parser: argparse.ArgumentParser) -> None:
     parser.add_argument("--reference", help="the reference arm: its label or one of its values")
     parser.add_argument(
         "--detect",
-        type=float,
+        type=positive_float,
         metavar="DIFF",
         help="robustness contrast: report the seeds needed to detect a contrast of DIFF"
         " (in the metric's units) at 80 %% power (default: the observed contrast)",
@@ -183,11 +183,12 @@ def sweep_and_report(study: Study, path: Path, text: str, args: argparse.Namespa
 def compare_command(args: argparse.Namespace) -> int:
     """``mresim compare``: figures and report of a sweep folder."""
     require_extra()
-    from mresim_phys.sweeps.compare import run_compare
+    from mresim_phys.sweeps.compare import compare_sweep
 
-    for path in run_compare(
+    paths, _ = compare_sweep(
         args.sweep_dir, args.by, args.metric, args.out, args.reference, args.svg, args.detect
-    ):
+    )
+    for path in paths:
         print(path)
     return 0
 

@@ -96,19 +96,6 @@ def pick_reference(keys: list[Any], probe: Grouping, text: str | None, info: dic
     return keys[0]
 
 
-def run_compare(
-    folder: Path,
-    by: list[str] | None = None,
-    metrics: list[str] | None = None,
-    out: Path | None = None,
-    reference: str | None = None,
-    svg: bool = False,
-    detect: float | None = None,
-) -> list[Path]:
-    """Figures and report of the sweep in ``folder``; the files written."""
-    return compare_sweep(folder, by, metrics, out, reference, svg, detect)[0]
-
-
 def compare_sweep(
     folder: Path,
     by: list[str] | None = None,
@@ -118,7 +105,8 @@ def compare_sweep(
     svg: bool = False,
     detect: float | None = None,
 ) -> tuple[list[Path], Headline | None]:
-    """:func:`run_compare`'s files and the report's headline robustness contrast."""
+    """Figures and report of the sweep in ``folder``: the files written, and the report's
+    headline robustness contrast (None without a fault axis and two strategies)."""
     sweep = read_sweep(folder)
     out = Path(out) if out is not None else sweep.folder / "compare"
     grouping = grouping_for(sweep, by, reference)

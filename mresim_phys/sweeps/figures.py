@@ -107,15 +107,40 @@ def fault_axis(axes: list[str]) -> str | None:
     return next((a for a in axes if a == "failures" or a.startswith("faults.")), None)
 
 
+def fault_lines(
+    runs: pd.DataFrame, axis: str, grouping: Grouping
+) -> tuple[list[Any], list[tuple[str, pd.DataFrame]]]:
+    """The fault axis's levels (sweep order) and the done runs of each line of a
+    degradation figure: one per group of the other ``by`` columns, with its label."""
+    others = [c for c in grouping.by if c != axis] or ["scenario"]
+    done = runs[runs["status"] == "done"]
+    levels = list(dict.fromkeys(done[axis].tolist()))
+    lines = [
+        (", ".join(str(k) for k in (key if isinstance(key, tuple) else (key,))), group)
+        for key, group in done.groupby(others, sort=False, dropna=False)
+    ]
+    return levels, lines
+
+
+def finish_degradation(
+    fig: Any, ax: Any, levels: list[Any], axis: str, ylabel: str, title: str
+) -> None:
+    """Ticks, labels, legend and grid of a degradation figure."""
+    ax.set_xticks(range(len(levels)), ["none" if v != v or v is None else str(v) for v in levels])
+    ax.set_xlabel(axis)
+    ax.set_ylabel(ylabel)
+    ax.set_title(title)
+    ax.legend(fontsize=8)
+    ax.grid(alpha=0.3)
+
+
 def plot_degradation(
     runs: pd.DataFrame, metric: str, axis: str, grouping: Grouping, out: Path, svg: bool
 ) -> list[Path]:
     """``metric`` against the fault axis, one line per group of the other ``by`` columns."""
-    others = [c for c in grouping.by if c != axis] or ["scenario"]
-    done = runs[runs["status"] == "done"]
-    levels = list(dict.fromkeys(done[axis].tolist()))
+    levels, lines = fault_lines(runs, axis, grouping)
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    for key, group in done.groupby(others, sort=False, dropna=False):
+    for label, group in lines:
         means, lows, highs = [], [], []
         for level in levels:
             values = metric_values(group[same(group[axis], level)], metric).dropna().to_numpy()
@@ -123,15 +148,11 @@ def plot_degradation(
             means.append(mean[0])
             lows.append(low[0])
             highs.append(high[0])
-        label = ", ".join(str(k) for k in (key if isinstance(key, tuple) else (key,)))
         (line,) = ax.plot(range(len(levels)), means, marker="o", label=label)
         ax.fill_between(range(len(levels)), lows, highs, color=line.get_color(), alpha=0.2)
-    ax.set_xticks(range(len(levels)), ["none" if v != v or v is None else str(v) for v in levels])
-    ax.set_xlabel(axis)
-    ax.set_ylabel(f"{metric} (mean, 95 % CI)")
-    ax.set_title(f"{metric} against {axis}")
-    ax.legend(fontsize=8)
-    ax.grid(alpha=0.3)
+    finish_degradation(
+        fig, ax, levels, axis, f"{metric} (mean, 95 % CI)", f"{metric} against {axis}"
+    )
     return save(fig, out, f"degradation_{metric}", svg)
 
 
