@@ -77,7 +77,14 @@ def robot_steps(
         given_up = given_up_of(r.strategy)
         out.append(
             RobotStep(
-                r.name, r.state, *moving, *place, reason=reason, safe=r.safe, given_up=given_up
+                r.name,
+                r.state,
+                *moving,
+                *place,
+                reason=reason,
+                safe=r.safe,
+                given_up=given_up,
+                goal=r.goal,
             )
         )
     return out

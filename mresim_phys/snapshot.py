@@ -64,7 +64,7 @@ class AgentSnapshot:
     broken: tuple[str, ...] = ()  # parts that do not work now (drive, radio, sensor, degraded)
     presumed_lost: tuple[str, ...] = ()  # teammates it has not heard of for too long
     battery: float | None = None  # battery level left, a fraction of capacity; None: none
-    activity: str = ""  # working / idle / stuck this step ("": not assessed; knowledge.health)
+    activity: str = ""  # working / waiting / idle / stuck ("": not assessed; knowledge.health)
     state_reason: str | None = None  # why ``state`` changed this step (None: it did not)
     given_up: BoolGrid | None = None  # frontier cells its strategy tried in vain, gave up
 

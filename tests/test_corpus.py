@@ -135,33 +135,34 @@ def test_rows_and_report_give_medians_and_robot_states(tmp_path: Path) -> None:
     assert cells[-1] == "active 3, error 3"
 
 
-def test_relays_waiting_are_not_idle_explorers() -> None:
-    job = corpus.Job(MAPS[0], "role_based", 3, 1, 40)
+def test_every_robot_counts_relays_too() -> None:
     health = {
-        "R1": {"idle_with_frontier": 90},  # the relay, waiting for its explorer
+        "R1": {"idle_with_frontier": 90},  # a relay that idled (waiting is not counted)
         "R2": {"idle_with_frontier": 12},
         "R3": {"idle_with_frontier": 3},
     }
-    fields = corpus.idle_fields({"health": {"robots": health}}, job)
-    assert fields == {"explorer_idle_with_frontier": 12, "idlest_explorer": "R2"}
-    frontier = corpus.Job(MAPS[0], "frontier", 3, 1, 40)
-    fields = corpus.idle_fields({"health": {"robots": health}}, frontier)
-    assert fields == {"explorer_idle_with_frontier": 90, "idlest_explorer": "R1"}
+    fields = corpus.idle_fields({"health": {"robots": health}})
+    assert fields == {"robot_idle_with_frontier": 90, "idlest_robot": "R1"}
+    assert corpus.idle_fields({}) == {"robot_idle_with_frontier": 0, "idlest_robot": ""}
+    none = {"health": {"robots": {"R1": {"idle_with_frontier": 0}}}}
+    assert corpus.idle_fields(none) == {"robot_idle_with_frontier": 0, "idlest_robot": ""}
 
 
 def test_violations_name_what_breaks_the_invariant() -> None:
     bound = corpus_report.IDLE_BOUND
     row = {"error": "", "final_explored": 0.97, "steps": 300, "strategy": "frontier",
-           "explorer_idle_with_frontier": bound, "idlest_explorer": "R2"}  # fmt: skip
+           "robot_idle_with_frontier": bound, "idlest_robot": "R2"}  # fmt: skip
     assert corpus_report.violations(row) == []
-    row |= {"final_explored": 0.9, "explorer_idle_with_frontier": bound + 1}
+    row |= {"final_explored": 0.9, "robot_idle_with_frontier": bound + 1}
     assert corpus_report.violations(row) == [
         "explored 0.9 after 300 steps",
         f"R2 idled {bound + 1} steps with reachable frontier cells",
     ]
     assert corpus_report.violations({**row, "error": "ValueError: x"}) == ["failed: ValueError: x"]
-    meeting = {**row, "final_explored": 0.97, "strategy": "role_based"}
-    assert corpus_report.violations(meeting) == []  # it may wait out a meeting
+    relay = {**row, "final_explored": 0.97, "strategy": "role_based"}
+    assert corpus_report.violations(relay) == [
+        f"R2 idled {bound + 1} steps with reachable frontier cells"
+    ]
 
 
 def test_a_run_that_fails_breaks_the_invariant_with_its_error(tmp_path: Path) -> None:

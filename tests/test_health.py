@@ -16,7 +16,7 @@ from mresim_phys import Simulation
 from mresim_phys.cli import main
 from mresim_phys.knowledge import health
 from mresim_phys.knowledge.frontier_reach import frontier_check
-from mresim_phys.knowledge.health import CHECK_EVERY, HealthWatch, RobotStep
+from mresim_phys.knowledge.health import CHECK_EVERY, WARN_AFTER, HealthWatch, RobotStep
 from mresim_phys.output.health import replayed_health, run_health
 from mresim_phys.output.runlog import RunLog
 from mresim_phys.strategies import Decision
@@ -338,3 +338,37 @@ def test_given_up_cells_travel_through_the_run_log(
     for got, expected in zip(replayed[4:], live[4:], strict=True):
         assert got is not None and expected is not None
         assert np.array_equal(got, expected) and int(got.sum()) == 100
+
+
+def test_a_robot_its_strategy_holds_still_waits_and_is_never_warned_about() -> None:
+    """A relay at its meeting point (its decision's goal is where it stands) waits: that is
+    neither idle nor stuck, however much frontier its map holds; once done it idles."""
+    belief = known_room()
+    belief[5:10, 30:35] = UNKNOWN  # reachable frontier in its map all along
+    watch = HealthWatch(["A"])
+    held = {"belief": belief, "goal": (10.5, 10.5)}
+    for n in range(WARN_AFTER + 5):
+        watch.update(n, [step(**held)])
+    assert watch.view("A")[0] == "waiting"
+    report = watch.report([step(**held)])
+    record = report.summary()["robots"]["A"]
+    assert record["waiting_steps"] == WARN_AFTER + 4 and record["idle_steps"] == 0
+    assert record["idle_with_frontier"] == 0 and report.warnings == []
+    assert report.totals()["waiting_robot_steps"] == WARN_AFTER + 4
+    watch.update(WARN_AFTER + 5, [step("done", reason="mission complete", **held)])
+    assert watch.view("A")[0] == "idle"
+    watch.update(WARN_AFTER + 6, [step(belief=belief, goal=(20.5, 10.5))])
+    assert watch.view("A")[0] == "idle"  # a goal elsewhere and no path: no plan, idle
+
+
+def test_relays_that_wait_for_their_partners_raise_no_warning() -> None:
+    """The shipped leader-follower run: its relays hold at the edge of their parents'
+    range for hundreds of steps while their maps hold frontier; before relays were told
+    apart, both warned (``robot R1 idled 178 steps``)."""
+    sim = Simulation.from_yaml(
+        Path(__file__).parent.parent / "scenarios" / "22_rooms_leader_follower.yaml"
+    )
+    sim.run()
+    record = run_health(sim)["health"]
+    assert record["warnings"] == [] and record["robots_idle_with_frontier"] == 0
+    assert record["waiting_robot_steps"] >= 200

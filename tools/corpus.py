@@ -215,7 +215,7 @@ def run_job(job: Job, out: Path) -> dict[str, Any]:
         failed = {**job_fields(job), "error": f"{type(exc).__name__}: {exc}"[:300]}
         return {**failed, "invariant": "; ".join(violations(failed))}
     summary = json.loads((folder / "summary.json").read_text(encoding="utf-8"))
-    row = {**job_fields(job), **summary_fields(summary), **idle_fields(summary, job)}
+    row = {**job_fields(job), **summary_fields(summary), **idle_fields(summary)}
     return {**row, "invariant": "; ".join(violations(row)), "cpu_s": cpu_since(started)}
 
 
@@ -224,15 +224,16 @@ def cpu_since(started: float) -> float:
     return round(time.process_time() - started, 1)
 
 
-def idle_fields(summary: dict[str, Any], job: Job) -> dict[str, Any]:
-    """The explorers' idle steps with reachable frontier cells (the worst one and who);
-    relays are left out: waiting at the base or a meeting point for their explorer is
-    their job (``strategies/role_based.py`` bounds it by its meeting times)."""
-    relays = {r["name"] for r in robots(job) if r.get("role") == "relay"}
+def idle_fields(summary: dict[str, Any]) -> dict[str, Any]:
+    """The robots' idle steps with reachable frontier cells (the worst one and who). A
+    relay waiting at a meeting point for its explorer is ``waiting``, not idle
+    (``knowledge/health.py``), so every robot counts, relays too."""
     health = summary.get("health", {}).get("robots", {})
-    idle = {n: int(h["idle_with_frontier"]) for n, h in health.items() if n not in relays}
+    idle = {n: int(h["idle_with_frontier"]) for n, h in health.items()}
     worst = max(idle, key=lambda n: idle[n], default="")
-    return {"explorer_idle_with_frontier": idle.get(worst, 0), "idlest_explorer": worst}
+    if not idle.get(worst):
+        return {"robot_idle_with_frontier": 0, "idlest_robot": ""}
+    return {"robot_idle_with_frontier": idle[worst], "idlest_robot": worst}
 
 
 def job_fields(job: Job) -> dict[str, Any]:

@@ -5,9 +5,11 @@ a snapshot holds of it: state, odometer, path, drive, pose, map) and keeps, per 
 
 * its *activity* in the step (after step 0, for a robot alive with a working drive):
   ``working`` (it moved at least :data:`MOVE_EPS` cells), else ``stuck`` (it had a path
-  to follow, or its last move bumped: state ``error``), else ``idle`` (parked, done, no
-  path); ``""`` when not assessed (step 0, a failed robot, a broken drive);
-* ``idle_steps``, ``stuck_steps`` and the longest idle stretch;
+  to follow, or its last move bumped: state ``error``), else ``waiting`` (``active`` and
+  holding still by its strategy's choice: its goal is where it stands, as a relay at a
+  meeting point), else ``idle`` (parked, done, no path); ``""`` when not assessed (step 0,
+  a failed robot, a broken drive);
+* ``idle_steps``, ``stuck_steps``, ``waiting_steps`` and the longest idle stretch;
 * every change of its reported state (``active``, ``done``, ``error``, ``failed``) with
   the step and the reason the run gave (:class:`StateChange`; the live reasons come from
   ``health_phase.change_reason``, a replay reads them from the run log); when it became
@@ -37,8 +39,13 @@ MOVE_EPS = 0.05  # cells: a robot that moved less in a step did not move
 CHECK_EVERY = 20  # steps between frontier checks of a robot that stays idle or done
 WARN_AFTER = 20  # idle steps with reachable frontier cells that make a warning (in a run)
 NOT_LOGGED = "not logged"  # a change without a reason (a log written before reasons were)
-WORKING, IDLE, STUCK = "working", "idle", "stuck"
-TOTALS = ("robots_idle_with_frontier", "idle_robot_steps", "stuck_robot_steps")  # sweep columns
+WORKING, IDLE, STUCK, WAITING = "working", "idle", "stuck", "waiting"
+TOTALS = (  # sweep columns
+    "robots_idle_with_frontier",
+    "idle_robot_steps",
+    "stuck_robot_steps",
+    "waiting_robot_steps",
+)
 
 
 @dataclass(frozen=True)
@@ -56,6 +63,14 @@ class RobotStep:
     reason: str | None = None  # why its state changed this step (None: unknown)
     safe: BoolGrid | None = None  # its safe space: where it (or a teammate it heard) has been
     given_up: BoolGrid | None = None  # frontier cells its strategy tried in vain and gave up
+    goal: tuple[float, float] | None = None  # where its latest decision sends it
+
+    @property
+    def holding(self) -> bool:
+        """Whether its strategy holds it still on purpose: its goal is where it stands."""
+        goal = self.goal
+        x, y = self.position
+        return goal is not None and (goal[0] - x) ** 2 + (goal[1] - y) ** 2 < MOVE_EPS**2
 
 
 class AgentLike(Protocol):
@@ -83,6 +98,8 @@ class AgentLike(Protocol):
     def safe(self) -> BoolGrid: ...
     @property
     def given_up(self) -> BoolGrid | None: ...
+    @property
+    def goal(self) -> tuple[float, float] | None: ...
 
 
 def step_of(agent: AgentLike) -> RobotStep:
@@ -99,6 +116,7 @@ def step_of(agent: AgentLike) -> RobotStep:
         agent.state_reason,
         agent.safe,
         agent.given_up,
+        agent.goal,
     )
 
 
@@ -107,17 +125,22 @@ def check_of(robot: RobotStep) -> FrontierCheck:
     return frontier_check(robot.belief, robot.position, robot.radius, robot.safe, robot.given_up)
 
 
-def activity_of(moved: float, has_path: bool, state: str) -> str:
-    """``working``, ``stuck`` or ``idle`` for a robot that could move (module docstring).
+def activity_of(moved: float, has_path: bool, state: str, holding: bool = False) -> str:
+    """``working``, ``stuck``, ``waiting`` or ``idle`` for a robot that could move
+    (module docstring); ``holding``: its goal is where it stands.
 
     >>> activity_of(0.5, True, "active"), activity_of(0.0, True, "active")
     ('working', 'stuck')
     >>> activity_of(0.0, False, "error"), activity_of(0.01, False, "done")
     ('stuck', 'idle')
+    >>> activity_of(0.0, False, "active", holding=True), activity_of(0.0, False, "done", True)
+    ('waiting', 'idle')
     """
     if moved >= MOVE_EPS:
         return WORKING
-    return STUCK if has_path or state == "error" else IDLE
+    if has_path or state == "error":
+        return STUCK
+    return WAITING if holding and state == "active" else IDLE
 
 
 @dataclass(frozen=True)
@@ -141,6 +164,7 @@ class RobotHealth:
 
     idle: int = 0
     stuck: int = 0
+    waiting: int = 0
     idle_with_frontier: int = 0
     first_idle_with_frontier: int | None = None
     longest_idle: int = 0
@@ -159,6 +183,7 @@ class RobotHealth:
         return {
             "idle_steps": self.idle,
             "stuck_steps": self.stuck,
+            "waiting_steps": self.waiting,
             "longest_idle": self.longest_idle,
             "idle_with_frontier": self.idle_with_frontier,
             "first_idle_with_frontier": self.first_idle_with_frontier,
@@ -202,7 +227,8 @@ class HealthWatch:
             self.note_state(step, robot, health)
             moved = robot.distance - health.distance
             assessed = not first and robot.can_move
-            health.activity = activity_of(moved, robot.has_path, robot.state) if assessed else ""
+            activity = activity_of(moved, robot.has_path, robot.state, robot.holding)
+            health.activity = activity if assessed else ""
             health.distance = robot.distance
             self.count(step, robot, health)
 
@@ -230,6 +256,7 @@ class HealthWatch:
         else:
             health.last_check, health.check = None, None
         health.stuck += health.activity == STUCK
+        health.waiting += health.activity == WAITING
         health.streak = health.streak + 1 if idle else 0
         if not idle:
             return
@@ -275,10 +302,11 @@ class HealthReport:
 
     def totals(self) -> dict[str, int]:
         """The sweep tables' columns: robots that idled with reachable frontier cells,
-        idle and stuck robot-steps."""
-        robots = self.robots.values()
+        idle, stuck and waiting robot-steps."""
+        robots = list(self.robots.values())
         warned = sum(h.idle_with_frontier >= WARN_AFTER for h in robots)
-        values = (warned, sum(h.idle for h in robots), sum(h.stuck for h in robots))
+        steps = (sum(h.idle for h in robots), sum(h.stuck for h in robots))
+        values = (warned, *steps, sum(h.waiting for h in robots))
         return dict(zip(TOTALS, values, strict=True))
 
     def summary(self) -> dict[str, Any]:

@@ -102,7 +102,10 @@ class RobotView:
 
 @dataclass(frozen=True)
 class Decision:
-    """A strategy's answer: where to go (path of world points) and why."""
+    """A strategy's answer: where to go (path of world points) and why.
+
+    ``goal`` at the robot's own position with no path means "wait here": run health counts
+    such a robot as ``waiting``, not idle (``knowledge/health.py``)."""
 
     path: FloatArray = field(default_factory=lambda: np.zeros((0, 2)))
     goal: tuple[float, float] | None = None

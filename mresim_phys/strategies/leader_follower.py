@@ -86,9 +86,10 @@ class LeaderFollower(FrontierExploration):
         path = self._within_parent_range(view, decision.path)
         if not follows and len(decision.path) > 1 and len(path) <= 1:  # no way on
             self._out_of_reach()
+        held = follows and len(path) <= 1  # at its parent's range's edge: it waits there
         return Decision(
             path=path,
-            goal=decision.goal,
+            goal=view.position if held else decision.goal,
             done=decision.done,
             look_at=decision.look_at,
             info=decision.info,

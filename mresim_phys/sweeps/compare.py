@@ -40,6 +40,7 @@ DEFAULT_METRICS = (
     "robots_idle_with_frontier",  # run health (knowledge/health.py, docs/run-health.md)
     "idle_robot_steps",
     "stuck_robot_steps",
+    "waiting_robot_steps",
 )
 HEADLINE = "auc_known_at_base"  # the robustness contrast opening the report, when chosen
 

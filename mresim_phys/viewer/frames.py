@@ -3,11 +3,10 @@
 A :class:`FrameMaker` renders a snapshot with the layers a page asks for through the same
 :class:`~mresim_phys.render.Renderer` (same scale, style and communication regions) as a
 run's video, and encodes it as PNG (lossless: the page's pixels are the renderer's).
-:func:`agent_rows` gives what hovering a robot shows (state, activity: working, idle or
-stuck, role, distance travelled, path left, battery, last contact with the base) and where
-the robot is in frame pixels.
-
-Typical use: ``FrameMaker(shape, scale).png(snapshot, layers)``.
+:func:`agent_rows` gives what hovering a robot shows (state, activity: working, waiting,
+idle or stuck, role, distance travelled, path left, battery, last contact with the base)
+and where the robot is in frame pixels. Typical use: ``FrameMaker(shape,
+scale).png(snapshot, layers)``.
 """
 
 from __future__ import annotations
