@@ -28,7 +28,10 @@ in ``denominators.json``); a row's cell count is round(fraction * E), and that c
 is the fraction the original would report (the original's joint area also counts every
 free pixel some robot saw). Our map is read with threshold ``1e-6`` (only
 pure black is wall, the original's rule), so both worlds have the same free pixels (the
-header of each table gives the number of pixels the two rules disagree on).
+header of each table gives the number of pixels the two rules disagree on). With
+``--denominator explorable`` both sides are fractions of E instead (the milestones' own
+denominator, docs/explorable.md): the original's joint and base pixel counts over E,
+capped at E.
 
 Censoring: a run that never reaches a threshold counts as later than every run that does;
 the median is "never" when half the runs or more never reach it, and the range is over the
@@ -61,6 +64,7 @@ from original_metrics import (  # noqa: E402  (a sibling script's module)
     censored_median,
     original_obstacles,
     original_total_area,
+    over_explorable,
     read_json,
     read_original_output,
     read_ours,
@@ -274,6 +278,12 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         help="only read the original's whole runs found in --original-results",
     )
     parser.add_argument("--out", type=Path, help="also write the tables to this file")
+    parser.add_argument(
+        "--denominator",
+        choices=("original", "explorable"),
+        default="original",
+        help="fractions of the original's free pixels, or of our explorable cells (both sides)",
+    )
     return parser.parse_args(argv)
 
 
@@ -282,6 +292,9 @@ def compare_case(
 ) -> tuple[list[RunResult], list[RunResult], str]:
     """The original's runs and ours of one case (run where missing), and the table note."""
     home = base_pixel(case.team_path)
+    runs = [run_ours(case, seed, args.steps, args.ours_results) for seed in args.seeds]
+    counts = read_json(runs[0] / "denominators.json")
+    explorable = args.denominator == "explorable"
     original = []
     for seed in args.original_seeds:
         out = args.original_results / case.key / f"seed-{seed}.txt"
@@ -290,15 +303,15 @@ def compare_case(
                 continue
             run_original(case, seed, out, args)
         curve, wall = read_original_output(out)
+        if explorable:
+            curve = over_explorable(curve, int(counts["ours_explorable_cells"]))
         original.append(run_result(curve, read_poslog(out.with_suffix(".pos.txt"), home), wall))
-    runs = [run_ours(case, seed, args.steps, args.ours_results) for seed in args.seeds]
-    counts = read_json(runs[0] / "denominators.json")
     note = (
         f"the original's free pixels {counts['original_total_area']:,}, our explorable cells"
         f" {counts['ours_explorable_cells']:,}; the two wall rules disagree on"
         f" {counts['pixels_the_wall_rules_disagree_on']} pixels."
     )
-    return original, [read_ours(run) for run in runs], note
+    return original, [read_ours(run, explorable) for run in runs], note
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -158,6 +158,14 @@ def slow_share(tracks: Sequence[Track], returning: bool) -> float | None:
     return sum(k for k, _ in counts) / steps if steps else None
 
 
+def over_explorable(curve: Curve, explorable: int) -> Curve:
+    """The original's curve as fractions of our explorable cells (counts capped there:
+    a pixel the original saw that no body of ours can see counts once the rest is seen)."""
+    explored = [min(n, explorable) for n in curve.explored]
+    base = [min(n, explorable) for n in curve.base]
+    return Curve(curve.steps, explored, base, explorable)
+
+
 def run_result(curve: Curve, tracks: Sequence[Track], wall_s: float | None) -> RunResult:
     """Milestones, finals and diagnostics of one run."""
     picks = [d for track in tracks for d in goal_pick_distances(track)]
@@ -243,18 +251,20 @@ def read_json(path: Path) -> dict[str, Any]:
     return data
 
 
-def read_ours(run_dir: Path) -> RunResult:
-    """One of our runs: metrics.csv, log/steps.jsonl, denominators.json, summary.json."""
+def read_ours(run_dir: Path, explorable: bool = False) -> RunResult:
+    """One of our runs: metrics.csv, log/steps.jsonl, denominators.json, summary.json;
+    fractions of the original's free pixels, or of our explorable cells (``explorable``)."""
     try:
-        return read_ours_files(run_dir)
+        return read_ours_files(run_dir, explorable)
     except (KeyError, ValueError, IndexError, TypeError) as exc:
         raise CompareError(f"{run_dir}: not a complete run of this tool ({exc!r})") from None
 
 
-def read_ours_files(run_dir: Path) -> RunResult:
+def read_ours_files(run_dir: Path, explorable: bool = False) -> RunResult:
     """:func:`read_ours` without the error wrapping."""
     counts = read_json(run_dir / "denominators.json")
     ours, total = int(counts["ours_explorable_cells"]), int(counts["original_total_area"])
+    total = ours if explorable else total
     with open(run_dir / "metrics.csv", newline="", encoding="utf-8") as handle:
         rows = list(csv.DictReader(handle))
     curve = Curve(
