@@ -62,6 +62,7 @@ def robot_view(
         children=robot.children,
         hops=robot.hops,
         escaping=robot.escape_from is not None,
+        safe=read_only(robot.safe),
     )
 
 

@@ -179,8 +179,6 @@ SLIVERS = (
     " less than 0.1 % in 300 steps and the run stops stalled short of 95 % (docs/real-maps.md)"
 )
 KNOWN: dict[tuple[str, str, int], str] = {
-    ("ipa_office", "frontier", 6): SLIVERS,
-    ("ipa_office", "role_based", 3): SLIVERS,
     ("ipa_office", "role_based", 6): SLIVERS,
 }
 INVARIANT_SIZES = [3, 6]

@@ -364,11 +364,15 @@ def test_a_robot_its_strategy_holds_still_waits_and_is_never_warned_about() -> N
 def test_relays_that_wait_for_their_partners_raise_no_warning() -> None:
     """The shipped leader-follower run: its relays hold at the edge of their parents'
     range for hundreds of steps while their maps hold frontier; before relays were told
-    apart, both warned (``robot R1 idled 178 steps``)."""
+    apart, both warned (``robot R1 idled 178 steps``). (Its leader may still warn: done
+    once no frontier lies within the chain's reach, it parks with frontier beyond it.)"""
     sim = Simulation.from_yaml(
         Path(__file__).parent.parent / "scenarios" / "22_rooms_leader_follower.yaml"
     )
     sim.run()
     record = run_health(sim)["health"]
-    assert record["warnings"] == [] and record["robots_idle_with_frontier"] == 0
-    assert record["waiting_robot_steps"] >= 200
+    for relay in ("R1", "R2"):
+        counts = record["robots"][relay]
+        assert counts["idle_with_frontier"] == counts["idle_steps"] == 0
+        assert counts["waiting_steps"] >= 200
+        assert not any(w.startswith(f"robot {relay} ") for w in record["warnings"])

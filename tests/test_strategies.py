@@ -285,3 +285,26 @@ def test_a_robot_in_contact_replans_once_its_frontier_is_gone(enabled: bool) -> 
     assert not wants_plan(robot, view.step + 1, 15)  # no contact, no replan
     robot.links = ("B",)
     assert wants_plan(robot, view.step + 1, 15) is enabled
+
+
+def unvisited_view(safe_right: bool) -> RobotView:
+    """The corridor, seen whole from the middle: its right half seen only from afar (not
+    safe) unless ``safe_right``. The robot stands nearer the left frontier."""
+    view = corridor_view({}, (45.5, 10.5))
+    safe = np.zeros(view.belief.shape, dtype=bool)
+    safe[5:15, 20:58] = True  # scanned from near by: the left half
+    if safe_right:
+        safe[5:15, 58:80] = True
+    return RobotView(**{**view.__dict__, "safe": safe})
+
+
+@pytest.mark.parametrize("size", ["region", "cells"])
+def test_a_frontier_before_unvisited_space_outweighs_a_nearer_one(size: str) -> None:
+    """The original weighs a frontier by the seen-but-unvisited region behind it: the right
+    end (22 columns seen only from afar) beats the nearer left end (no such region)."""
+    params = FrontierParams(frontier_size=size, init_cycles=0)
+    decision = FrontierExploration(params).decide(unvisited_view(safe_right=False))
+    assert decision.goal is not None
+    assert (decision.goal[0] > 50) is (size == "region")  # by its own cells: the nearer
+    both_safe = FrontierExploration(params).decide(unvisited_view(safe_right=True))
+    assert both_safe.goal is not None and both_safe.goal[0] < 50  # nothing behind either

@@ -87,6 +87,7 @@ class RobotView:
     children: tuple[str, ...] = ()  # the robots whose parent it is
     hops: int = 0  # robots from the base down to it along its parents (0: not under the base)
     escaping: bool = False  # a collision taught its map nothing: it plans wide of corners
+    safe: BoolGrid | None = None  # cells it or a teammate it heard scanned from near by
 
     @property
     def planning_map(self) -> BeliefGrid:

@@ -1,17 +1,18 @@
 """``frontier`` (phase 4, decide): the original's greedy frontier exploration ("return when done").
 
-At every replan the robot finds the frontiers of its own map, scores each as
-``U = size * 1e8 / d**4`` (``d`` = path length; original ``FrontierExploration``)
-and runs a greedy auction with the teammates it heard from within
-``teammate_memory`` steps and does not presume lost (``RobotView.lost``: a silent
-teammate's frontier is auctioned again), nor whose record says its drive or sensor has
-failed (it cannot explore a frontier): the best (robot, frontier) pair is fixed, that robot
-and that frontier leave the auction, until the best pair is this robot's. So two
-robots in contact do not chase the same frontier. A teammate's distance starts as
-the straight line from its last known position and is replaced by its exact path
-length on this robot's map before its bid can win (as the original does), with a
-path search bounded to 1.5 times the straight-line estimate, widened only if needed.
-With nothing reachable left to explore the robot returns to the base: ``done``.
+At every replan the robot finds the frontiers of its own map, scores each as ``U = size *
+1e8 / d**4`` (``d`` = path length; original ``FrontierExploration``; ``size``: the
+seen-but-unvisited region the frontier borders, as the original's frontier polygons,
+``knowledge/frontier_regions.py``) and runs a greedy auction with the teammates it heard
+from within ``teammate_memory`` steps and does not presume lost (``RobotView.lost``: a
+silent teammate's frontier is auctioned again), nor whose record says its drive or sensor
+has failed (it cannot explore a frontier): the best (robot, frontier) pair is fixed, that
+robot and that frontier leave the auction, until the best pair is this robot's. So two
+robots in contact do not chase the same frontier. A teammate's distance starts as the
+straight line from its last known position and is replaced by its exact path length on this
+robot's map before its bid can win (as the original does), with a path search bounded to 1.5
+times the straight-line estimate, widened only if needed. With nothing reachable left to
+explore the robot returns to the base: ``done``.
 
 On arriving, the robot turns to face the frontier (its laser covers only 180
 degrees) and scans. A frontier it reached without resolving (unknown cells it cannot
@@ -26,11 +27,13 @@ random-walk steps.
 
 from __future__ import annotations
 
-from typing import ClassVar
+from dataclasses import replace
+from typing import ClassVar, Literal
 
 import numpy as np
 from pydantic import Field
 
+from mresim_phys.knowledge.frontier_regions import region_sizes
 from mresim_phys.knowledge.frontiers import Frontiers, any_frontier, frontiers_in
 from mresim_phys.knowledge.prior import walled_in
 from mresim_phys.knowledge.targets import TargetFinder, target_reach
@@ -98,7 +101,7 @@ class FrontierParams(StrategyParams):
         100, ge=0, description="Steps before the done_fraction rule may fire (the original: 100)."
     )
     replan_on_contact: bool = Field(
-        False,
+        True,
         description=(
             "Replan on the step after a contact when the frontier the robot chases has"
             " left its map (the original replans every step while in contact)."
@@ -111,6 +114,14 @@ class FrontierParams(StrategyParams):
             "On reaching a frontier that is still there after facing it, its cells within"
             " this distance (cells) count a try: set aside until no untried frontier is"
             " left, then tried from another spot, given up after two tries (giveup.py)."
+        ),
+    )
+    frontier_size: Literal["region", "cells"] = Field(
+        "region",
+        description=(
+            "A frontier's size in its utility: 'region', the seen-but-unvisited region it"
+            " borders (free cells outside safe space, as the original's frontier polygons;"
+            " knowledge/frontier_regions.py), or 'cells', its own cells."
         ),
     )
     reach: float | None = Field(
@@ -236,7 +247,11 @@ class FrontierExploration(Plugin):
         if view.prior is not None:  # the plan shows only walls behind these cells
             exclude = exclude | walled_in(view.belief, view.prior)
         size = self.params.min_frontier_size
-        return frontiers_in(view.belief, context.free_box, size, exclude)
+        found = frontiers_in(view.belief, context.free_box, size, exclude)
+        box = context.free_box
+        if self.params.frontier_size == "region" and view.safe is not None and box is not None:
+            found = replace(found, sizes=region_sizes(found, view.belief, view.safe, box))
+        return found
 
     def _search(
         self, frontiers: Frontiers, context: PlanContext, reach: float, retry: bool = False

@@ -1,0 +1,66 @@
+"""Frontier regions (phase 3b, knowledge): the seen-but-unvisited space behind each frontier.
+
+The original MRESim's frontier is not a line of cells but a region: every cell its robot
+has seen free but not from near by (free and not *safe*: no robot scanned it from within
+10 % of its range), and the cells beside unknown ones, traced into polygons. A frontier's
+weight in the utility ``area / d^4`` is the polygon's area, so a doorway with a long
+corridor seen through it outweighs a shadow behind a chair that the robot has walked past
+(the chair's shadow lies in safe space; the corridor does not).
+
+:func:`region_sizes` gives each frontier cluster of ``knowledge.frontiers`` that weight on
+the grid: the cells of the 8-connected component, of the FREE cells outside safe space and
+the frontier cells themselves, that holds the cluster. Two clusters in one region share
+its size. One ``cv2.connectedComponentsWithStats`` over the FREE cells' bounding box.
+"""
+
+from __future__ import annotations
+
+from typing import Protocol
+
+import cv2
+import numpy as np
+
+from mresim_phys.planning.grid import Box
+from mresim_phys.types import FREE, BeliefGrid, BoolGrid, IntArray
+
+
+class Clusters(Protocol):
+    """What region sizes are found for (``knowledge.frontiers.Frontiers``)."""
+
+    @property
+    def cells_rc(self) -> IntArray:
+        """(n, 2) (row, col) of every cell of every cluster."""
+
+    @property
+    def cluster_of(self) -> IntArray:
+        """The cluster of each cell."""
+
+    def __len__(self) -> int:
+        """How many clusters."""
+
+
+def region_sizes(frontiers: Clusters, belief: BeliefGrid, safe: BoolGrid, box: Box) -> IntArray:
+    """Cells of the seen-but-unvisited region that holds each cluster (module docstring).
+
+    ``box`` (row0, row1, col0, col1, half-open) holds every FREE cell of ``belief``.
+
+    >>> from mresim_phys.knowledge.frontiers import find_frontiers
+    >>> belief = np.full((5, 8), FREE, dtype=np.uint8)
+    >>> belief[:, 7] = 0  # unknown beyond the last column
+    >>> safe = np.zeros((5, 8), dtype=bool)
+    >>> safe[:, :3] = True  # the robot scanned the left part from near by
+    >>> int(region_sizes(find_frontiers(belief), belief, safe, (0, 5, 0, 7))[0])
+    20
+    """
+    k = len(frontiers)
+    if k == 0:
+        return np.zeros(0, dtype=np.intp)
+    r0, r1, c0, c1 = box
+    region = (belief[r0:r1, c0:c1] == FREE) & ~safe[r0:r1, c0:c1]
+    cells = frontiers.cells_rc
+    region[cells[:, 0] - r0, cells[:, 1] - c0] = True
+    _, labels, stats, _ = cv2.connectedComponentsWithStats(region.view(np.uint8), connectivity=8)
+    _, first = np.unique(frontiers.cluster_of, return_index=True)
+    label = labels[cells[first, 0] - r0, cells[first, 1] - c0]
+    sizes: IntArray = stats[label, cv2.CC_STAT_AREA].astype(np.intp)
+    return sizes
