@@ -168,7 +168,7 @@ def boxed_in(view: RobotView) -> bool:
 
 def look_around(view: RobotView) -> Decision:
     """Turn in place to face the way behind and scan: a ray through a false wall clears it
-    (``knowledge.mapping.clear_contradicted``), so the next plan may find the way out."""
+    (``knowledge.wall_marks.clear_contradicted``), so the next plan may find the way out."""
     x, y = view.position
     behind = (x - np.cos(view.heading), y - np.sin(view.heading))
     return Decision(path=np.array([[x, y]]), goal=(x, y), look_at=behind, info={"reason": BOXED})

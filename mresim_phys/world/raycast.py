@@ -13,7 +13,7 @@ of the three cells beyond the corner is occupied: a ray does not slip between tw
 diagonally touching wall cells, and a ray grazing a wall corner touches it, as a
 segment query touches a segment's end point (its normal faces the cell it touched: across
 that cell's side, or diagonally back when only the diagonal cell is a wall, so the map
-marks that cell, ``knowledge.mapping.hit_cell``); likewise a ray running exactly along a cell
+marks that cell, ``knowledge.wall_marks.hit_cell``); likewise a ray running exactly along a cell
 boundary line (a robot on a whole coordinate looking along an axis) touches the cells on
 both sides of it. Outside the map is wall.
 
