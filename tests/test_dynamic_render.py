@@ -52,6 +52,7 @@ def dynamic_scenario(folder: Path, **changes: Any) -> Path:
         "name": "dynamic",
         "seed": 5,
         "steps": STEPS,
+        "stop": {"all_done": False},  # every step is run: the events come at steps 10-30
         "map": {"image": "rooms.png", "resolution": 0.1},
         "base_station": {"position": [8, 30], "comm_range": 30},
         "team": {"speed": 2, "radius": 1.0, "sensor": {"range": 30}, "comm_range": 30},
@@ -241,7 +242,7 @@ def test_replayed_regions_pass_through_obstacles_radio_passes_through(tmp_path: 
         obstacles=[rover],
         random_debris={"rate": 0.3, "size": [2, 4]},
     )
-    assert_replay_equals_live(path, tmp_path / "run", (10, 20, 33, 38))  # all done at 39
+    assert_replay_equals_live(path, tmp_path / "run", (10, 20, 33, 38))
 
 
 def assert_replay_equals_live(scenario: Path, out: Path, steps: tuple[int, ...]) -> None:
@@ -288,8 +289,9 @@ def test_static_frames_are_unchanged(
     written by the code of commit 1cc4d1a, before the world layers existed; re-rendered when
     the frontier rule changed the runs themselves, when the legend gained the done,
     idle and stuck glyphs and labels that would overlap were placed apart, and when rays
-    grazing a wall corner stopped marking the free cell beyond it as wall; and when maps
-    of known resolution gained a scale bar)."""
+    grazing a wall corner stopped marking the free cell beyond it as wall; when maps
+    of known resolution gained a scale bar; and when frontiers were weighed by the
+    seen-but-unvisited region they border, which moved the runs)."""
     sim = Simulation.from_yaml(ROOT / "scenarios" / f"{name}.yaml", steps=steps)
     for _ in range(steps):
         sim.step()
