@@ -200,9 +200,9 @@ class FrontierExploration(Plugin):
         The original replans every cycle while a robot receives messages, so a robot
         whose frontier a teammate has explored turns to another one at once. Of those
         replans only the ones whose target is gone are made here (replanning every step
-        in contact cost 8 times the run time, library 8 robots). Off by default: it
-        helps library 8 robots under path_loss and hurts library 16 (see
-        docs/differences-from-original.md, "Fidelity")."""
+        in contact cost 8 times the run time, library 8 robots). On by default since
+        frontiers are weighed by their regions: with both, 12x12_rooms reaches 90 % in
+        fewer steps than the original (docs/differences-from-original.md)."""
         chasing = self._chasing
         return bool(
             self.params.replan_on_contact
