@@ -15,28 +15,12 @@ its size. One ``cv2.connectedComponentsWithStats`` over the FREE cells' bounding
 
 from __future__ import annotations
 
-from typing import Protocol
-
 import cv2
 import numpy as np
 
+from mresim_phys.knowledge.targets import Clusters
 from mresim_phys.planning.grid import Box
 from mresim_phys.types import FREE, BeliefGrid, BoolGrid, IntArray
-
-
-class Clusters(Protocol):
-    """What region sizes are found for (``knowledge.frontiers.Frontiers``)."""
-
-    @property
-    def cells_rc(self) -> IntArray:
-        """(n, 2) (row, col) of every cell of every cluster."""
-
-    @property
-    def cluster_of(self) -> IntArray:
-        """The cluster of each cell."""
-
-    def __len__(self) -> int:
-        """How many clusters."""
 
 
 def region_sizes(frontiers: Clusters, belief: BeliefGrid, safe: BoolGrid, box: Box) -> IntArray:
