@@ -12,9 +12,10 @@ all links), ``control_bytes`` the same for the control channel; the information
 latency at the base is the age of each alive robot's newest report the base
 holds (its max and mean over robots, as the original logs it), and each robot's
 ``base_contact`` is the last step its data reached the base (-1: never).
-A :class:`StepRecord` is one row of ``metrics.csv``, made by :func:`measure_step` for
-live runs (``Simulation.measure``) and replays (``output.runlog.Replay``) alike;
-:class:`Milestones` remembers the first step each fraction crossed 0.5/0.9/0.95.
+A :class:`StepRecord` holds one step's facts, made by :func:`measure_step` for live
+runs (``Simulation.measure``) and replays (``output.runlog.Replay``) alike; the columns of
+``metrics.csv`` are computed from it (``columns``), and the run's trackers (milestones,
+stall rule, curves, communication totals: ``tracking``) read those columns.
 """
 
 from __future__ import annotations
@@ -64,51 +65,8 @@ class StepRecord:
     # a replay of a log older than the explorable area)
     explored_connected: float | None = None
     known_at_base_connected: float | None = None
-
-    def csv_row(self) -> list[str]:
-        """Values in :func:`csv_header` order, floats as exact round-trip text."""
-        row = [
-            str(self.step),
-            repr(self.explored),
-            repr(self.known_at_base),
-            repr(self.distance),
-            str(self.alive),
-            str(self.links),
-            str(self.comm_bytes),
-            str(self.control_links),
-            str(self.control_bytes),
-            repr(self.latency_max),
-            repr(self.latency_mean),
-        ]
-        if self.explored_connected is not None:
-            row += [repr(self.explored_connected), repr(self.known_at_base_connected)]
-        row += [repr(r.distance) for r in self.robots]
-        row += [r.state for r in self.robots]
-        row += [str(r.base_contact) for r in self.robots]
-        row = row if self.stale is None else [*row, str(self.stale)]
-        return row if self.robustness is None else [*row, *map(str, self.robustness)]
-
-
-ROBUSTNESS_COLUMNS = ["failures", "knowledge_lost", "lost_unrecovered"]
-CONNECTED_COLUMNS = ["explored_connected", "known_at_base_connected"]
-
-
-def csv_header(
-    robot_names: list[str], stale: bool = False, faults: bool = False, connected: bool = True
-) -> list[str]:
-    """Column names of ``metrics.csv``: the fixed columns, the ``connected`` ones (left out
-    only by replays of logs older than them), the per-robot ones, ``stale`` for a world
-    that changes, then the robustness columns for a run with faults, last."""
-    return (
-        ["step", "explored", "known_at_base", "distance", "alive", "links"]
-        + ["comm_bytes", "control_links", "control_bytes", "latency_max", "latency_mean"]
-        + (CONNECTED_COLUMNS if connected else [])
-        + [f"distance_{n}" for n in robot_names]
-        + [f"state_{n}" for n in robot_names]
-        + [f"base_contact_{n}" for n in robot_names]
-        + (["stale"] if stale else [])
-        + (ROBUSTNESS_COLUMNS if faults else [])
-    )
+    # the (n, n) main-channel links (index 0 = the base) the ``links`` count comes from
+    link_matrix: BoolGrid | None = field(default=None, compare=False, repr=False)
 
 
 def measure_step(
@@ -158,6 +116,7 @@ def measure_step(
         robustness=robustness,
         explored_connected=None if connected is None else min(connected, 1.0),
         known_at_base_connected=None if connected is None else known_at_base_connected,
+        link_matrix=np.array(links, dtype=bool),  # the live array changes in place
     )
 
 
@@ -199,120 +158,6 @@ def base_latency(step: int, heard: dict[str, int], robots: list[str]) -> tuple[f
         return 0.0, 0.0
     ages = [float(step - heard.get(name, 0)) for name in robots]
     return max(ages), sum(ages) / len(ages)
-
-
-def no_milestones() -> dict[str, int | None]:
-    """Every threshold, none reached yet."""
-    return dict.fromkeys(map(str, THRESHOLDS))
-
-
-@dataclass
-class Milestones:
-    """First step at which ``explored`` / ``known_at_base`` (and their ``_connected``
-    versions) reached each threshold."""
-
-    explored: dict[str, int | None] = field(default_factory=no_milestones)
-    known_at_base: dict[str, int | None] = field(default_factory=no_milestones)
-    explored_connected: dict[str, int | None] = field(default_factory=no_milestones)
-    known_at_base_connected: dict[str, int | None] = field(default_factory=no_milestones)
-
-    def update(self, record: StepRecord) -> None:
-        """Note thresholds first crossed by ``record``."""
-        for name in ("explored", "known_at_base", "explored_connected", "known_at_base_connected"):
-            value: float | None = getattr(record, name)
-            table = getattr(self, name)
-            for threshold in THRESHOLDS:
-                key = str(threshold)
-                if table[key] is None and value is not None and value >= threshold:
-                    table[key] = record.step
-
-
-def explorable_summary(
-    coverage: Coverage, last: StepRecord, milestones: Milestones
-) -> dict[str, object]:
-    """summary.json's fields about what the fractions count: the explorable cells and the
-    connected ones at the last step, and the ``_connected`` fractions' final values and
-    milestones."""
-    return {
-        "explorable_cells": coverage.total,
-        "connected_cells": coverage.total_connected if coverage.connected is not None else None,
-        "final_explored_connected": last.explored_connected,
-        "final_known_at_base_connected": last.known_at_base_connected,
-        "steps_to_explored_connected": dict(milestones.explored_connected),
-        "steps_to_known_at_base_connected": dict(milestones.known_at_base_connected),
-    }
-
-
-@dataclass
-class StallWatch:
-    """When the run last made progress: a gain of ``gain`` in explored or known at base.
-
-    The run is stalled once ``window`` steps have passed since the last step at which
-    either fraction rose by at least ``gain`` above its value at the progress before
-    (``stop.stalled_for`` / ``stop.stalled_gain``). Slow, steady gains add up: 0.01 %
-    a step for ten steps is a gain of 0.1 %.
-    """
-
-    window: int | None
-    gain: float
-    explored: float = 0.0
-    known_at_base: float = 0.0
-    last_progress: int = 0
-
-    def update(self, record: StepRecord) -> None:
-        """Note progress made by ``record``."""
-        gained = max(record.explored - self.explored, record.known_at_base - self.known_at_base)
-        if record.step == 0 or gained >= self.gain:
-            self.explored, self.known_at_base = record.explored, record.known_at_base
-            self.last_progress = record.step
-
-    def stalled(self, step: int) -> bool:
-        """No progress in the last ``window`` steps."""
-        return self.window is not None and step - self.last_progress >= self.window
-
-
-@dataclass
-class CommTotals:
-    """Communication over the whole run, for ``summary.json``."""
-
-    comm_bytes: int = 0
-    control_bytes: int = 0
-    link_steps: int = 0  # sum over steps of the linked pairs
-    latency_max: float = 0.0
-    latency_sum: float = 0.0
-    steps: int = 0
-
-    def update(self, record: StepRecord) -> None:
-        """Add one step."""
-        self.comm_bytes += record.comm_bytes
-        self.control_bytes += record.control_bytes
-        self.link_steps += record.links
-        self.latency_max = max(self.latency_max, record.latency_max)
-        self.latency_sum += record.latency_mean
-        self.steps += 1
-
-    def summary(self) -> dict[str, float | int]:
-        """The totals as JSON-ready numbers."""
-        return {
-            "comm_bytes": self.comm_bytes,
-            "control_bytes": self.control_bytes,
-            "mean_links": self.link_steps / self.steps if self.steps else 0.0,
-            "latency_max": self.latency_max,
-            "latency_mean": self.latency_sum / self.steps if self.steps else 0.0,
-        }
-
-
-@dataclass
-class Curves:
-    """The explored and known-at-base curves of the run, step by step (for their areas)."""
-
-    explored: list[float] = field(default_factory=list)
-    known_at_base: list[float] = field(default_factory=list)
-
-    def update(self, record: StepRecord) -> None:
-        """Add one step (steps come in order from 0)."""
-        self.explored.append(record.explored)
-        self.known_at_base.append(record.known_at_base)
 
 
 def normalised_area(curve: Sequence[float], steps: int | None = None) -> float:

@@ -50,6 +50,7 @@ class Registry(Generic[T]):
         self._classes: dict[str, type[T]] = {}
         self._broken: dict[str, str] = {}  # entry points that failed to load: why
         self._discovered = False
+        self._from_entry_points: set[str] = set()
         REGISTRIES.add(self)
 
     def register(self, cls: type[T]) -> type[T]:
@@ -93,6 +94,11 @@ class Registry(Generic[T]):
         """A new instance of plugin ``name`` built from ``params`` (validated by its Params)."""
         cls: Any = self.get(name)
         return cls(cls.Params.model_validate(dict(params or {})))  # type: ignore[no-any-return]
+
+    def registered(self) -> list[type[T]]:
+        """The classes registered in this process (not those of entry points), in the order
+        they were registered."""
+        return [cls for name, cls in self._classes.items() if name not in self._from_entry_points]
 
     def names(self) -> list[str]:
         """All registered names (built-ins and discovered plugins), sorted."""
@@ -169,6 +175,7 @@ class Registry(Generic[T]):
                 self._broken[ep.name] = problem
             else:
                 self._classes[ep.name] = cls
+                self._from_entry_points.add(ep.name)
 
     def _entry_point_problem(self, shown: str, loaded: Any) -> str:
         """Why what an entry point loaded is no class of this family ('' if it is one)."""

@@ -44,11 +44,7 @@ from mresim_phys.knowledge.robustness import FailureWatch, robot_states
 from mresim_phys.knowledge.teammates import presumed_lost
 from mresim_phys.memory import keep_freed_memory
 from mresim_phys.metrics import (
-    CommTotals,
-    Curves,
-    Milestones,
     RobotRecord,
-    StallWatch,
     StepRecord,
     base_latency,
     measure_step,
@@ -63,6 +59,7 @@ from mresim_phys.snapshot import (
     read_only,
 )
 from mresim_phys.strategies import Decision, RobotView, relax
+from mresim_phys.tracking import CommTotals, Curves, Milestones, StallWatch
 from mresim_phys.world.views import movable_views
 
 PHASES = ("sensing", "mapping", "planning", "communication", "metrics")

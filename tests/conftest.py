@@ -82,3 +82,10 @@ def write_study(folder: Path, **fields: Any) -> Path:
     path = folder / "study.yaml"
     path.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
     return path
+
+
+def csv_row(record: Any) -> list[str]:
+    """A step record's ``metrics.csv`` row with every column a run may have (None: '')."""
+    from mresim_phys.columns import FLAGS, Layout
+
+    return Layout(tuple(r.name for r in record.robots), frozenset(FLAGS)).row(record)

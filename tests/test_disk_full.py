@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 
 from mresim_phys.cli import main
+from mresim_phys.columns import Layout
 from mresim_phys.output.files import PendingFile, WriteError
 from mresim_phys.output.logwriter import RunLogWriter
 from mresim_phys.output.runlog import RunLog, recompute_metrics
@@ -36,6 +37,7 @@ FULL = os.strerror(errno.ENOSPC)  # "No space left on device"
 LIMITED = """
 import resource, signal, sys
 from mresim_phys.cli import main
+from mresim_phys.columns import Layout
 limit, warm, args = int(sys.argv[1]), sys.argv[2], sys.argv[3:]
 main(["run", args[1], "--out", warm, "--steps", "3", "--quiet", "--no-plots"])
 signal.signal(signal.SIGXFSZ, signal.SIG_IGN)
@@ -155,17 +157,18 @@ def test_a_log_that_cannot_commit_a_chunk_keeps_the_chunks_before(
     tmp_path: Path, scenario_file: ScenarioFile, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     sim, log_dir = Simulation.from_yaml(scenario_file(), steps=30), tmp_path / "log"
-    rows = [sim.record.csv_row()]
+    layout = Layout.of([r.name for r in sim.robots], latest=True, faults=True)
+    rows = [layout.row(sim.record)]
     writer = RunLogWriter(log_dir, sim.snapshot(), name="tiny", seed=3, chunk_steps=8)
     fail_renames_onto(monkeypatch, "deltas-00001.npz")
     with pytest.raises(WriteError, match=f"deltas-00001.npz: {FULL}"):
         for _ in range(30):
-            rows.append(sim.step().csv_row())
+            rows.append(layout.row(sim.step()))
             writer.write(sim.snapshot())
     writer.close()  # commits nothing more
     log = RunLog.open(log_dir)
     assert log.steps == 8 and not log.meta["closed"]
-    assert [r.csv_row() for r in recompute_metrics(log)] == rows[:8]
+    assert [layout.row(r) for r in recompute_metrics(log)] == rows[:8]
     assert not (log_dir / "deltas-00001.npz").exists() and not leftovers(tmp_path)
 
 

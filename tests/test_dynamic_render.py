@@ -15,6 +15,7 @@ import cv2
 import numpy as np
 import pytest
 import yaml
+from conftest import csv_row
 from test_runlog import assert_same_snapshot, kept
 
 from mresim_phys.cli import main
@@ -196,10 +197,10 @@ def test_the_legend_names_the_world_layers_only_when_there_is_something(
 def test_replayed_snapshots_and_frames_equal_the_live_ones(scenario: Path, tmp_path: Path) -> None:
     snaps, frames = live_run(scenario, "all")
     sim = Simulation.from_yaml(scenario)
-    rows = [sim.record.csv_row()]
+    rows = [csv_row(sim.record)]
     with RunLogWriter(tmp_path / "log", sim.snapshot(), name="dynamic", seed=5) as writer:
         for _ in range(STEPS):
-            rows.append(sim.step().csv_row())
+            rows.append(csv_row(sim.step()))
             writer.write(sim.snapshot())
     log = RunLog.open(tmp_path / "log")
     renderer = Renderer(log.truth.shape, parse_layers("all"), frame_scale(log.truth.shape, 1))
@@ -207,7 +208,7 @@ def test_replayed_snapshots_and_frames_equal_the_live_ones(scenario: Path, tmp_p
     for got, want, frame in zip(replayed, snaps, frames, strict=True):
         assert_same_snapshot(got, want)
         assert np.array_equal(renderer.render(got), frame), want.step
-    assert [record.csv_row() for record in recompute_metrics(log)] == rows
+    assert [csv_row(record) for record in recompute_metrics(log)] == rows
 
 
 def test_the_log_stores_footprints_once_and_moves_only_when_they_change(

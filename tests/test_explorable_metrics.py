@@ -12,11 +12,13 @@ from typing import Any
 import numpy as np
 import pytest
 import yaml
-from conftest import write_png
+from conftest import csv_row, write_png
 
 from mresim_phys.cli import main
-from mresim_phys.metrics import Milestones, RobotRecord, StepRecord, csv_header
+from mresim_phys.columns import Layout
+from mresim_phys.metrics import RobotRecord, StepRecord
 from mresim_phys.output.runlog import Replay, RunLog, recompute_metrics
+from mresim_phys.tracking import Milestones
 from mresim_phys.viewer.replaysource import freeze, thaw
 from mresim_phys.world.explorable import RobotSight, explorable_mask
 
@@ -122,13 +124,13 @@ def test_a_replay_thawed_mid_run_goes_on_with_the_same_metrics(tmp_path: Path) -
     out, grow = tmp_path / "run", {"belief": "grow"}
     run(write_scenario(tmp_path, steps=30, obstacles=[walker], simulation=grow), out)
     log = RunLog.open(out / "log")
-    rows = [record.csv_row() for record in recompute_metrics(log)]
+    rows = [csv_row(record) for record in recompute_metrics(log)]
     replay = Replay(log)
     steps = list(log.records())
     for line, chunk, j in steps[:12]:
         replay.step(line, chunk, j)
     thawed = thaw(freeze(replay), log)
-    assert [thawed.step(*entry)[1].csv_row() for entry in steps[12:]] == rows[12:]
+    assert [csv_row(thawed.step(*entry)[1]) for entry in steps[12:]] == rows[12:]
     assert thawed.explorable is not None and thawed.coverage.reachable is thawed.explorable.mask
 
 
@@ -146,7 +148,8 @@ def test_a_log_older_than_the_explorable_area_replays_the_old_metrics(tmp_path: 
     assert [repr(r.explored) for r in replayed] == [row["explored_connected"] for row in live]
     old = [repr(r.known_at_base) for r in replayed]
     assert old == [row["known_at_base_connected"] for row in live]
-    assert len(replayed[0].csv_row()) == len(live[0]) - 2
+    old_layout = Layout.of(["A", "B"], latest=False, faults=False, connected=False)
+    assert len(old_layout.row(replayed[0])) == len(live[0]) - 2
 
 
 def test_a_damaged_sights_entry_is_a_clear_error(
@@ -169,12 +172,12 @@ def record(explored: float, connected: float | None, step: int = 1) -> StepRecor
 
 
 def test_rows_put_the_connected_columns_after_the_fixed_ones() -> None:
-    row = record(0.5, 0.25).csv_row()
-    header = csv_header(["A"])
+    layout = Layout.of(["A"], latest=False, faults=False)
+    row, header = layout.row(record(0.5, 0.25)), layout.header()
     assert len(row) == len(header) and row[header.index("explored_connected")] == "0.25"
-    assert csv_header(["A"], connected=False) == [*FIXED, "distance_A", "state_A",
-                                                  "base_contact_A"]  # fmt: skip
-    assert len(record(0.5, None).csv_row()) == len(header) - 2
+    old = Layout.of(["A"], latest=False, faults=False, connected=False)
+    assert old.header() == [*FIXED, "distance_A", "state_A", "base_contact_A"]
+    assert len(old.row(record(0.5, None))) == len(header) - 2
 
 
 def test_milestones_follow_both_definitions() -> None:

@@ -8,7 +8,7 @@ from typing import Any
 
 import numpy as np
 import pytest
-from conftest import rooms_grid, write_png
+from conftest import csv_row, rooms_grid, write_png
 
 from mresim_phys.cli import main
 from mresim_phys.errors import MapError, ScenarioError
@@ -181,10 +181,10 @@ def test_replay_gives_the_live_prior_frames_and_metrics(
     plan_file(rooms_grid())
     sim = Simulation.from_yaml(scenario_file(prior={**PLAN, "drop": 0.2}))
     renderer = Renderer(sim.world.shape, parse_layers("all"), 4)
-    frames, rows = [renderer.render(sim.snapshot())], [sim.record.csv_row()]
+    frames, rows = [renderer.render(sim.snapshot())], [csv_row(sim.record)]
     with RunLogWriter(tmp_path / "log", sim.snapshot(), name="tiny", seed=3) as writer:
         for _ in range(15):
-            rows.append(sim.step().csv_row())
+            rows.append(csv_row(sim.step()))
             writer.write(sim.snapshot())
             frames.append(renderer.render(sim.snapshot()))
     log = RunLog.open(tmp_path / "log")
@@ -192,7 +192,7 @@ def test_replay_gives_the_live_prior_frames_and_metrics(
     assert np.array_equal(log.prior, sim.setup.prior)
     for snap, frame in zip(log.snapshots(), frames, strict=True):
         assert np.array_equal(renderer.render(snap), frame), snap.step
-    assert [record.csv_row() for record in recompute_metrics(log)] == rows
+    assert [csv_row(record) for record in recompute_metrics(log)] == rows
 
 
 # ---------------------------------------------------------------- bad input

@@ -13,6 +13,7 @@ from typing import Any
 import cv2
 import numpy as np
 import pytest
+from conftest import csv_row
 
 from mresim_phys import MresimError, Simulation
 from mresim_phys.output import logformat
@@ -51,10 +52,10 @@ def record_run(
     """Run ``steps`` steps, logging every snapshot; the live snapshots and csv rows, the writer."""
     sim = Simulation.from_yaml(path, steps=steps)
     first = sim.snapshot()
-    snaps, rows = [kept(first)], [sim.record.csv_row()]
+    snaps, rows = [kept(first)], [csv_row(sim.record)]
     writer = RunLogWriter(log_dir, first, name="tiny", seed=3, chunk_steps=chunk_steps)
     for _ in range(steps):
-        rows.append(sim.step().csv_row())
+        rows.append(csv_row(sim.step()))
         snap = sim.snapshot()
         writer.write(snap)
         snaps.append(kept(snap))
@@ -120,7 +121,7 @@ def test_planner_views_replay(scenario_file: ScenarioFile, tmp_path: Path) -> No
     for got, want in zip(log.snapshots(), snaps, strict=True):
         assert_same_snapshot(got, want)
     assert sum(r.skeleton is not None and r.skeleton.any() for r in snaps[-1].robots) == 3
-    assert [record.csv_row() for record in recompute_metrics(log)] == rows
+    assert [csv_row(record) for record in recompute_metrics(log)] == rows
 
 
 @pytest.mark.parametrize(
@@ -136,7 +137,7 @@ def test_recomputed_metrics_equal_the_live_csv(
     scenario_file: ScenarioFile, tmp_path: Path, changes: dict[str, object]
 ) -> None:
     _, rows, _ = record_run(scenario_file(**changes), tmp_path / "log", 45, chunk_steps=7)
-    got = [record.csv_row() for record in recompute_metrics(RunLog.open(tmp_path / "log"))]
+    got = [csv_row(record) for record in recompute_metrics(RunLog.open(tmp_path / "log"))]
     assert got == rows
 
 
@@ -178,11 +179,11 @@ def test_an_unclosed_log_holds_its_flushed_chunks(
     _, rows, writer = record_run(scenario_file(), log_dir, 40, chunk_steps=16, close=False)
     log = RunLog.open(log_dir)  # as after a crash: only whole chunks count
     assert log.steps == 32 and not log.meta["closed"]
-    assert [record.csv_row() for record in recompute_metrics(log)] == rows[:32]
+    assert [csv_row(record) for record in recompute_metrics(log)] == rows[:32]
     writer.close()
     log = RunLog.open(log_dir)
     assert log.steps == 41 and log.meta["closed"]
-    assert [record.csv_row() for record in recompute_metrics(log)] == rows
+    assert [csv_row(record) for record in recompute_metrics(log)] == rows
 
 
 def test_writer_wants_steps_in_order(scenario_file: ScenarioFile, tmp_path: Path) -> None:
@@ -380,7 +381,7 @@ def test_version_1_logs_still_replay(scenario_file: ScenarioFile, tmp_path: Path
         robots_then = [dataclasses.replace(r, skeleton=None, rendezvous=None) for r in want.robots]
         assert_same_snapshot(got, dataclasses.replace(want, agents=(base, *robots_then)))
     assert any(r.skeleton is not None for r in snaps[-1].robots)
-    assert [record.csv_row() for record in recompute_metrics(log)] == rows
+    assert [csv_row(record) for record in recompute_metrics(log)] == rows
 
 
 DOOR = (slice(25, 37), slice(40, 42))  # the door between the two rooms of the tiny map
@@ -401,12 +402,12 @@ def test_replay_follows_truth_changes(scenario_file: ScenarioFile, tmp_path: Pat
     renderer = Renderer(sim.world.shape, LayerSpec.all(), frame_scale(sim.world.shape, 2.0))
     snap = sim.snapshot()
     writer = RunLogWriter(tmp_path / "log", snap, name="tiny", seed=3, chunk_steps=8)
-    snaps, rows, frames = [kept(snap)], [sim.record.csv_row()], [renderer.render(snap)]
+    snaps, rows, frames = [kept(snap)], [csv_row(sim.record)], [renderer.render(snap)]
     totals = [sim.coverage.total]
     for step in range(1, 31):
         if step in CHANGES:
             change_world(sim, *CHANGES[step])
-        rows.append(sim.step().csv_row())
+        rows.append(csv_row(sim.step()))
         snap = sim.snapshot()
         writer.write(snap)
         snaps.append(kept(snap))
@@ -422,7 +423,7 @@ def test_replay_follows_truth_changes(scenario_file: ScenarioFile, tmp_path: Pat
         assert np.array_equal(renderer.render(got), frame)
         assert got.truth[33, 40] == (got.step >= 8)
         assert got.truth[27, 40] == (8 <= got.step < 20)
-    assert [record.csv_row() for record in recompute_metrics(log)] == rows
+    assert [csv_row(record) for record in recompute_metrics(log)] == rows
     for n in range(31):  # the truth is logged only where it changed
         chunk = log.read_chunk(n // 8)
         cells = logformat.segment(chunk, "truth", n % 8)

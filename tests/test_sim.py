@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from conftest import csv_row
 
 from mresim_phys import Simulation
 from mresim_phys.scenario.load import load_scenario
@@ -18,7 +19,7 @@ ScenarioFile = Callable[..., Path]
 
 def rollout(path: Path, steps: int, **overrides: object) -> tuple[list[list[str]], Simulation]:
     sim = Simulation.from_yaml(path, steps=steps, **overrides)
-    rows = [record.csv_row() for record in sim.iterate()]
+    rows = [csv_row(record) for record in sim.iterate()]
     return rows, sim
 
 
@@ -174,7 +175,7 @@ def test_a_stalled_run_stops_with_reason_stalled(scenario_file: ScenarioFile) ->
 
 
 def test_slow_steady_gains_count_as_progress() -> None:
-    from mresim_phys.metrics import StallWatch
+    from mresim_phys.tracking import StallWatch
 
     watch = StallWatch(window=5, gain=0.001)
     for step in range(40):  # 0.0004 a step: a gain of 0.001 every three steps

@@ -13,6 +13,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
@@ -46,10 +47,16 @@ def chunk_file(index: int) -> str:
 
 
 def new_meta(
-    first: Snapshot, name: str, seed: int, chunk_steps: int, faults: bool = False
+    first: Snapshot,
+    name: str,
+    seed: int,
+    chunk_steps: int,
+    faults: bool = False,
+    columns: Sequence[str] = (),
 ) -> dict[str, Any]:
     """meta.json of a log about to get its first step (``fault_columns``: the run had
-    faults, so its metrics.csv has the robustness columns; only written when true)."""
+    faults, so its metrics.csv has the robustness columns; only written when true;
+    ``columns``: the optional metric columns its scenario named, only written when some)."""
     meta: dict[str, Any] = {
         "format": FORMAT,
         "version": VERSION,
@@ -67,6 +74,8 @@ def new_meta(
     }
     if faults:
         meta["fault_columns"] = True
+    if columns:
+        meta["columns"] = list(columns)
     if first.sights:
         meta["sights"] = [sight_meta(s) for s in first.sights]
     if first.dt is not None:  # a run given in seconds too (scenario dt)
@@ -92,6 +101,7 @@ class RunLogWriter:
         seed: int,
         chunk_steps: int = 100,
         faults: bool = False,
+        columns: Sequence[str] = (),
     ) -> None:
         if chunk_steps < 1:
             raise ValueError(f"chunk_steps must be at least 1, not {chunk_steps}")
@@ -102,7 +112,7 @@ class RunLogWriter:
         self.log_dir.mkdir(parents=True, exist_ok=True)
         for stale in self.log_dir.glob("deltas-*.npz"):
             stale.unlink()
-        self.meta = new_meta(first, name, seed, chunk_steps, faults)
+        self.meta = new_meta(first, name, seed, chunk_steps, faults, columns)
         truth = np.packbits(first.truth, axis=None)
         statics: dict[str, Any] = {"occupied": truth}
         if first.terrain is not None:

@@ -20,9 +20,10 @@ import numpy as np
 import yaml
 
 from mresim_phys.build import region_probe, run_rules
+from mresim_phys.columns import Layout
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.errors import ScenarioError
-from mresim_phys.metrics import CommTotals, Milestones, StepRecord, csv_header
+from mresim_phys.metrics import StepRecord
 from mresim_phys.output.files import PendingFile, write_json_atomic, write_text_atomic
 from mresim_phys.output.logwriter import RunLogWriter
 from mresim_phys.output.video import (
@@ -34,6 +35,7 @@ from mresim_phys.output.video import (
 from mresim_phys.render import LayerSpec, Renderer, frame_scale, parse_layers
 from mresim_phys.scenario.schema import RenderSpec, Scenario
 from mresim_phys.snapshot import Snapshot
+from mresim_phys.tracking import CommTotals, Milestones
 
 if TYPE_CHECKING:
     from mresim_phys.sim import Simulation
@@ -67,6 +69,15 @@ def scenario_yaml(scenario: Scenario) -> str:
     return yaml.safe_dump(scenario.model_dump(mode="json"), sort_keys=False)
 
 
+def run_layout(scenario: Scenario) -> Layout:
+    """The columns of the run's ``metrics.csv`` (a world that changes: ``stale``; paired
+    faults: the robustness columns; the optional columns its scenario names)."""
+    rules = run_rules(scenario)
+    names = [r.name for r in scenario.robots]
+    extra = scenario.metrics.columns
+    return Layout.of(names, latest=rules.latest, faults=rules.fault_columns, extra=extra)
+
+
 class RunWriter:
     """Streams ``metrics.csv`` during a run and writes ``summary.json`` when closed.
 
@@ -83,13 +94,12 @@ class RunWriter:
         self.path = out_dir / "metrics.csv"
         self._file = PendingFile(self.path)
         self._csv = csv.writer(self._file, lineterminator="\n")
-        rules = run_rules(scenario)  # a world that changes: 'stale'; paired faults: robustness
-        names = [r.name for r in scenario.robots]
-        self._csv.writerow(csv_header(names, stale=rules.latest, faults=rules.fault_columns))
+        self.layout = run_layout(scenario)
+        self._csv.writerow(self.layout.header())
 
     def on_step(self, record: StepRecord) -> None:
         """Append one row."""
-        self._csv.writerow(record.csv_row())
+        self._csv.writerow(self.layout.row(record))
 
     def close(self) -> None:
         """Close ``metrics.csv`` and give it its name (idempotent; WriteError if a row
@@ -157,15 +167,23 @@ class MetricsRecorder:
 class LogRecorder:
     """The run log (every snapshot field, as map deltas and JSON lines) for replay."""
 
-    def __init__(self, log_dir: Path, name: str, seed: int, faults: bool = False) -> None:
+    def __init__(
+        self, log_dir: Path, name: str, seed: int, faults: bool = False, columns: Sequence[str] = ()
+    ) -> None:
         self.log_dir, self.name, self.seed, self.faults = log_dir, name, seed, faults
+        self.columns = tuple(columns)
         self.writer: RunLogWriter | None = None
 
     def on_step(self, record: StepRecord, snapshot: SnapshotSource) -> None:
         """Log the step (the first call writes the static data and step 0)."""
         if self.writer is None:
             self.writer = RunLogWriter(
-                self.log_dir, snapshot(), name=self.name, seed=self.seed, faults=self.faults
+                self.log_dir,
+                snapshot(),
+                name=self.name,
+                seed=self.seed,
+                faults=self.faults,
+                columns=self.columns,
             )
         else:
             self.writer.write(snapshot())
@@ -304,7 +322,8 @@ def make_recorders(sim: Simulation, out_dir: Path) -> tuple[RunWriter, list[Reco
         raise
     recorders: list[Recorder] = [MetricsRecorder(writer)]
     if spec.log:
-        log = LogRecorder(out_dir / "log", scenario.name, scenario.seed, sim.fault_columns)
+        columns = scenario.metrics.columns
+        log = LogRecorder(out_dir / "log", scenario.name, scenario.seed, sim.fault_columns, columns)
         recorders.append(log)
     if frames is not None:
         recorders.append(frames)

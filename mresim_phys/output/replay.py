@@ -21,9 +21,9 @@ from typing import Any
 import numpy as np
 
 from mresim_phys.build import region_probe
+from mresim_phys.columns import Layout
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.errors import MresimError, ScenarioError
-from mresim_phys.metrics import csv_header
 from mresim_phys.output.files import atomic_path
 from mresim_phys.output.health import compare_health
 from mresim_phys.output.recorders import checked_layers, frame_recorder, given
@@ -143,6 +143,17 @@ def replay_frames(
     return written
 
 
+def log_layout(log: RunLog, latest: bool) -> Layout:
+    """The columns of the logged run's ``metrics.csv``, as its meta.json tells them."""
+    return Layout.of(
+        log.names[1:],
+        latest=latest,
+        faults=bool(log.meta.get("fault_columns", False)),
+        connected=bool(log.meta.get("sights")),  # logs before the explorable area: no
+        extra=[str(name) for name in log.meta.get("columns", [])],
+    )
+
+
 def replay_metrics(log: RunLog, run_dir: Path) -> tuple[list[str], bool]:
     """Write metrics-replayed.csv from the log and compare it with metrics.csv; recompute
     the run-health record and compare it with summary.json's (one pass over the log)."""
@@ -151,11 +162,10 @@ def replay_metrics(log: RunLog, run_dir: Path) -> tuple[list[str], bool]:
     replay, last = Replay(log, latest), None
     with atomic_path(out) as tmp, tmp.open("w", newline="", encoding="utf-8") as handle:
         writer = csv.writer(handle, lineterminator="\n")
-        faults = bool(log.meta.get("fault_columns", False))
-        connected = bool(log.meta.get("sights"))  # logs before the explorable area: no
-        writer.writerow(csv_header(log.names[1:], stale=latest, faults=faults, connected=connected))
+        layout = log_layout(log, latest)
+        writer.writerow(layout.header())
         for snap, record in replay.run():
-            writer.writerow(record.csv_row())
+            writer.writerow(layout.row(record))
             last = snap
     health = replay.health_report(last).summary() if last is not None else {}
     lines, same_health = compare_health(health, run_dir)

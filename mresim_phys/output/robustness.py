@@ -23,9 +23,10 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from mresim_phys.errors import ScenarioError
-from mresim_phys.metrics import Curves, normalised_area
+from mresim_phys.metrics import normalised_area
 from mresim_phys.output.files import write_json_atomic
 from mresim_phys.scenario.faults import paired_problem, without_faults
+from mresim_phys.tracking import Curves
 from mresim_phys.types import FREE
 
 if TYPE_CHECKING:

@@ -26,7 +26,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from mresim_phys.metrics import StepRecord, explorable_summary
+from mresim_phys.metrics import StepRecord
 from mresim_phys.output.files import WriteError
 from mresim_phys.output.health import run_health
 from mresim_phys.output.physical import physical_summary
@@ -36,6 +36,7 @@ from mresim_phys.output.rundir import StagedRun
 from mresim_phys.output.signals import StopRequest, stop_on_signals
 from mresim_phys.sim import Simulation
 from mresim_phys.snapshot import Snapshot
+from mresim_phys.tracking import explorable_summary
 
 INTERRUPTED = "interrupted"
 

@@ -15,6 +15,7 @@ from typing import Any, TypeVar, get_args
 
 from pydantic import BaseModel, ValidationError
 
+from mresim_phys.columns import COLUMNS, DEFAULTS
 from mresim_phys.comms import COMM_MODELS
 from mresim_phys.errors import MapError, ScenarioError, UnknownPluginError
 from mresim_phys.knowledge.teammates import BASE_NAME
@@ -117,6 +118,7 @@ def validate_scenario(
         raise ScenarioError(describe_errors(source, exc)) from None
     check_event_robots(scenario, source)
     check_layers(scenario, source)
+    check_columns(scenario, source)
     problem = paired_problem(scenario)
     if problem is not None:
         raise ScenarioError(f"{source}: {problem}")
@@ -135,6 +137,28 @@ def check_event_robots(scenario: Scenario, source: str) -> None:
         for where, name, base_allowed in event.agent_names():
             known = [BASE_NAME, *names] if base_allowed else names
             check_agent_name(name, known, source, f"events[{i}].{where}")
+
+
+def check_columns(scenario: Scenario, source: str) -> None:
+    """Every column ``metrics.columns`` names must be a metric column, not a default one,
+    named once."""
+    seen: set[str] = set()
+    for i, name in enumerate(scenario.metrics.columns):
+        where = f"{source}: metrics.columns[{i}]"
+        try:
+            cls = COLUMNS.get(name)
+        except UnknownPluginError as exc:
+            raise ScenarioError(f"{where}: {exc}") from None
+        if cls.name in DEFAULTS:
+            raise ScenarioError(
+                f"{where}: {name!r} is a default column of metrics.csv, always written;"
+                " list only optional columns here (docs/metric-columns.md)."
+            )
+        if cls.name in seen:
+            raise ScenarioError(
+                f"{where}: {name!r} is column {cls.name!r}, named twice; name each column once."
+            )
+        seen.add(cls.name)
 
 
 def check_layers(scenario: Scenario, source: str) -> None:

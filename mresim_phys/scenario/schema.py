@@ -286,6 +286,17 @@ class RenderSpec(Strict):
     plots: bool = Field(True, description="Write plots at the end (needs the plot extra).")
 
 
+class MetricsSpec(Strict):
+    """What ``metrics.csv`` holds beyond its default columns."""
+
+    columns: list[str] = Field(
+        default_factory=list,
+        description="Optional metric columns written after the default ones, in this order:"
+        " a column's name (robots_done, base_links, robot_base_link, or one a package"
+        " registers) or package.module:Class; see docs/metric-columns.md.",
+    )
+
+
 def event_kind(value: Any) -> str | None:
     """Which registered event a YAML entry is: the first event name among its keys."""
     if isinstance(value, EventParams):
@@ -354,6 +365,9 @@ class Scenario(Strict):
     )
     render: RenderSpec = Field(
         default_factory=RenderSpec, description="Video, pictures, run log and plots."
+    )
+    metrics: MetricsSpec = Field(
+        default_factory=MetricsSpec, description="Optional columns of metrics.csv."
     )
     events: EventList = Field(
         default_factory=list,

@@ -16,6 +16,9 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from mresim_phys.metrics import StepRecord
+from mresim_phys.tracking import fraction
+
+CHART = ("explored", "known_at_base")  # the metric columns the page's chart draws
 
 
 @dataclass
@@ -39,8 +42,8 @@ class Timeline:
         of the state changes of this step (None where a robot's state did not change)."""
         n = len(self.steps)
         self.steps.append(record.step)
-        self.explored.append(record.explored)
-        self.known_at_base.append(record.known_at_base)
+        self.explored.append(fraction(CHART[0], record))
+        self.known_at_base.append(fraction(CHART[1], record))
         self.events += [(n, text) for text in events]
         if self._states:
             told = " ".join(events)

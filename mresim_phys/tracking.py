@@ -1,0 +1,154 @@
+"""Run trackers (phase 7, metrics): what the run remembers of its steps, read from columns.
+
+Each tracker is fed every step's facts (``metrics.StepRecord``) and reads them through the
+metric columns (``columns.value_of``), as ``metrics.csv`` does: :class:`Milestones` (the
+first step each fraction crossed 0.5 / 0.9 / 0.95), :class:`StallWatch` (the stall rule,
+``stop.stalled_for``), :class:`Curves` (the explored and known-at-base curves, for their
+areas) and :class:`CommTotals` (communication over the run, for ``summary.json``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+from mresim_phys.columns import value_of
+from mresim_phys.knowledge.coverage import Coverage
+from mresim_phys.metrics import THRESHOLDS, StepRecord
+
+MILESTONE_COLUMNS = ("explored", "known_at_base", "explored_connected", "known_at_base_connected")
+
+
+def number(name: str, record: StepRecord) -> float | None:
+    """Column ``name``'s value at ``record``'s step as a number (None: not measured)."""
+    value = value_of(name, record)
+    if value is None:
+        return None
+    if not isinstance(value, (int, float)):
+        raise TypeError(f"column {name!r} is not a number per step")
+    return value
+
+
+def count(name: str, record: StepRecord) -> int:
+    """Column ``name``'s value at ``record``'s step as a whole number (None counts 0)."""
+    return int(number(name, record) or 0)
+
+
+def fraction(name: str, record: StepRecord) -> float:
+    """Column ``name``'s value at ``record``'s step as a float (None counts 0)."""
+    value = number(name, record)
+    return 0.0 if value is None else value
+
+
+def no_milestones() -> dict[str, int | None]:
+    """Every threshold, none reached yet."""
+    return dict.fromkeys(map(str, THRESHOLDS))
+
+
+@dataclass
+class Milestones:
+    """First step at which ``explored`` / ``known_at_base`` (and their ``_connected``
+    versions) reached each threshold."""
+
+    explored: dict[str, int | None] = field(default_factory=no_milestones)
+    known_at_base: dict[str, int | None] = field(default_factory=no_milestones)
+    explored_connected: dict[str, int | None] = field(default_factory=no_milestones)
+    known_at_base_connected: dict[str, int | None] = field(default_factory=no_milestones)
+
+    def update(self, record: StepRecord) -> None:
+        """Note thresholds first crossed by ``record``."""
+        for name in MILESTONE_COLUMNS:
+            value = number(name, record)
+            table = getattr(self, name)
+            for threshold in THRESHOLDS:
+                key = str(threshold)
+                if table[key] is None and value is not None and value >= threshold:
+                    table[key] = record.step
+
+
+def explorable_summary(
+    coverage: Coverage, last: StepRecord, milestones: Milestones
+) -> dict[str, object]:
+    """summary.json's fields about what the fractions count: the explorable cells and the
+    connected ones at the last step, and the ``_connected`` fractions' final values and
+    milestones."""
+    return {
+        "explorable_cells": coverage.total,
+        "connected_cells": coverage.total_connected if coverage.connected is not None else None,
+        "final_explored_connected": number("explored_connected", last),
+        "final_known_at_base_connected": number("known_at_base_connected", last),
+        "steps_to_explored_connected": dict(milestones.explored_connected),
+        "steps_to_known_at_base_connected": dict(milestones.known_at_base_connected),
+    }
+
+
+@dataclass
+class StallWatch:
+    """When the run last made progress: a gain of ``gain`` in explored or known at base.
+
+    The run is stalled once ``window`` steps have passed since the last step at which
+    either fraction rose by at least ``gain`` above its value at the progress before
+    (``stop.stalled_for`` / ``stop.stalled_gain``). Slow, steady gains add up: 0.01 %
+    a step for ten steps is a gain of 0.1 %.
+    """
+
+    window: int | None
+    gain: float
+    explored: float = 0.0
+    known_at_base: float = 0.0
+    last_progress: int = 0
+
+    def update(self, record: StepRecord) -> None:
+        """Note progress made by ``record``."""
+        explored, known = fraction("explored", record), fraction("known_at_base", record)
+        gained = max(explored - self.explored, known - self.known_at_base)
+        if record.step == 0 or gained >= self.gain:
+            self.explored, self.known_at_base = explored, known
+            self.last_progress = record.step
+
+    def stalled(self, step: int) -> bool:
+        """No progress in the last ``window`` steps."""
+        return self.window is not None and step - self.last_progress >= self.window
+
+
+@dataclass
+class CommTotals:
+    """Communication over the whole run, for ``summary.json``."""
+
+    comm_bytes: int = 0
+    control_bytes: int = 0
+    link_steps: int = 0  # sum over steps of the linked pairs
+    latency_max: float = 0.0
+    latency_sum: float = 0.0
+    steps: int = 0
+
+    def update(self, record: StepRecord) -> None:
+        """Add one step."""
+        self.comm_bytes += count("comm_bytes", record)
+        self.control_bytes += count("control_bytes", record)
+        self.link_steps += count("links", record)
+        self.latency_max = max(self.latency_max, fraction("latency_max", record))
+        self.latency_sum += fraction("latency_mean", record)
+        self.steps += 1
+
+    def summary(self) -> dict[str, float | int]:
+        """The totals as JSON-ready numbers."""
+        return {
+            "comm_bytes": self.comm_bytes,
+            "control_bytes": self.control_bytes,
+            "mean_links": self.link_steps / self.steps if self.steps else 0.0,
+            "latency_max": self.latency_max,
+            "latency_mean": self.latency_sum / self.steps if self.steps else 0.0,
+        }
+
+
+@dataclass
+class Curves:
+    """The explored and known-at-base curves of the run, step by step (for their areas)."""
+
+    explored: list[float] = field(default_factory=list)
+    known_at_base: list[float] = field(default_factory=list)
+
+    def update(self, record: StepRecord) -> None:
+        """Add one step (steps come in order from 0)."""
+        self.explored.append(fraction("explored", record))
+        self.known_at_base.append(fraction("known_at_base", record))
