@@ -22,16 +22,7 @@ from mresim_phys.scenario.schema import (
     Scenario,
 )
 from mresim_phys.types import BeliefGrid
-from mresim_phys.world.events import (
-    Cells,
-    Close,
-    Collapse,
-    DoorEventParams,
-    Event,
-    Open,
-    make_event,
-)
-from mresim_phys.world.shapes import region_cells
+from mresim_phys.world.events import Event, NeedsMap
 from mresim_phys.world.space import World
 from mresim_phys.world.terrain import TerrainGrid, TerrainSpec, terrain_grid
 
@@ -60,26 +51,27 @@ def check_event_boxes(scenario: Scenario, world: World) -> None:
 
 
 def check_world_events(scenario: Scenario, events: list[Event], world: World) -> None:
-    """Doors named by close / open events must exist; collapse regions must lie on the map
-    (their cells are fixed here, once)."""
+    """Doors the events name must exist; an event that needs the map works out where it
+    acts now, once (a collapse region must lie on the map)."""
     doors = {d.name for d in scenario.doors}
     for i, (params, event) in enumerate(zip(scenario.events, events, strict=True)):
-        if isinstance(params, DoorEventParams) and params.door() not in doors:
-            known = ", ".join(sorted(doors)) or "none: add a 'doors' list"
-            raise ScenarioError(
-                f"events[{i}]: there is no door called {params.door()!r} (doors: {known})."
-            )
-        if isinstance(event, Collapse):
+        for where, door in params.doors():
+            if door not in doors:
+                known = ", ".join(sorted(doors)) or "none: add a 'doors' list"
+                raise ScenarioError(
+                    f"events[{i}].{where}: there is no door called {door!r} (doors: {known})."
+                )
+        kind = event.name
+        if isinstance(event, NeedsMap):
             try:
-                event.cells = region_cells(event.params.collapse, world.shape)
+                event.prepare(world.shape)
             except ValueError as exc:
-                raise ScenarioError(f"events[{i}].collapse: {exc}") from None
+                raise ScenarioError(f"events[{i}].{kind}: {exc}") from None
 
 
 def world_can_change(scenario: Scenario) -> bool:
     """Whether anything in the scenario changes the truth during the run."""
-    changing = (Cells, Collapse, Close, Open)
-    events = any(isinstance(make_event(e), changing) for e in scenario.events)
+    events = any("world" in e.changes for e in scenario.events)
     return bool(scenario.obstacles or scenario.doors or scenario.random_debris or events)
 
 

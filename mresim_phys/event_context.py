@@ -23,7 +23,7 @@ from mresim_phys.world.changes import Change, circles_cover
 from mresim_phys.world.debris import Crush
 from mresim_phys.world.doors import Door
 from mresim_phys.world.elements import WorldElement
-from mresim_phys.world.events import Box, Channels, Event, RobotPart
+from mresim_phys.world.events import Box, Channels, Event, RobotInfo, RobotPart
 from mresim_phys.world.explorable import Explorable, follow_world
 from mresim_phys.world.reach import Reachable
 from mresim_phys.world.space import World
@@ -58,11 +58,12 @@ class RunEventContext:
         self._step = 0
         self._current = 0
         self._bodies: FloatArray | None = None  # (x, y, radius) of every robot this step
+        self._robots: tuple[RobotInfo, ...] | None = None  # what events see of them
 
     def run(self, events: Sequence[Event], step: int) -> list[str]:
         """Apply every event (in scenario order), then move every world element (moving
         obstacles, doors, debris; in scenario order) at ``step``; return the lines logged."""
-        self._step, self.lines, self._bodies = step, [], None
+        self._step, self.lines, self._bodies, self._robots = step, [], None, None
         for index, event in enumerate(events):
             self._current = index
             event.apply(self)
@@ -74,6 +75,17 @@ class RunEventContext:
     def step(self) -> int:
         """The step now starting."""
         return self._step
+
+    @property
+    def robots(self) -> tuple[RobotInfo, ...]:
+        """Every robot as it stands at the start of the step (robots stand still through
+        the events phase; taken once a step, when an event first asks)."""
+        if self._robots is None:
+            self._robots = tuple(robot_info(r) for r in self._team())
+        return self._robots
+
+    def _team(self) -> list[Robot]:
+        return [a for a in self.agents.values() if isinstance(a, Robot)]
 
     @property
     def rng(self) -> np.random.Generator:
@@ -121,7 +133,7 @@ class RunEventContext:
     def change_cells(self, cells: BoolGrid, occupied: bool, crush: Crush) -> list[str]:
         """Make the True cells of ``cells`` rubble or free; robots in the way are spared
         (their cells stay free) or, with ``crush: fail``, buried and failed."""
-        robots = [a for a in self.agents.values() if isinstance(a, Robot)]
+        robots = self._team()
         under = []
         if occupied:
             rows, cols = np.nonzero(cells)
@@ -151,7 +163,7 @@ class RunEventContext:
     ) -> bool:
         """Put or move obstacle ``name`` (False, and nothing changes, if it does not fit)."""
         if self._bodies is None:  # robots stand still through the events phase
-            robots = [a for a in self.agents.values() if isinstance(a, Robot)]
+            robots = self._team()
             bodies = np.array([(*r.position, r.radius) for r in robots], dtype=np.float64)
             self._bodies = bodies.reshape(-1, 3)
         if not self.world.fits(footprint, at, self._bodies, name, over_walls):
@@ -169,6 +181,13 @@ class RunEventContext:
     def log(self, line: str) -> None:
         """Note what happened this step."""
         self.lines.append(line)
+
+
+def robot_info(robot: Robot) -> RobotInfo:
+    """What events may see of ``robot`` now."""
+    x, y = robot.position
+    broken = tuple(sorted(robot.broken))
+    return RobotInfo(robot.name, (x, y), robot.heading, robot.radius, robot.state, broken)
 
 
 def robot_cells(robots: Sequence[Robot], shape: tuple[int, int]) -> BoolGrid:

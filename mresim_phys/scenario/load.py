@@ -31,12 +31,11 @@ from mresim_phys.scenario.schema import (
     PluginSpec,
     RobotParams,
     Scenario,
-    refresh_event_union,
 )
 from mresim_phys.scenario.units import to_cells
 from mresim_phys.strategies import STRATEGIES
-from mresim_phys.world.events import EVENTS, CollapseParams
-from mresim_phys.world.shapes import MaskRegion, Region
+from mresim_phys.world.events import EVENTS
+from mresim_phys.world.shapes import region_under
 from mresim_phys.world.terrain import absolute_terrain
 
 RobotT = TypeVar("RobotT", bound=RobotParams)
@@ -77,7 +76,6 @@ def check_own_values(data: dict[str, Any], source: str) -> None:
     problems here (an override or a default may give them); an event the file schedules
     after its own step cap would never happen, and is refused.
     """
-    refresh_event_union()  # events registered in code since the last scenario was read
     try:
         scenario = Scenario.model_validate(data)
     except ValidationError as exc:
@@ -110,7 +108,6 @@ def validate_scenario(
     """Schema-validate ``data`` and each plugin's params; errors name ``source``. A scenario
     in metres (``units: m``) is turned into cells first, its map read from ``folder``
     (default the working folder) when its path is relative (``scenario/units.py``)."""
-    refresh_event_union()
     data = to_cells(data, source, folder if folder is not None else Path.cwd())
     try:
         scenario = Scenario.model_validate(data)
@@ -268,30 +265,18 @@ def absolute_map(spec: MapSpec, folder: Path, source: str, field: str) -> MapSpe
     return spec.model_copy(update={kind: str(path)})
 
 
-def absolute_mask(region: Region | None, folder: Path) -> Region | None:
-    """``region`` with a mask image's path made absolute (relative to ``folder``)."""
-    if not isinstance(region, MaskRegion):
-        return region
-    return region.model_copy(update={"mask": (folder / region.mask.expanduser()).resolve()})
-
-
 def resolve_mask_paths(scenario: Scenario, folder: Path) -> Scenario:
     """The scenario with the mask images of collapse events, random debris and terrain made
     absolute (relative paths are to the YAML file), so the run can be built anywhere."""
-    events = [
-        e.model_copy(update={"collapse": absolute_mask(e.collapse, folder)})
-        if isinstance(e, CollapseParams)
-        else e
-        for e in scenario.events
-    ]
+    events = [e.under(folder) for e in scenario.events]
     debris = scenario.random_debris
     if debris is not None:
-        debris = debris.model_copy(update={"region": absolute_mask(debris.region, folder)})
+        debris = debris.model_copy(update={"region": region_under(debris.region, folder)})
     terrain = absolute_terrain(scenario.terrain, folder)
     faults = scenario.faults
     if faults is not None:
         hazards = [
-            h.model_copy(update={"region": absolute_mask(h.region, folder)}) for h in faults.hazards
+            h.model_copy(update={"region": region_under(h.region, folder)}) for h in faults.hazards
         ]
         faults = faults.model_copy(update={"hazards": hazards})
     return scenario.model_copy(

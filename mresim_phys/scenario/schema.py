@@ -9,7 +9,8 @@ inherits; a robot entry may override any of them (nested ``sensor`` keys merge).
 from __future__ import annotations
 
 import re
-from typing import TYPE_CHECKING, Annotated, Any, Literal, Union
+from functools import lru_cache
+from typing import Annotated, Any, Literal, Union
 
 from pydantic import (
     AfterValidator,
@@ -17,6 +18,9 @@ from pydantic import (
     Field,
     SerializeAsAny,
     Tag,
+    TypeAdapter,
+    ValidatorFunctionWrapHandler,
+    WrapValidator,
     field_validator,
     model_validator,
 )
@@ -306,31 +310,34 @@ def event_kind(value: Any) -> str | None:
     return None
 
 
-def event_union() -> Any:
-    """The ``events[i]`` type: one tagged member per registered event's ``Params``."""
-    members = tuple(Annotated[EVENTS.get(n).Params, Tag(n)] for n in EVENTS.names())
-    return Annotated[
+@lru_cache(maxsize=8)
+def event_adapter(names: tuple[str, ...]) -> TypeAdapter[Any]:
+    """A validator of one ``events[i]`` entry: one tagged member per registered event's
+    ``Params`` (``names``: the registry's event names when it is asked)."""
+    members = tuple(Annotated[EVENTS.get(n).Params, Tag(n)] for n in names)
+    union: Any = Annotated[
         Union[members],  # noqa: UP007 (a union built from a tuple of types)
         Discriminator(
             event_kind,
             custom_error_type="unknown_event",
             custom_error_message="an event needs one of the keys "
-            + ", ".join(repr(n) for n in EVENTS.names()),
+            + ", ".join(repr(n) for n in names),
         ),
     ]
+    return TypeAdapter(union)
 
 
-def events_type() -> Any:
-    """``list[SerializeAsAny[<event union>]]``: the type of ``Scenario.events``."""
-    union = event_union()
-    # a type built at run time from the registry: mypy cannot check it, pydantic does
-    return list[SerializeAsAny[union]]  # type: ignore[valid-type]
+def validate_event(value: Any, handler: ValidatorFunctionWrapHandler) -> EventParams:
+    """One ``events[i]`` entry validated by the ``Params`` of its event, looked up in the
+    registry now (an event registered in code or by an entry point since the last
+    scenario is known at once; nothing is rebuilt)."""
+    if isinstance(value, EventParams):
+        return value
+    event: EventParams = event_adapter(tuple(EVENTS.names())).validate_python(value)
+    return event
 
 
-if TYPE_CHECKING:
-    EventList = list[EventParams]  # what every member of the union is
-else:
-    EventList = events_type()
+EventList = list[SerializeAsAny[Annotated[EventParams, WrapValidator(validate_event)]]]
 
 
 class Scenario(Strict):
@@ -471,20 +478,3 @@ def _inherit(team: dict[str, Any], robot: dict[str, Any]) -> dict[str, Any]:
     if isinstance(team_sensor, dict) and isinstance(robot_sensor, dict):
         merged["sensor"] = {**team_sensor, **robot_sensor}
     return merged
-
-
-_EVENT_NAMES = tuple(EVENTS.names())
-
-
-def refresh_event_union() -> None:
-    """Rebuild ``Scenario.events`` if events were registered after this module was imported.
-
-    The event union is generated from the registry; a third-party event registered
-    in code (``EVENTS.register(MyEvent)``) joins it the next time a scenario is loaded.
-    """
-    global _EVENT_NAMES
-    names = tuple(EVENTS.names())
-    if names != _EVENT_NAMES:
-        _EVENT_NAMES = names
-        Scenario.model_fields["events"].annotation = events_type()
-        Scenario.model_rebuild(force=True)

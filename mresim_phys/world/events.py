@@ -7,13 +7,23 @@ model per event that the scenario schema validates each entry against (the
 schema's event union and the scenario reference are generated from the
 registry). Each step the simulation calls every event's :meth:`Event.apply`
 with an :class:`EventContext`: the small surface through which an event acts
-(fail a robot or part of one, silence agents, change the world, log a line,
-draw from the event's own named random stream).
+(see the robots, fail a robot or part of one, silence agents, change the world, log a
+line, draw from the event's own named random stream).
+
+What an event touches is declared by its ``Params``, never found by checking its class:
+:attr:`EventParams.changes` (``world``, ``robots``, ``radio``: a run whose events change
+the world keeps 'latest' beliefs), :meth:`EventParams.agent_names` (checked against the
+team), :meth:`EventParams.boxes` (checked against the map), :meth:`EventParams.doors`
+(checked against the doors list) and :meth:`EventParams.under` (its files, made absolute
+when the scenario is read). An event that needs the map before the run starts has
+:meth:`NeedsMap.prepare`.
 """
 
 from __future__ import annotations
 
 from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
 from typing import ClassVar, Literal, Protocol, runtime_checkable
 
 import numpy as np
@@ -24,17 +34,29 @@ from mresim_phys.registry import Registry
 from mresim_phys.types import BoolGrid
 from mresim_phys.world.debris import Crush
 from mresim_phys.world.parts import FaultPart, check_part, factor_field, factors_of, part_field
-from mresim_phys.world.shapes import BoxRegion, Region
+from mresim_phys.world.shapes import BoxRegion, Region, region_cells, region_under
 
 RobotPart = FaultPart
 Channels = Literal["main", "control", "both"]
 Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)
+Changes = Literal["world", "robots", "radio"]
 
 
 class EventParams(PluginParams):
-    """Base for every event's parameters: the step at which it happens."""
+    """Base for every event's parameters: the step at which it happens, and what the event
+    touches (module docstring)."""
 
     step: int = Field(ge=0, description="Step at which the event happens.")
+    changes: ClassVar[frozenset[Changes]] = frozenset()  # what the event may change
+
+    def doors(self) -> list[tuple[str, str]]:
+        """(field, door name) for every door the event names (checked against ``doors``)."""
+        return []
+
+    def under(self, folder: Path) -> EventParams:
+        """The params with every file they name made absolute (relative to ``folder``, the
+        scenario file's folder)."""
+        return self
 
     def agent_names(self) -> list[tuple[str, str, bool]]:
         """(field, agent name, whether 'base' may be named) for every agent the event names.
@@ -52,12 +74,29 @@ class EventParams(PluginParams):
         return []
 
 
+@dataclass(frozen=True)
+class RobotInfo:
+    """What an event may see of a robot: where it is and whether it works."""
+
+    name: str
+    position: tuple[float, float]  # (x, y) cells
+    heading: float  # radians
+    radius: float
+    state: str  # active, done, error or failed
+    broken: tuple[str, ...]  # the parts that do not work now (faults.md)
+
+
 class EventContext(Protocol):
     """What an event may do to the running simulation (and nothing more)."""
 
     @property
     def step(self) -> int:
         """The step now starting."""
+        ...
+
+    @property
+    def robots(self) -> Sequence[RobotInfo]:
+        """Every robot as it stands at the start of the step (scenario order; read only)."""
         ...
 
     @property
@@ -121,6 +160,15 @@ class Event(Protocol):
 EVENTS: Registry[Event] = Registry("event", "mresim_phys.events", Family(Event, EventParams))
 
 
+@runtime_checkable
+class NeedsMap(Protocol):
+    """An event that works out where it acts on the map before the run starts."""
+
+    def prepare(self, shape: tuple[int, int]) -> None:
+        """Fix the cells it acts on for a map of ``shape`` (ValueError: it cannot)."""
+        ...
+
+
 class FailParams(EventParams):
     """At ``step``, robot ``fail`` stops (or loses one ``part``), for good or until ``until``."""
 
@@ -131,6 +179,7 @@ class FailParams(EventParams):
     until: int | None = Field(
         None, ge=1, description="Step at which the part works again (null: never)."
     )
+    changes: ClassVar[frozenset[Changes]] = frozenset({"robots"})
 
     def agent_names(self) -> list[tuple[str, str, bool]]:
         """The failing robot."""
@@ -175,6 +224,7 @@ class BlackoutParams(EventParams):
     until: int = Field(ge=1, description="First step after the blackout.")
     blackout: list[str] = Field(min_length=1, description="Robot names (or 'base') that go silent.")
     channel: Channels = Field("both", description="Which channel goes silent.")
+    changes: ClassVar[frozenset[Changes]] = frozenset({"radio"})
 
     def agent_names(self) -> list[tuple[str, str, bool]]:
         """The silenced agents (the base may be one)."""
@@ -216,6 +266,7 @@ class CellsParams(EventParams):
         description="The window [x0, y0, x1, y1] in cells: columns x0..x1-1, rows y0..y1-1."
     )
     occupied: bool = Field(True, description="True: the cells become walls; false: free.")
+    changes: ClassVar[frozenset[Changes]] = frozenset({"world"})
 
     @model_validator(mode="after")
     def _non_empty(self) -> CellsParams:
@@ -261,6 +312,11 @@ class CollapseParams(EventParams):
     crush: Crush = Field(
         "avoid", description="avoid: rubble lands around robots; fail: robots under it fail."
     )
+    changes: ClassVar[frozenset[Changes]] = frozenset({"world", "robots"})
+
+    def under(self, folder: Path) -> CollapseParams:
+        """A mask region's image path made absolute."""
+        return self.model_copy(update={"collapse": region_under(self.collapse, folder)})
 
     def boxes(self) -> list[tuple[str, Box]]:
         """A box region, as (row0, row1, col0, col1)."""
@@ -282,6 +338,10 @@ class Collapse(Plugin):
         self.params = params
         self.cells: BoolGrid | None = None  # the region on the map, set when the run is built
 
+    def prepare(self, shape: tuple[int, int]) -> None:
+        """The region's cells on a map of ``shape`` (ValueError: it does not fit)."""
+        self.cells = region_cells(self.params.collapse, shape)
+
     def apply(self, context: EventContext) -> None:
         """Change the region at the event's step."""
         p = self.params
@@ -299,9 +359,7 @@ class Collapse(Plugin):
 class DoorEventParams(EventParams):
     """Base of the events that close or open a door."""
 
-    def door(self) -> str:
-        """The door's name."""
-        raise NotImplementedError
+    changes: ClassVar[frozenset[Changes]] = frozenset({"world"})
 
 
 class CloseParams(DoorEventParams):
@@ -309,9 +367,9 @@ class CloseParams(DoorEventParams):
 
     close: str = Field(description="Name of a door of the scenario's doors list.")
 
-    def door(self) -> str:
-        """The door's name."""
-        return self.close
+    def doors(self) -> list[tuple[str, str]]:
+        """The door that closes."""
+        return [("close", self.close)]
 
 
 class OpenParams(DoorEventParams):
@@ -319,9 +377,9 @@ class OpenParams(DoorEventParams):
 
     open: str = Field(description="Name of a door of the scenario's doors list.")
 
-    def door(self) -> str:
-        """The door's name."""
-        return self.open
+    def doors(self) -> list[tuple[str, str]]:
+        """The door that opens."""
+        return [("open", self.open)]
 
 
 @EVENTS.register

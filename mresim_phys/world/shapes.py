@@ -109,6 +109,13 @@ class MaskRegion(Strict):
     mask: Path = Field(description="PNG the size of the map; pixels darker than 128 are in.")
 
 
+def region_under(region: Region | None, folder: Path) -> Region | None:
+    """``region`` with a mask image's path made absolute (relative to ``folder``)."""
+    if not isinstance(region, MaskRegion):
+        return region
+    return region.model_copy(update={"mask": (folder / region.mask.expanduser()).resolve()})
+
+
 Region = Annotated[
     Annotated[BoxRegion, Tag("box")]
     | Annotated[CircleRegion, Tag("circle")]
