@@ -61,13 +61,34 @@ def test_readme_commands_are_the_ones_ci_runs() -> None:
 def test_coordination_example_runs(
     tmp_path: Path, scenario_file: Callable[..., Path], monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    importable_example(1, "meet_strategies", tmp_path, monkeypatch)
+    importable_example(2, "meet_strategies", tmp_path, monkeypatch)
     team = {"speed": 2, "radius": 1.0, "sensor": {"range": 30}, "comm_range": 20}
     strategy = {"name": "meet_strategies:MeetAtBase"}
     sim = Simulation.from_yaml(scenario_file(team={**team, "strategy": strategy}, steps=20))
     sim.run()
     heard = sim.robot("A").teammates["B"]
     assert heard.payload is not None and heard.payload.point == sim.base.position
+
+
+def test_the_strategy_built_from_parts_spreads_the_team(
+    tmp_path: Path, scenario_file: Callable[..., Path], monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The guide's strategy from parts runs with its own allocation in place of the
+    auction, and explores."""
+    importable_example(1, "my_parts", tmp_path, monkeypatch)
+    import my_parts
+
+    from mresim_phys.strategies.parts import GreedyAuction
+
+    team = {"speed": 2, "radius": 1.0, "sensor": {"range": 30}, "comm_range": 20}
+    sim = Simulation.from_yaml(
+        scenario_file(team={**team, "strategy": "my_parts:Spread"}, steps=60)
+    )
+    strategy = sim.robot("A").strategy
+    assert isinstance(strategy.parts.allocation, my_parts.AwayFromTeammates)
+    assert not isinstance(strategy.parts.allocation, GreedyAuction)
+    last = sim.run()
+    assert last.explored > 0.5
 
 
 def documented_names(path: Path) -> set[str]:

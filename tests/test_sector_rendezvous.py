@@ -68,7 +68,7 @@ def run(path: Path) -> tuple[Simulation, dict[str, list[bool]]]:
                     x, y = meeting.point
                     if math.dist(meeting.point, BASE) > 15:
                         bearing = math.atan2(y - BASE[1], x - BASE[0]) % (2 * math.pi)
-                        ends = [a % (2 * math.pi) for a in strategy._span]
+                        ends = [a % (2 * math.pi) for a in strategy.wedge.span]
                         gap = min(abs(math.remainder(bearing - end, 2 * math.pi)) for end in ends)
                         assert gap < math.radians(10), (robot.name, meeting)
             if decision is None or seen.get(robot.name) is decision or not robot.alive:
@@ -76,7 +76,7 @@ def run(path: Path) -> tuple[Simulation, dict[str, list[bool]]]:
             seen[robot.name] = decision
             if "target_cluster" in decision.info:
                 x, y = decision.info["frontiers"].centroids.T
-                inside = in_wedge(np.arctan2(y - BASE[1], x - BASE[0]), strategy._span)
+                inside = in_wedge(np.arctan2(y - BASE[1], x - BASE[0]), strategy.wedge.span)
                 if inside.any():
                     own[robot.name].append(bool(inside[decision.info["target_cluster"]]))
     return sim, own
@@ -111,7 +111,7 @@ def test_a_failed_robots_wedge_is_shared_out(tmp_path: Path, scenario_file: Make
         a = sim.robots[0]
         heard_c = a.teammates.get("C")
         if sim.t > 75 and heard_c is not None and sim.t - heard_c.step <= 30:
-            span = a.strategy._span  # type: ignore[attr-defined]
+            span = a.strategy.wedge.span  # type: ignore[attr-defined]
             shared.append(math.isclose(span[1] - span[0], math.radians(45)))
     # two share 90 degrees while they count each other (from the replan after contact)
     assert len(shared) >= 20 and sum(shared) >= 0.8 * len(shared)

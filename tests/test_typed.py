@@ -13,7 +13,8 @@ import pytest
 ROOT = Path(__file__).parent.parent
 EXAMPLES = {  # module name -> (guide, python block)
     "my_strategies": ("writing-a-strategy.md", 0),
-    "my_payloads": ("writing-a-strategy.md", 1),
+    "my_parts": ("writing-a-strategy.md", 1),
+    "my_payloads": ("writing-a-strategy.md", 2),
     "my_columns": ("metric-columns.md", 0),
 }
 

@@ -25,6 +25,7 @@ reported position (:func:`teammate_costs`).
 
 from __future__ import annotations
 
+from dataclasses import dataclass, replace
 from typing import ClassVar
 
 import numpy as np
@@ -34,7 +35,8 @@ from scipy.optimize import linear_sum_assignment
 from mresim_phys.knowledge.frontiers import Frontiers
 from mresim_phys.knowledge.teammates import TeammateInfo
 from mresim_phys.strategies.base import STRATEGIES, PlanContext, RobotView, StrategyParams
-from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams
+from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams, default_parts
+from mresim_phys.strategies.parts import auction_team
 from mresim_phys.types import FloatArray, IntArray
 
 UNREACHABLE = 1e9  # cost of an unreachable (robot, frontier) pair in the assignment
@@ -92,9 +94,9 @@ def min_pos_choice(mine: FloatArray, others: FloatArray, ahead: IntArray) -> int
     return int(order[0])
 
 
-def assignment_team(strategy: FrontierExploration, view: RobotView) -> list[TeammateInfo]:
+def assignment_team(view: RobotView, memory: int) -> list[TeammateInfo]:
     """The teammates that take part (as in the auction), in the team's tie-break order."""
-    return sorted(strategy.teammates(view), key=lambda t: (view.tie_rank(t.name), t.name))
+    return sorted(auction_team(view, memory), key=lambda t: (view.tie_rank(t.name), t.name))
 
 
 def team_costs(
@@ -111,14 +113,13 @@ def farthest(costs: FloatArray) -> float:
     return float(finite.max()) if len(finite) else 0.0
 
 
-@STRATEGIES.register
-class HungarianExploration(FrontierExploration):
-    """Optimal robot-to-frontier assignment over path costs at every replan."""
+@dataclass
+class HungarianAssignment:
+    """The allocation of ``hungarian``: the team's least-total-cost assignment."""
 
-    name = "hungarian"
-    Params: ClassVar[type[StrategyParams]] = HungarianParams
+    teammate_memory: int
 
-    def _auction(
+    def choose(
         self,
         view: RobotView,
         context: PlanContext,
@@ -131,7 +132,7 @@ class HungarianExploration(FrontierExploration):
         is searched to twice this robot's farthest candidate plus a sensor range; beyond
         that it counts as that far (a lower bound of its cost)."""
         goals, mine = targets[candidates], costs[candidates]
-        team = assignment_team(self, view)
+        team = assignment_team(view, self.teammate_memory)
         limit = 2.0 * farthest(mine) + view.sensor_range
         others = np.minimum(team_costs(context, team, goals, limit), limit)
         me = view.tie_rank(view.name)
@@ -140,14 +141,13 @@ class HungarianExploration(FrontierExploration):
         return int(candidates[column if column >= 0 else 0])
 
 
-@STRATEGIES.register
-class MinPosExploration(FrontierExploration):
-    """MinPos: the frontier where the fewest teammates are nearer than this robot."""
+@dataclass
+class MinPosAllocation:
+    """The allocation of ``min_pos``: the frontier where the fewest teammates are nearer."""
 
-    name = "min_pos"
-    Params: ClassVar[type[StrategyParams]] = MinPosParams
+    teammate_memory: int
 
-    def _auction(
+    def choose(
         self,
         view: RobotView,
         context: PlanContext,
@@ -159,8 +159,36 @@ class MinPosExploration(FrontierExploration):
         """Rank this robot on each candidate; a teammate is searched only as far as this
         robot's farthest candidate (beyond it, it is nearer to none)."""
         goals, mine = targets[candidates], costs[candidates]
-        team = assignment_team(self, view)
+        team = assignment_team(view, self.teammate_memory)
         others = team_costs(context, team, goals, farthest(mine))
         me = view.tie_rank(view.name)
         ahead = np.array([int(view.tie_rank(t.name) < me) for t in team], dtype=np.intp)
         return int(candidates[max(min_pos_choice(mine, others, ahead), 0)])
+
+
+@STRATEGIES.register
+class HungarianExploration(FrontierExploration):
+    """Optimal robot-to-frontier assignment over path costs at every replan."""
+
+    name = "hungarian"
+    Params: ClassVar[type[StrategyParams]] = HungarianParams
+
+    def __init__(self, params: HungarianParams) -> None:
+        parts = default_parts(params)
+        super().__init__(
+            params, replace(parts, allocation=HungarianAssignment(params.teammate_memory))
+        )
+
+
+@STRATEGIES.register
+class MinPosExploration(FrontierExploration):
+    """MinPos: the frontier where the fewest teammates are nearer than this robot."""
+
+    name = "min_pos"
+    Params: ClassVar[type[StrategyParams]] = MinPosParams
+
+    def __init__(self, params: MinPosParams) -> None:
+        parts = default_parts(params)
+        super().__init__(
+            params, replace(parts, allocation=MinPosAllocation(params.teammate_memory))
+        )

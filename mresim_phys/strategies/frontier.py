@@ -37,15 +37,7 @@ from mresim_phys.knowledge.frontier_regions import region_sizes
 from mresim_phys.knowledge.frontiers import Frontiers, any_frontier, frontiers_in
 from mresim_phys.knowledge.prior import walled_in
 from mresim_phys.knowledge.targets import TargetFinder, target_reach
-from mresim_phys.knowledge.teammates import TeammateInfo
 from mresim_phys.plugin import Plugin
-from mresim_phys.strategies.auction import (
-    Bidder,
-    exact_costs,
-    greedy_auction,
-    teammate_bidders,
-    utility,
-)
 from mresim_phys.strategies.base import (
     GOAL_MET,
     NO_FRONTIER,
@@ -58,10 +50,15 @@ from mresim_phys.strategies.base import (
     return_to_base,
 )
 from mresim_phys.strategies.giveup import Tried
+from mresim_phys.strategies.parts import (
+    AllFrontiers,
+    FrontierParts,
+    GreedyAuction,
+    MissionComplete,
+    UtilityRanking,
+)
 from mresim_phys.strategies.random_walk import random_step
-from mresim_phys.types import FREE, BeliefGrid, BoolGrid, FloatArray, IntArray
-
-EXPLORES_WITHOUT = frozenset({"drive", "sensor"})  # a teammate with either failed takes no frontier
+from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray, IntArray
 
 
 class FrontierParams(StrategyParams):
@@ -143,13 +140,12 @@ class FrontierExploration(Plugin):
     Params: ClassVar[type[StrategyParams]] = FrontierParams
     params: FrontierParams
 
-    def __init__(self, params: FrontierParams) -> None:
+    def __init__(self, params: FrontierParams, parts: FrontierParts | None = None) -> None:
         self.params = params
+        self.parts = parts or default_parts(params)
         self._tried: Tried | None = None
         self._chasing: IntArray | None = None
         self._home: tuple[float, float] | None = None
-        self._goal_was_met = False  # the done rule sent this robot home
-        self._delivered = False  # ... and its map has reached the base since
 
     def decide(self, view: RobotView) -> Decision:
         """Pick the frontier this robot wins in the auction and plan a path to it."""
@@ -161,7 +157,7 @@ class FrontierExploration(Plugin):
         tried = self._tried_cells(view)
         frontiers = self._frontiers(view, context, tried.set_aside)
         reach = self.params.reach or target_reach(view.clearance)
-        goal_met = len(frontiers) > 0 and self._goal_met(view)
+        goal_met = len(frontiers) > 0 and self.parts.done.met(view)
         found = self._search(frontiers, context, reach) if not goal_met else None
         if found is None and not goal_met and tried.set_aside.any():
             frontiers = self._frontiers(view, context, tried.given_up)
@@ -174,7 +170,7 @@ class FrontierExploration(Plugin):
             return decision
         self._home = None
         targets, costs, candidates = found
-        chosen = self._auction(view, context, frontiers, targets, costs, candidates)
+        chosen = self.parts.allocation.choose(view, context, frontiers, targets, costs, candidates)
         chasing = self._chasing = frontiers.cells_rc[frontiers.cluster_of == chosen]
         row, col = (int(v) for v in targets[chosen])
         path = context.plan_to(row, col)
@@ -210,26 +206,6 @@ class FrontierExploration(Plugin):
             and not any_frontier(belief, chasing)
         )
 
-    def _goal_met(self, view: RobotView) -> bool:
-        """The original's mission-complete rule: after ``done_after`` steps, the robot's own
-        map holds ``done_fraction`` of the building's free area (known before the mission).
-
-        It sends a robot out of the base's reach home once: when its map has reached the
-        base, it explores on until no frontier is left (the original parks it there; a
-        rule that fired again on every loss of contact kept robots shuttling between the
-        edge of the base's reach and the far frontiers, never reaching them)."""
-        fraction = self.params.done_fraction
-        if fraction is None or view.free_area <= 0 or view.step < self.params.done_after:
-            return False
-        if view.base_contact >= view.step - 1:  # its data reaches the base: nothing to carry
-            self._delivered = self._delivered or self._goal_was_met
-            return False
-        if self._delivered:  # it brought its map home once: it explores on to the end
-            return False
-        met = int(np.count_nonzero(view.belief == FREE)) >= fraction * view.free_area
-        self._goal_was_met = self._goal_was_met or met
-        return met
-
     def _tried_cells(self, view: RobotView) -> Tried:
         """What this robot tried in vain (``giveup``); a frontier it has just reached and
         still holds counts a try."""
@@ -242,7 +218,7 @@ class FrontierExploration(Plugin):
 
     def _frontiers(self, view: RobotView, context: PlanContext, tried: BoolGrid) -> Frontiers:
         """This robot's frontier clusters without the ``tried`` cells (nor, with a prior
-        map, those behind which the plan shows only walls)."""
+        map, those behind which the plan shows only walls), as its filter keeps them."""
         exclude = tried
         if view.prior is not None:  # the plan shows only walls behind these cells
             exclude = exclude | walled_in(view.belief, view.prior)
@@ -251,7 +227,7 @@ class FrontierExploration(Plugin):
         box = context.free_box
         if self.params.frontier_size == "region" and view.safe is not None and box is not None:
             found = replace(found, sizes=region_sizes(found, view.belief, view.safe, box))
-        return found
+        return self.parts.filter.keep(view, found)
 
     def _search(
         self, frontiers: Frontiers, context: PlanContext, reach: float, retry: bool = False
@@ -269,75 +245,21 @@ class FrontierExploration(Plugin):
             self.params.horizon * context.view.sensor_range
         ):
             targets, costs = finder.targets(field, final)
-            candidates = self._candidates(frontiers, costs)
-            if len(candidates) and self._settled(frontiers, costs, candidates, limit):
+            candidates = self.parts.ranking.candidates(frontiers, costs)
+            if len(candidates) and self.parts.ranking.settled(frontiers, costs, candidates, limit):
                 return targets, costs, candidates
         return None
 
-    def _candidates(self, frontiers: Frontiers, costs: FloatArray) -> IntArray:
-        """Indices of the best reachable frontiers, best first."""
-        u = utility(frontiers.sizes.astype(float), costs)
-        order = np.argsort(-u, kind="stable")
-        keep = order[np.isfinite(u[order])]
-        return keep[: self.params.max_frontiers]
 
-    def _settled(
-        self, frontiers: Frontiers, costs: FloatArray, candidates: IntArray, limit: float
-    ) -> bool:
-        """Whether no frontier beyond the search horizon ``limit`` could enter the best
-        ``max_frontiers`` (a frontier there costs at least ``limit``): the horizon
-        only saves work, the candidates are those of a whole-map search."""
-        beyond = ~np.isfinite(costs)
-        if limit == np.inf or not beyond.any():
-            return True
-        if len(candidates) < self.params.max_frontiers:
-            return False
-        sizes = frontiers.sizes.astype(float)
-        best_beyond = utility(sizes[beyond].max(keepdims=True), np.array([limit]))[0]
-        return bool(utility(sizes[candidates[-1:]], costs[candidates[-1:]])[0] > best_beyond)
-
-    def _auction(
-        self,
-        view: RobotView,
-        context: PlanContext,
-        frontiers: Frontiers,
-        targets: IntArray,
-        costs: FloatArray,
-        candidates: IntArray,
-    ) -> int:
-        sizes = frontiers.sizes[candidates].astype(float)
-        goals = targets[candidates]
-        mine = costs[candidates]
-        rank = view.tie_rank
-        me = Bidder(view.name, mine, np.ones(len(mine), dtype=bool), view.position, rank(view.name))
-        team = self.teammates(view)
-        others = teammate_bidders(
-            [t.name for t in team], [t.position for t in team], [rank(t.name) for t in team],
-            goals, context.search, mine,
-        )  # fmt: skip
-        bidders = [me, *others]
-        won = greedy_auction(
-            bidders, sizes, lambda b, k, limit: exact_costs(context, b.position, goals, k, limit)
-        )
-        return int(candidates[won])
-
-    def teammates(self, view: RobotView) -> list[TeammateInfo]:
-        """The teammates that take part in the auction, by name: exploring, heard from
-        within ``teammate_memory`` steps, not presumed lost, drive and sensor working."""
-        memory = self.params.teammate_memory
-        return sorted(
-            (
-                t
-                for t in view.teammates.values()
-                if t.name != view.name
-                and t.role == "explorer"
-                and t.state in ("active", "error")
-                and view.step - t.step <= memory
-                and t.name not in view.lost
-                and not EXPLORES_WITHOUT.intersection(t.broken)
-            ),
-            key=lambda t: t.name,
-        )
+def default_parts(params: FrontierParams) -> FrontierParts:
+    """The parts of ``frontier``: every frontier, the original's utility, the greedy
+    auction, the original's mission-complete rule (``strategies/parts.py``)."""
+    return FrontierParts(
+        filter=AllFrontiers(),
+        ranking=UtilityRanking(params.max_frontiers),
+        allocation=GreedyAuction(params.teammate_memory),
+        done=MissionComplete(params.done_fraction, params.done_after),
+    )
 
 
 def nearest_cell_centre(cells_rc: IntArray, row: int, col: int) -> tuple[float, float]:

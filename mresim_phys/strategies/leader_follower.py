@@ -27,6 +27,7 @@ range is only an estimate and the step-back rule mends the chain.
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 from typing import ClassVar
 
 import numpy as np
@@ -42,8 +43,8 @@ from mresim_phys.strategies.base import (
     heading_for,
     plan_context,
 )
-from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams
-from mresim_phys.types import BoolGrid, FloatArray
+from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams, default_parts
+from mresim_phys.types import FloatArray
 
 LEADER_MARGIN = 5.0  # cells: the original's frontier radius is comm_range * hops - 5
 
@@ -70,7 +71,7 @@ class LeaderFollower(FrontierExploration):
     params: LeaderFollowerParams
 
     def __init__(self, params: LeaderFollowerParams) -> None:
-        super().__init__(params)
+        super().__init__(params, replace(default_parts(params), filter=ChainReach()))
         self._linked_at: tuple[float, float] | None = None  # where its parent was last linked
         self._goal: tuple[int, int] | None = None  # the leader's frontier target (row, col)
         self._searched = -(10**9)  # step of the leader's last frontier search
@@ -150,9 +151,12 @@ class LeaderFollower(FrontierExploration):
         kept: FloatArray = path[:stop]
         return kept
 
-    def _frontiers(self, view: RobotView, context: PlanContext, tried: BoolGrid) -> Frontiers:
-        """The leader's frontiers, less those beyond the chain's reach from the base."""
-        found = super()._frontiers(view, context, tried)
+
+class ChainReach:
+    """The leader's frontiers, less those beyond the chain's reach from the base."""
+
+    def keep(self, view: RobotView, found: Frontiers) -> Frontiers:
+        """The clusters with a cell within the chain's reach (all of them without a chain)."""
         if view.hops <= 0 or len(found) == 0:
             return found
         radius = view.comm_range * view.hops - LEADER_MARGIN

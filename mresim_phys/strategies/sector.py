@@ -28,7 +28,7 @@ home and keeps no meeting. ``info["sector"]`` is its wedge (bearings, degrees) a
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import ClassVar
 
 import numpy as np
@@ -46,7 +46,8 @@ from mresim_phys.strategies.base import (
     heading_for,
     plan_context,
 )
-from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams
+from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams, default_parts
+from mresim_phys.strategies.parts import Allocation, UtilityRanking
 from mresim_phys.types import FloatArray, IntArray
 
 
@@ -104,6 +105,75 @@ def in_wedge(bearings: FloatArray, span: tuple[float, float]) -> np.ndarray:
     return np.asarray((bearings - span[0]) % (2 * math.pi) < span[1] - span[0])
 
 
+@dataclass
+class Wedge:
+    """A robot's wedge as its last decision set it (shared by its ranking and allocation):
+    its bearings ``span`` from the base at ``base`` (None before the first decision), and
+    which frontiers of the last ranking lie in it."""
+
+    span: tuple[float, float] = (0.0, 2 * math.pi)
+    base: tuple[float, float] | None = None
+    inside: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=bool))
+
+    def holds(self, frontiers: Frontiers) -> np.ndarray:
+        """Which frontiers (by centroid) lie in the wedge."""
+        assert self.base is not None
+        dx, dy = (frontiers.centroids - np.asarray(self.base)).T
+        return in_wedge(np.arctan2(dy, dx), self.span)
+
+
+@dataclass
+class WedgeRanking:
+    """The best reachable frontiers in the robot's wedge (all of them if it has none)."""
+
+    wedge: Wedge
+    inner: UtilityRanking
+
+    def candidates(self, frontiers: Frontiers, costs: FloatArray) -> IntArray:
+        """The wedge's frontiers by utility, best first (else ``inner``'s candidates)."""
+        if self.wedge.base is None:
+            return self.inner.candidates(frontiers, costs)
+        self.wedge.inside = self.wedge.holds(frontiers)
+        mine = self.wedge.inside & np.isfinite(costs)
+        if not mine.any():
+            return self.inner.candidates(frontiers, costs)
+        u = np.where(mine, utility(frontiers.sizes.astype(float), costs), -np.inf)
+        order = np.argsort(-u, kind="stable")
+        return order[np.isfinite(u[order])][: self.inner.max_frontiers]
+
+    def settled(
+        self, frontiers: Frontiers, costs: FloatArray, candidates: IntArray, limit: float
+    ) -> bool:
+        """Not while its wedge's frontiers all lie beyond the search horizon ``limit``."""
+        inside = self.wedge.inside
+        if limit < np.inf and inside.any() and not (inside & np.isfinite(costs)).any():
+            return False
+        return self.inner.settled(frontiers, costs, candidates, limit)
+
+
+@dataclass
+class WedgeFirst:
+    """Its wedge's best frontier; the ``inner`` allocation only outside its wedge."""
+
+    wedge: Wedge
+    inner: Allocation
+
+    def choose(
+        self,
+        view: RobotView,
+        context: PlanContext,
+        frontiers: Frontiers,
+        targets: IntArray,
+        costs: FloatArray,
+        candidates: IntArray,
+    ) -> int:
+        """The first candidate if it lies in the wedge, else the inner allocation's."""
+        dx, dy = frontiers.centroids[candidates[0]] - np.asarray(view.base_position)
+        if in_wedge(np.array([math.atan2(dy, dx)]), self.wedge.span)[0]:
+            return int(candidates[0])
+        return self.inner.choose(view, context, frontiers, targets, costs, candidates)
+
+
 @STRATEGIES.register
 class SectorRendezvous(FrontierExploration):
     """Each robot explores its sector of the open space and meets its neighbours on the
@@ -114,16 +184,18 @@ class SectorRendezvous(FrontierExploration):
     params: SectorParams
 
     def __init__(self, params: SectorParams) -> None:
-        super().__init__(params)
+        self.wedge = Wedge()  # its wedge, as its ranking and allocation parts see it
+        parts = default_parts(params)
+        ranking = WedgeRanking(self.wedge, UtilityRanking(params.max_frontiers))
+        allocation = WedgeFirst(self.wedge, parts.allocation)
+        super().__init__(params, replace(parts, ranking=ranking, allocation=allocation))
         self.meetings: dict[str, SectorMeeting] = {}  # partner -> next meeting with it
         self.state = "explore"  # explore / to_meet / wait
         self.met = 0  # meetings kept
         self.speed = 1.0
-        self._span = (0.0, 2 * math.pi)
         self._view: RobotView | None = None
         self._linked: tuple[str, ...] = ()
         self._done = False
-        self._in_wedge = np.zeros(0, dtype=bool)  # which frontiers lie in its wedge
 
     def replan_now(self, step: int, position: tuple[float, float], links: tuple[str, ...]) -> bool:
         """When a neighbour with a meeting comes into reach, at its meeting point, when its
@@ -144,7 +216,8 @@ class SectorRendezvous(FrontierExploration):
         self._view, self.speed = view, view.speed
         order = self._order(view)
         params = self.params
-        self._span = wedge(order, view.name, params.first_bearing_deg, params.span_deg)
+        self.wedge.span = wedge(order, view.name, params.first_bearing_deg, params.span_deg)
+        self.wedge.base = view.base_position
         if self._done:  # done exploring: no meetings, unless exploring resumes
             return self._explore(view)
         context = plan_context(view)
@@ -173,44 +246,6 @@ class SectorRendezvous(FrontierExploration):
             if t.payload is not None and not isinstance(t.payload, SectorPayload)
         }
         return [n for n in order if n == view.name or (n not in view.lost and n not in others)]
-
-    def _candidates(self, frontiers: Frontiers, costs: FloatArray) -> IntArray:
-        """The best reachable frontiers in its wedge (all of them if the wedge has none)."""
-        view = self._view
-        if view is None:
-            return super()._candidates(frontiers, costs)
-        dx, dy = (frontiers.centroids - np.asarray(view.base_position)).T
-        self._in_wedge = in_wedge(np.arctan2(dy, dx), self._span)
-        mine = self._in_wedge & np.isfinite(costs)
-        if not mine.any():
-            return super()._candidates(frontiers, costs)
-        u = np.where(mine, utility(frontiers.sizes.astype(float), costs), -np.inf)
-        order = np.argsort(-u, kind="stable")
-        return order[np.isfinite(u[order])][: self.params.max_frontiers]
-
-    def _settled(
-        self, frontiers: Frontiers, costs: FloatArray, candidates: IntArray, limit: float
-    ) -> bool:
-        """Not while its wedge's frontiers all lie beyond the search horizon ``limit``."""
-        wedge = self._in_wedge
-        if limit < np.inf and wedge.any() and not (wedge & np.isfinite(costs)).any():
-            return False
-        return super()._settled(frontiers, costs, candidates, limit)
-
-    def _auction(
-        self,
-        view: RobotView,
-        context: PlanContext,
-        frontiers: Frontiers,
-        targets: IntArray,
-        costs: FloatArray,
-        candidates: IntArray,
-    ) -> int:
-        """Its wedge's best frontier; the team's auction only outside its wedge."""
-        dx, dy = frontiers.centroids[candidates[0]] - np.asarray(view.base_position)
-        if in_wedge(np.array([math.atan2(dy, dx)]), self._span)[0]:
-            return int(candidates[0])
-        return super()._auction(view, context, frontiers, targets, costs, candidates)
 
     # ---------------------------------------------------------------- meetings
 
@@ -245,7 +280,7 @@ class SectorRendezvous(FrontierExploration):
         """The next meeting with ``partner`` on the ray between their wedges."""
         mine, theirs = order.index(view.name), order.index(partner)
         clockwise = (mine + 1) % len(order) == theirs
-        bearing = self._span[1] if clockwise else self._span[0]
+        bearing = self.wedge.span[1] if clockwise else self.wedge.span[0]
         record = view.teammates[partner]
         base = view.base_position
         radius = min(math.dist(view.position, base), math.dist(record.position, base))
@@ -283,7 +318,7 @@ class SectorRendezvous(FrontierExploration):
         points = [m.point for m in self.meetings.values()]
         info = {
             **decision.info,
-            "sector": tuple(math.degrees(a) for a in self._span),
+            "sector": tuple(math.degrees(a) for a in self.wedge.span),
             "sector_state": self.state,
         }
         if points:

@@ -1,0 +1,222 @@
+"""Strategy parts (phase 4, decide): the small policies a frontier strategy is built from.
+
+``frontier`` and every strategy built on it run one loop (``strategies/frontier.py``): find
+the robot's frontiers, search for the best reachable ones, pick one with the team in mind,
+go there, and return to the base when the mission is complete. What varies between
+strategies is a part, never an override of the loop's private steps:
+
+* :class:`FrontierFilter`, which of its frontiers the robot considers: every one
+  (:class:`AllFrontiers`), or, for ``leader_follower``'s leader, those the chain reaches;
+* :class:`Ranking`, the candidates best first (:meth:`Ranking.candidates`) and whether a
+  search out to a horizon has settled them (:meth:`Ranking.settled`): the original's
+  utility (:class:`UtilityRanking`), or ``sector_rendezvous``'s wedge first;
+* :class:`Allocation`, which candidate this robot takes given its teammates: the greedy
+  auction (:class:`GreedyAuction`), ``hungarian``'s assignment, ``min_pos``'s ranks, or
+  ``sector_rendezvous``'s wedge before the auction;
+* :class:`DoneRule`, when the mission is complete and the robot goes home though frontiers
+  are left: the original's rule (:class:`MissionComplete`).
+
+:class:`FrontierParts` holds one of each; a strategy passes its parts to
+``FrontierExploration.__init__``. A new strategy from parts: ``docs/writing-a-strategy.md``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from mresim_phys.knowledge.frontiers import Frontiers
+from mresim_phys.knowledge.teammates import TeammateInfo
+from mresim_phys.strategies.auction import (
+    Bidder,
+    exact_costs,
+    greedy_auction,
+    teammate_bidders,
+    utility,
+)
+from mresim_phys.strategies.base import PlanContext, RobotView
+from mresim_phys.types import FREE, FloatArray, IntArray
+
+EXPLORES_WITHOUT = frozenset({"drive", "sensor"})  # a teammate with either failed takes no frontier
+
+
+@runtime_checkable
+class FrontierFilter(Protocol):
+    """Which of its frontiers a robot considers."""
+
+    def keep(self, view: RobotView, found: Frontiers) -> Frontiers:
+        """The frontiers of ``found`` the robot may take (renumbered clusters)."""
+        ...
+
+
+@runtime_checkable
+class Ranking(Protocol):
+    """The candidates, best first, and when a bounded search has settled them."""
+
+    def candidates(self, frontiers: Frontiers, costs: FloatArray) -> IntArray:
+        """Indices of the best reachable frontiers, best first."""
+        ...
+
+    def settled(
+        self, frontiers: Frontiers, costs: FloatArray, candidates: IntArray, limit: float
+    ) -> bool:
+        """Whether no frontier beyond the search horizon ``limit`` could change the
+        candidates (a frontier there costs at least ``limit``)."""
+        ...
+
+
+@runtime_checkable
+class Allocation(Protocol):
+    """Which candidate this robot takes, given its teammates."""
+
+    def choose(
+        self,
+        view: RobotView,
+        context: PlanContext,
+        frontiers: Frontiers,
+        targets: IntArray,
+        costs: FloatArray,
+        candidates: IntArray,
+    ) -> int:
+        """The index (into ``frontiers``) of the frontier this robot takes; ``targets`` and
+        ``costs`` are per frontier, ``candidates`` the best ones, best first."""
+        ...
+
+
+@runtime_checkable
+class DoneRule(Protocol):
+    """When the robot goes home although its map still holds frontiers."""
+
+    def met(self, view: RobotView) -> bool:
+        """Whether the mission is complete for this robot now."""
+        ...
+
+
+class AllFrontiers:
+    """Every frontier of the robot's map."""
+
+    def keep(self, view: RobotView, found: Frontiers) -> Frontiers:
+        """``found`` as it is."""
+        return found
+
+
+@dataclass
+class UtilityRanking:
+    """The original's utility ``size * 1e8 / d**4``; the best ``max_frontiers`` compete."""
+
+    max_frontiers: int
+
+    def candidates(self, frontiers: Frontiers, costs: FloatArray) -> IntArray:
+        """Indices of the best reachable frontiers, best first."""
+        u = utility(frontiers.sizes.astype(float), costs)
+        order = np.argsort(-u, kind="stable")
+        keep = order[np.isfinite(u[order])]
+        return keep[: self.max_frontiers]
+
+    def settled(
+        self, frontiers: Frontiers, costs: FloatArray, candidates: IntArray, limit: float
+    ) -> bool:
+        """Whether no frontier beyond the search horizon ``limit`` could enter the best
+        ``max_frontiers``: the horizon only saves work, the candidates are those of a
+        whole-map search."""
+        beyond = ~np.isfinite(costs)
+        if limit == np.inf or not beyond.any():
+            return True
+        if len(candidates) < self.max_frontiers:
+            return False
+        sizes = frontiers.sizes.astype(float)
+        best_beyond = utility(sizes[beyond].max(keepdims=True), np.array([limit]))[0]
+        return bool(utility(sizes[candidates[-1:]], costs[candidates[-1:]])[0] > best_beyond)
+
+
+def auction_team(view: RobotView, memory: int) -> list[TeammateInfo]:
+    """The teammates that take part in an allocation, by name: exploring, heard from within
+    ``memory`` steps, not presumed lost, drive and sensor working."""
+    return sorted(
+        (
+            t
+            for t in view.teammates.values()
+            if t.name != view.name
+            and t.role == "explorer"
+            and t.state in ("active", "error")
+            and view.step - t.step <= memory
+            and t.name not in view.lost
+            and not EXPLORES_WITHOUT.intersection(t.broken)
+        ),
+        key=lambda t: t.name,
+    )
+
+
+@dataclass
+class GreedyAuction:
+    """The original's greedy auction: the best (robot, frontier) pair is fixed, that robot
+    and that frontier leave, until the best pair is this robot's (``strategies/auction.py``)."""
+
+    teammate_memory: int
+
+    def choose(
+        self,
+        view: RobotView,
+        context: PlanContext,
+        frontiers: Frontiers,
+        targets: IntArray,
+        costs: FloatArray,
+        candidates: IntArray,
+    ) -> int:
+        """The candidate this robot wins."""
+        sizes = frontiers.sizes[candidates].astype(float)
+        goals = targets[candidates]
+        mine = costs[candidates]
+        rank = view.tie_rank
+        me = Bidder(view.name, mine, np.ones(len(mine), dtype=bool), view.position, rank(view.name))
+        team = auction_team(view, self.teammate_memory)
+        others = teammate_bidders(
+            [t.name for t in team], [t.position for t in team], [rank(t.name) for t in team],
+            goals, context.search, mine,
+        )  # fmt: skip
+        bidders = [me, *others]
+        won = greedy_auction(
+            bidders, sizes, lambda b, k, limit: exact_costs(context, b.position, goals, k, limit)
+        )
+        return int(candidates[won])
+
+
+@dataclass
+class MissionComplete:
+    """The original's mission-complete rule: after ``after`` steps, the robot's own map
+    holds ``fraction`` of the building's free area (known before the mission).
+
+    It sends a robot out of the base's reach home once: when its map has reached the base,
+    it explores on until no frontier is left (the original parks it there; a rule that
+    fired again on every loss of contact kept robots shuttling between the edge of the
+    base's reach and the far frontiers, never reaching them)."""
+
+    fraction: float | None
+    after: int
+    was_met: bool = False  # the rule sent this robot home
+    delivered: bool = False  # ... and its map has reached the base since
+
+    def met(self, view: RobotView) -> bool:
+        """Whether the mission is complete for this robot now."""
+        if self.fraction is None or view.free_area <= 0 or view.step < self.after:
+            return False
+        if view.base_contact >= view.step - 1:  # its data reaches the base: nothing to carry
+            self.delivered = self.delivered or self.was_met
+            return False
+        if self.delivered:  # it brought its map home once: it explores on to the end
+            return False
+        met = int(np.count_nonzero(view.belief == FREE)) >= self.fraction * view.free_area
+        self.was_met = self.was_met or met
+        return met
+
+
+@dataclass
+class FrontierParts:
+    """The parts of one robot's frontier strategy (module docstring)."""
+
+    filter: FrontierFilter
+    ranking: Ranking
+    allocation: Allocation
+    done: DoneRule
