@@ -16,8 +16,8 @@ from mresim_phys.errors import ScenarioError
 from mresim_phys.output.runlog import RunLog
 from mresim_phys.planning.grid import bbox
 from mresim_phys.sim import Simulation
+from mresim_phys.strategies.meetings import Rendezvous
 from mresim_phys.strategies.rendezvous import linked, relay_point
-from mresim_phys.strategies.role_based import Rendezvous
 from mresim_phys.types import FREE, OCCUPIED
 
 MakeScenario = Callable[..., Path]

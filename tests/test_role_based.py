@@ -16,7 +16,7 @@ import yaml
 from mresim_phys.errors import ScenarioError
 from mresim_phys.sim import Simulation
 from mresim_phys.strategies import RobotView
-from mresim_phys.strategies.role_based import Rendezvous, improved_point
+from mresim_phys.strategies.meetings import Rendezvous, improved_point
 from mresim_phys.types import FREE, OCCUPIED
 
 MakeScenario = Callable[..., Path]

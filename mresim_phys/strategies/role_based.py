@@ -12,10 +12,11 @@ the relay's parent the base.
   brought, and the explorer, seeing that exchange succeeded, binds itself to the same
   one, so the pair never parts holding different meetings (a proposal whose exchange
   failed binds neither). The
-  point is its frontier target if that lies more than :data:`MIN_RV_DISTANCE` cells away,
+  point is its frontier target if that lies more than ``MIN_RV_DISTANCE`` cells away,
   else where it stands (``rendezvous: improved``: the best skeleton junction near that
-  frontier, :func:`improved_point`); the time is ``now + max(60, the relay's trip to the base and on
-  to the point, its own trip to the frontier and on to the point + 75)`` (straight lines
+  frontier, ``meetings.improved_point``); the time is ``now + max(60, the relay's trip
+  to the base and on to the point, its own trip to the frontier and on to the point +
+  75)`` (straight lines
   at its own speed; the original uses path lengths). Every ``check_interval`` steps it
   checks whether it must head back to be there in time; at the point it waits for the
   relay until ``wait`` steps after the agreed time; a relay that has not come (late,
@@ -34,10 +35,9 @@ its decision's ``info`` (``rv_state``).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import ClassVar, Literal
 
-import numpy as np
 from pydantic import Field
 
 from mresim_phys.knowledge.teammates import Payload, TeammateInfo
@@ -50,15 +50,9 @@ from mresim_phys.strategies.base import (
     plan_context,
 )
 from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams
-from mresim_phys.strategies.rendezvous import MultiPoint, relay_point
+from mresim_phys.strategies.meetings import MeetingPlanner, Rendezvous, overdue
 from mresim_phys.types import FloatArray
 
-MIN_RV_DISTANCE = 25.0  # cells: a nearer frontier is no meeting point (the original's 25 px)
-IMPROVED_REACH = 600.0  # cells: junctions farther from the frontier are no candidates
-IMPROVED_CANDIDATES = 4  # the nearest junctions scored (the original's 4)
-MIN_MEETING_DELAY = 60  # steps: the earliest meeting after an agreement (the original)
-EXPLORE_TIME = 75  # steps the explorer gets at its frontier (FRONTIER_MIN_EXPLORE_TIME)
-RV_REPLAN_INTERVAL = 15  # steps: multi-point points are recomputed at most this often
 START_HOLD = 2  # steps a relay without an agreement holds still at the start (the original)
 
 
@@ -85,30 +79,6 @@ class RoleBasedParams(FrontierParams):
     )
 
 
-@dataclass(frozen=True)
-class Rendezvous(Payload):
-    """An explorer's agreement with its relay: where and when they meet next.
-
-    ``point`` is the explorer's; ``relay_point`` the relay's when they differ (multi-point:
-    linked through walls); ``backup`` the meeting both fall back to when the other has
-    not come by the end of the wait (multi-point). Unset fields cost no bytes."""
-
-    point: tuple[float, float]
-    step: int
-    relay_point: tuple[float, float] | None = None
-    backup: Rendezvous | None = None
-
-    @property
-    def relay_at(self) -> tuple[float, float]:
-        """Where the relay waits."""
-        return self.point if self.relay_point is None else self.relay_point
-
-    def points(self) -> FloatArray:
-        """The agreed points (explorer's, relay's, backup's) as (k, 2), for the layers."""
-        pts = [self.point, self.relay_at] + ([self.backup.point] if self.backup else [])
-        return np.array(pts, dtype=float)
-
-
 @STRATEGIES.register
 class RoleBased(FrontierExploration):
     """Explorers explore and meet their relays; relays shuttle between them and the base."""
@@ -126,7 +96,7 @@ class RoleBased(FrontierExploration):
         self.speed = 1.0
         self._is_relay = False
         self._linked = False  # its partner was linked at the last check
-        self._multi: tuple[int, MultiPoint] | None = None  # (step, last multi-point choice)
+        self.planner = MeetingPlanner(params.rendezvous, params.wait)  # its rendezvous part
 
     def replan_now(self, step: int, position: tuple[float, float], links: tuple[str, ...]) -> bool:
         """When its state would change: its partner comes into reach (multi-point: is in
@@ -175,10 +145,7 @@ class RoleBased(FrontierExploration):
         """What the rendezvous layers draw: the agreed points, and (multi-point) the
         potential points and those linked through walls."""
         views = {} if self.meeting is None else {"rendezvous": self.meeting.points()}
-        if self._multi is not None:
-            views["rv_candidates"] = self._multi[1].candidates
-            views["rv_through_walls"] = self._multi[1].through_walls
-        return views
+        return {**views, **self.planner.views()}
 
     def _my_point(self, meeting: Rendezvous) -> tuple[float, float]:
         return meeting.relay_at if self._is_relay else meeting.point
@@ -205,7 +172,7 @@ class RoleBased(FrontierExploration):
             # (deciding at every step of contact) takes it now: it binds both
             stale = sent is None and overdue(self.meeting, view.step)
             self.state, self.meeting = "explore", sent or (None if stale else self.meeting)
-            self.proposal = self._agree(view, relay, explored)
+            self.proposal = self.planner.agree(view, relay, explored)
             if stale:  # met after the agreed time: stay until the relay has the new one
                 return Decision(goal=view.position, payload=self.proposal)
         meeting = self.meeting
@@ -229,53 +196,6 @@ class RoleBased(FrontierExploration):
             self.meeting = meeting.backup or meeting
         if self.state == "home" and view.base_contact >= view.step - 1:
             self.state, self.meeting = "explore", None
-
-    def _agree(self, view: RobotView, relay: str, explored: Decision) -> Rendezvous:
-        """The next meeting: its frontier target (else here), at the original's time."""
-        frontier = view.position if explored.done or explored.goal is None else explored.goal
-        near = math.dist(frontier, view.position) <= MIN_RV_DISTANCE
-        point = view.position if near else frontier
-        if self.params.rendezvous in ("improved", "multi_point") and not near:
-            point = improved_point(view, frontier) or point
-        point = (float(point[0]), float(point[1]))
-        multi = self.params.rendezvous == "multi_point"
-        theirs = self._relay_point(view, point) if multi else point
-        record = view.teammates.get(relay)
-        relay_at = record.position if record is not None else view.position
-        base = view.base_position
-        relay_trip = math.dist(relay_at, base) + math.dist(base, theirs)
-        own_trip = math.dist(view.position, frontier) + math.dist(frontier, point)
-        delay = max(
-            MIN_MEETING_DELAY, relay_trip / view.speed, own_trip / view.speed + EXPLORE_TIME
-        )
-        step = view.step + math.ceil(delay)
-        if not multi:
-            return Rendezvous(point, step)
-        return Rendezvous(point, step, theirs, self._backup(view, point, theirs, step))
-
-    def _relay_point(self, view: RobotView, point: tuple[float, float]) -> tuple[float, float]:
-        """Multi-point: the relay's point for the explorer's ``point`` (recomputed at most
-        every :data:`RV_REPLAN_INTERVAL` steps or when the explorer's point moved)."""
-        last = self._multi
-        fresh = last is not None and view.step - last[0] < RV_REPLAN_INTERVAL
-        if last is None or not fresh or math.dist(last[1].explorer, point) > MIN_RV_DISTANCE:
-            context = plan_context(view)
-            reach = view.comm_range
-            choice = relay_point(
-                view.belief, context.passable, context.passable_box, point,
-                view.base_position, reach,
-            )  # fmt: skip
-            self._multi = last = (view.step, choice)
-        return last[1].relay
-
-    def _backup(
-        self, view: RobotView, point: tuple[float, float], theirs: tuple[float, float], step: int
-    ) -> Rendezvous:
-        """The backup meeting: where the pair stands now (they are linked here), once the
-        wait is over and both could have walked there from their points."""
-        here = (float(view.position[0]), float(view.position[1]))
-        trip = max(math.dist(point, here), math.dist(theirs, here)) / view.speed
-        return Rendezvous(here, step + self.params.wait + math.ceil(trip))
 
     # ---------------------------------------------------------------- relay
 
@@ -335,36 +255,3 @@ class RoleBased(FrontierExploration):
             return heading_for(context, point, payload=payload, info=info)
         goal = (float(path[-1, 0]), float(path[-1, 1]))
         return Decision(path=path, goal=goal, payload=payload, info=info)
-
-
-def overdue(meeting: Rendezvous | None, step: int) -> bool:
-    """Whether ``meeting``'s agreed time has passed. Partners that meet after it have kept
-    or missed it; neither may set out for it again. Before, the pair kept it when their
-    contact lasted one step, so no new agreement was bound, and shuttled between the old
-    point and the base (scenario 23, seeds 10, 13 and 18: stalled at 78.9 % explored)."""
-    return meeting is not None and step > meeting.step
-
-
-def improved_point(view: RobotView, frontier: tuple[float, float]) -> tuple[float, float] | None:
-    """The original's improved rendezvous: of the skeleton junctions of the robot's known
-    space within :data:`IMPROVED_REACH` cells of the frontier, the
-    :data:`IMPROVED_CANDIDATES` nearest, scored by ``degree**2 * 1e4 / distance`` to the
-    frontier (straight lines; the original: path length); None without a junction."""
-    topology = plan_context(view).topology()
-    junctions = topology.junctions
-    if len(junctions) == 0:
-        return None
-    centres = junctions[:, ::-1] + 0.5  # (x, y)
-    distance = np.hypot(*(centres - np.asarray(frontier)).T)
-    near = np.flatnonzero(distance <= IMPROVED_REACH)
-    if len(near) == 0:
-        return None
-    near = near[np.argsort(distance[near], kind="stable")[:IMPROVED_CANDIDATES]]
-    skeleton = topology.skeleton
-    degree = np.array([
-        int(skeleton[max(r - 1, 0) : r + 2, max(c - 1, 0) : c + 2].sum()) - 1
-        for r, c in junctions[near]
-    ])  # fmt: skip
-    score = degree.astype(float) ** 2 * 1e4 / np.maximum(distance[near], 1.0)
-    best = near[int(np.argmax(score))]
-    return float(centres[best, 0]), float(centres[best, 1])

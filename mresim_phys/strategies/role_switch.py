@@ -39,7 +39,8 @@ from pydantic import Field
 from mresim_phys.knowledge.teammates import Payload, TeammateInfo
 from mresim_phys.strategies.base import STRATEGIES, Decision, RobotView, StrategyParams
 from mresim_phys.strategies.base import plan_context as context_of
-from mresim_phys.strategies.role_based import Rendezvous, RoleBased, RoleBasedParams
+from mresim_phys.strategies.meetings import Rendezvous
+from mresim_phys.strategies.role_based import RoleBased, RoleBasedParams
 
 FIRST_CHECK = 5  # steps: no switch before (the original: after cycle 5)
 
@@ -261,7 +262,8 @@ class RoleSwitch(RoleBased):
         self.position = (theirs.role, theirs.parent, theirs.children)
         self.meeting, self.proposal = theirs.rendezvous or self.meeting, None
         self.state = theirs.state  # its state and goal go with the position, as the original's
-        self.last_switch, self.swaps, self._multi = view.step, self.swaps + 1, None
+        self.last_switch, self.swaps = view.step, self.swaps + 1
+        self.planner.forget()
         self.taken_goal = goal if theirs.role != "relay" else None
 
     def _second_rule(self, view: RobotView) -> None:
