@@ -56,6 +56,7 @@ def test_readme_commands_are_the_ones_ci_runs() -> None:
     assert 'pip install -e ".[test,dev]"' in ci  # the README's install, plus the checkers
     for command in ("ruff check .", "ruff format --check .", "mypy", "pytest"):
         assert f"\n{command}\n" in ci, f".ci/run does not run {command!r}"
+    assert re.search(r"--cov-fail-under=\d+", ci), ".ci/run has no coverage floor"
 
 
 def test_coordination_example_runs(
