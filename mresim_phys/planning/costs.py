@@ -13,13 +13,13 @@ heuristic of A* stays admissible and consistent, and a search bounded by a cost
 ``limit`` still stays within that Chebyshev radius of its start.
 
 Without terrain, or while every known factor is 1, there is no slowness grid at all
-(``None``) and every search runs its uniform-cost kernel, unchanged. With one:
+(``None``) and every search runs on uniform costs. With one:
 
 * distance fields (``fields.distance_field``, hence frontier utilities and
   auctions) run :func:`dijkstra_weighted`, a binary-heap Dijkstra (Dial's
   buckets need moves of bounded cost);
-* ``astar`` runs :func:`astar_weighted_kernel` (the octile heuristic, moves priced as
-  above);
+* ``astar`` runs ``bestfirst.astar_kernel`` with the slowness grid (the octile
+  heuristic, moves priced by :func:`move_cost`);
 * ``jps`` falls back to ``astar``: its pruning assumes uniform costs;
 * ``topological`` falls back to ``astar`` over the whole window (its region graph and
   corridor search are uniform-cost);
@@ -33,20 +33,13 @@ from numba import njit
 from numpy.typing import NDArray
 
 from mresim_phys.planning.grid import (
-    CLOSED,
     DIAGONAL,
-    MOVES,
-    NO_PRED,
-    OPEN,
     STRAIGHT,
-    UNSEEN,
-    diagonal_ok,
     flat_moves,
     heap_grow,
     heap_new,
     heap_pop,
     heap_push,
-    octile,
     passes_corner,
 )
 from mresim_phys.types import FloatArray
@@ -104,50 +97,3 @@ def dijkstra_weighted(
                     fs, gs, nodes = heap_grow(fs, gs, nodes)
                 size = heap_push(fs, gs, nodes, size, cost, cost, v)
     return dist, pred
-
-
-@njit(cache=True, nogil=True)
-def astar_weighted_kernel(
-    pad: NDArray[np.bool_],
-    wp: int,
-    source: int,
-    target: int,
-    slow: FloatArray,
-    g: FloatArray,
-    pred: NDArray[np.int64],
-    state: NDArray[np.uint8],
-) -> tuple[float, int]:
-    """``astar.astar_kernel`` (no labels) with terrain costs: moves priced by
-    :func:`move_cost`; the same heap order, corner rule and outputs."""
-    tr, tc = target // wp, target % wp
-    fs, gs, nodes = heap_new(1024)
-    g[source], pred[source], state[source] = 0.0, NO_PRED, OPEN
-    size = heap_push(fs, gs, nodes, 0, octile(source // wp, source % wp, tr, tc), 0.0, source)
-    expanded = 0
-    while size > 0:
-        u, size = heap_pop(fs, gs, nodes, size)
-        if state[u] == CLOSED:
-            continue
-        state[u] = CLOSED
-        expanded += 1
-        if u == target:
-            break
-        here = g[u]
-        ur, uc = u // wp, u % wp
-        for dr, dc in MOVES:
-            v = u + dr * wp + dc
-            if not pad[v] or state[v] == CLOSED:
-                continue
-            if dr != 0 and dc != 0:
-                if not diagonal_ok(pad, wp, u, dr, dc):
-                    continue
-                cost = here + move_cost(DIAGONAL, slow, u, v)
-            else:
-                cost = here + move_cost(STRAIGHT, slow, u, v)
-            if state[v] == UNSEEN or cost < g[v]:
-                g[v], pred[v], state[v] = cost, u, OPEN
-                f = cost + octile(ur + dr, uc + dc, tr, tc)
-                if size == len(fs):
-                    fs, gs, nodes = heap_grow(fs, gs, nodes)
-                size = heap_push(fs, gs, nodes, size, f, cost, v)
-    return (g[target] if state[target] != UNSEEN else np.inf), expanded
