@@ -32,11 +32,10 @@ import numpy as np
 from pydantic import Field
 from scipy.optimize import linear_sum_assignment
 
-from mresim_phys.knowledge.frontiers import Frontiers
 from mresim_phys.knowledge.teammates import TeammateInfo
 from mresim_phys.strategies.base import STRATEGIES, PlanContext, RobotView, StrategyParams
 from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams, default_parts
-from mresim_phys.strategies.parts import auction_team
+from mresim_phys.strategies.parts import Offer, auction_team
 from mresim_phys.types import FloatArray, IntArray
 
 UNREACHABLE = 1e9  # cost of an unreachable (robot, frontier) pair in the assignment
@@ -119,19 +118,12 @@ class HungarianAssignment:
 
     teammate_memory: int
 
-    def choose(
-        self,
-        view: RobotView,
-        context: PlanContext,
-        frontiers: Frontiers,
-        targets: IntArray,
-        costs: FloatArray,
-        candidates: IntArray,
-    ) -> int:
+    def choose(self, offer: Offer) -> int:
         """Solve the team's assignment; take the column of this robot's row. A teammate
         is searched to twice this robot's farthest candidate plus a sensor range; beyond
         that it counts as that far (a lower bound of its cost)."""
-        goals, mine = targets[candidates], costs[candidates]
+        view, context, candidates = offer.view, offer.context, offer.candidates
+        goals, mine = offer.targets[candidates], offer.costs[candidates]
         team = assignment_team(view, self.teammate_memory)
         limit = 2.0 * farthest(mine) + view.sensor_range
         others = np.minimum(team_costs(context, team, goals, limit), limit)
@@ -147,18 +139,11 @@ class MinPosAllocation:
 
     teammate_memory: int
 
-    def choose(
-        self,
-        view: RobotView,
-        context: PlanContext,
-        frontiers: Frontiers,
-        targets: IntArray,
-        costs: FloatArray,
-        candidates: IntArray,
-    ) -> int:
+    def choose(self, offer: Offer) -> int:
         """Rank this robot on each candidate; a teammate is searched only as far as this
         robot's farthest candidate (beyond it, it is nearer to none)."""
-        goals, mine = targets[candidates], costs[candidates]
+        view, context, candidates = offer.view, offer.context, offer.candidates
+        goals, mine = offer.targets[candidates], offer.costs[candidates]
         team = assignment_team(view, self.teammate_memory)
         others = team_costs(context, team, goals, farthest(mine))
         me = view.tie_rank(view.name)

@@ -55,6 +55,7 @@ from mresim_phys.strategies.parts import (
     FrontierParts,
     GreedyAuction,
     MissionComplete,
+    Offer,
     UtilityRanking,
 )
 from mresim_phys.strategies.random_walk import random_step
@@ -170,7 +171,8 @@ class FrontierExploration(Plugin):
             return decision
         self._home = None
         targets, costs, candidates = found
-        chosen = self.parts.allocation.choose(view, context, frontiers, targets, costs, candidates)
+        offer = Offer(view, context, frontiers, targets, costs, candidates)
+        chosen = self.parts.allocation.choose(offer)
         chasing = self._chasing = frontiers.cells_rc[frontiers.cluster_of == chosen]
         row, col = (int(v) for v in targets[chosen])
         path = context.plan_to(row, col)

@@ -10,9 +10,9 @@ strategies is a part, never an override of the loop's private steps:
 * :class:`Ranking`, the candidates best first (:meth:`Ranking.candidates`) and whether a
   search out to a horizon has settled them (:meth:`Ranking.settled`): the original's
   utility (:class:`UtilityRanking`), or ``sector_rendezvous``'s wedge first;
-* :class:`Allocation`, which candidate this robot takes given its teammates: the greedy
-  auction (:class:`GreedyAuction`), ``hungarian``'s assignment, ``min_pos``'s ranks, or
-  ``sector_rendezvous``'s wedge before the auction;
+* :class:`Allocation`, which candidate of an :class:`Offer` this robot takes given its
+  teammates: the greedy auction (:class:`GreedyAuction`), ``hungarian``'s assignment,
+  ``min_pos``'s ranks, or ``sector_rendezvous``'s wedge before the auction;
 * :class:`DoneRule`, when the mission is complete and the robot goes home though frontiers
   are left: the original's rule (:class:`MissionComplete`).
 
@@ -67,21 +67,26 @@ class Ranking(Protocol):
         ...
 
 
+@dataclass(frozen=True)
+class Offer:
+    """What an allocation chooses from: the robot's view and planning context, its
+    frontiers, each frontier's target cell and path cost (inf: unreachable), and the
+    candidates, best first (indices into ``frontiers``)."""
+
+    view: RobotView
+    context: PlanContext
+    frontiers: Frontiers
+    targets: IntArray
+    costs: FloatArray
+    candidates: IntArray
+
+
 @runtime_checkable
 class Allocation(Protocol):
     """Which candidate this robot takes, given its teammates."""
 
-    def choose(
-        self,
-        view: RobotView,
-        context: PlanContext,
-        frontiers: Frontiers,
-        targets: IntArray,
-        costs: FloatArray,
-        candidates: IntArray,
-    ) -> int:
-        """The index (into ``frontiers``) of the frontier this robot takes; ``targets`` and
-        ``costs`` are per frontier, ``candidates`` the best ones, best first."""
+    def choose(self, offer: Offer) -> int:
+        """The index (into ``offer.frontiers``) of the frontier this robot takes."""
         ...
 
 
@@ -156,19 +161,12 @@ class GreedyAuction:
 
     teammate_memory: int
 
-    def choose(
-        self,
-        view: RobotView,
-        context: PlanContext,
-        frontiers: Frontiers,
-        targets: IntArray,
-        costs: FloatArray,
-        candidates: IntArray,
-    ) -> int:
+    def choose(self, offer: Offer) -> int:
         """The candidate this robot wins."""
-        sizes = frontiers.sizes[candidates].astype(float)
-        goals = targets[candidates]
-        mine = costs[candidates]
+        view, context, candidates = offer.view, offer.context, offer.candidates
+        sizes = offer.frontiers.sizes[candidates].astype(float)
+        goals = offer.targets[candidates]
+        mine = offer.costs[candidates]
         rank = view.tie_rank
         me = Bidder(view.name, mine, np.ones(len(mine), dtype=bool), view.position, rank(view.name))
         team = auction_team(view, self.teammate_memory)

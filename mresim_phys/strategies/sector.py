@@ -47,7 +47,7 @@ from mresim_phys.strategies.base import (
     plan_context,
 )
 from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams, default_parts
-from mresim_phys.strategies.parts import Allocation, UtilityRanking
+from mresim_phys.strategies.parts import Allocation, Offer, UtilityRanking
 from mresim_phys.types import FloatArray, IntArray
 
 
@@ -158,20 +158,13 @@ class WedgeFirst:
     wedge: Wedge
     inner: Allocation
 
-    def choose(
-        self,
-        view: RobotView,
-        context: PlanContext,
-        frontiers: Frontiers,
-        targets: IntArray,
-        costs: FloatArray,
-        candidates: IntArray,
-    ) -> int:
+    def choose(self, offer: Offer) -> int:
         """The first candidate if it lies in the wedge, else the inner allocation's."""
-        dx, dy = frontiers.centroids[candidates[0]] - np.asarray(view.base_position)
+        first = offer.candidates[0]
+        dx, dy = offer.frontiers.centroids[first] - np.asarray(offer.view.base_position)
         if in_wedge(np.array([math.atan2(dy, dx)]), self.wedge.span)[0]:
-            return int(candidates[0])
-        return self.inner.choose(view, context, frontiers, targets, costs, candidates)
+            return int(first)
+        return self.inner.choose(offer)
 
 
 @STRATEGIES.register
