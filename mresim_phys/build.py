@@ -20,19 +20,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mresim_phys.agents import Agent, Body, Robot, empty_belief
-from mresim_phys.build_world import (
-    build_prior,
-    build_terrain,
-    check_event_boxes,
-    check_world_events,
-    load_map,
-    world_can_change,
-)
+from mresim_phys.build_world import build_prior, build_terrain, check_world_events, world_can_change
 from mresim_phys.comms import COMM_MODELS
 from mresim_phys.comms.ledger import Ledger
 from mresim_phys.comms.network import Channel, Network
 from mresim_phys.comms.regions import RegionProbe
-from mresim_phys.errors import ScenarioError
 from mresim_phys.faults.runtime import Faults, build_faults
 from mresim_phys.knowledge.coverage import Coverage
 from mresim_phys.knowledge.latest import LatestCoverage
@@ -41,23 +33,24 @@ from mresim_phys.planning import PLANNERS
 from mresim_phys.rng import Streams
 from mresim_phys.scenario.faults import robustness_columns
 from mresim_phys.scenario.load import load_scenario
-from mresim_phys.scenario.readers import LoadedMap
-from mresim_phys.scenario.schema import (
-    BaseStationSpec,
-    RobotSpec,
-    Scenario,
-    SensorSpec,
-    StartJitterSpec,
+from mresim_phys.scenario.on_map import (
+    check_apart,
+    check_base,
+    check_event_boxes,
+    check_inside,
+    load_map,
+    overlapping,
 )
+from mresim_phys.scenario.readers import LoadedMap
+from mresim_phys.scenario.run_specs import StartJitterSpec
+from mresim_phys.scenario.schema import BaseStationSpec, RobotSpec, Scenario, SensorSpec
 from mresim_phys.strategies import STRATEGIES
 from mresim_phys.types import BeliefGrid, FloatArray
 from mresim_phys.world.debris import RandomDebris
 from mresim_phys.world.doors import Door
 from mresim_phys.world.elements import build_elements
-from mresim_phys.world.events import (
-    Event,
-    make_event,
-)
+from mresim_phys.world.event_api import Event
+from mresim_phys.world.events import make_event
 from mresim_phys.world.explorable import Explorable, RobotSight
 from mresim_phys.world.obstacles import MovingObstacle
 from mresim_phys.world.reach import Reachable
@@ -69,62 +62,11 @@ __all__ = ["RunRules", "Scenario", "Setup", "build_setup", "load_scenario", "reg
 
 
 def check_start(world: World, robot: RobotSpec) -> None:
-    """A robot must start inside the map, clear of every wall."""
-    rows, cols = world.shape
-    x, y = robot.start
-    if not (0 <= x < cols and 0 <= y < rows):
-        raise ScenarioError(
-            f"robot {robot.name!r} starts at {list(robot.start)}, outside the {cols}x{rows} map;"
-            " give a start with 0 <= x < columns and 0 <= y < rows (x = column, y = row)."
-        )
+    """A robot must start inside the map, clear of every wall (the exact walls and
+    obstacles of ``world``)."""
+    check_inside(world.occupied, robot)
     if world.overlaps_wall(robot.start, robot.radius):
-        raise ScenarioError(
-            f"robot {robot.name!r} starts at {list(robot.start)} inside or overlapping a wall"
-            f" (radius {robot.radius}); move its start into free space at least its radius"
-            " away from any obstacle."
-        )
-
-
-def check_base(world: World, base: BaseStationSpec) -> None:
-    """The base station must stand inside the map, on a free cell."""
-    rows, cols = world.shape
-    x, y = base.position
-    if not (0 <= x < cols and 0 <= y < rows):
-        raise ScenarioError(
-            f"base_station.position {[x, y]} is outside the {cols}x{rows} map;"
-            " give 0 <= x < columns and 0 <= y < rows."
-        )
-    if world.occupied[int(y), int(x)]:
-        raise ScenarioError(
-            f"base_station.position {[x, y]} is inside a wall (cell column {int(x)}, row"
-            f" {int(y)} is an obstacle); move the base station into free space."
-        )
-
-
-MAX_PAIRS_SHOWN = 5  # overlapping start pairs named in the message
-
-
-def check_apart(robots: list[RobotSpec]) -> None:
-    """With ``simulation.robots_block``, no two robots' bodies may overlap at their starts."""
-    starts = np.array([r.start for r in robots], dtype=np.float64).reshape(-1, 2)
-    radii = np.array([r.radius for r in robots], dtype=np.float64)
-    pairs: list[tuple[int, int]] = []
-    for i in range(len(robots) - 1):
-        gaps = np.hypot(*(starts[i + 1 :] - starts[i]).T) - radii[i + 1 :] - radii[i]
-        pairs += [(i, i + 1 + int(j)) for j in np.flatnonzero(gaps < 0)]
-    if pairs:
-        raise ScenarioError(
-            f"robots {pair_names(robots, pairs)} start with overlapping bodies, which"
-            " simulation.robots_block: true does not allow; place every start at least the"
-            " sum of the two radii from every other."
-        )
-
-
-def pair_names(robots: list[RobotSpec], pairs: list[tuple[int, int]]) -> str:
-    """``'A' and 'B', 'A' and 'C' (and 7 more pairs)``: the first few pairs by name."""
-    shown = [f"{robots[i].name!r} and {robots[j].name!r}" for i, j in pairs[:MAX_PAIRS_SHOWN]]
-    extra = len(pairs) - len(shown)
-    return ", ".join(shown) + (f" (and {extra} more pairs)" if extra else "")
+        raise overlapping(robot)
 
 
 def laser_of(spec: SensorSpec) -> Laser:
@@ -353,10 +295,10 @@ def build_setup(scenario: Scenario) -> Setup:
     robots = make_team(scenario.robots, streams, world, jitter)
     if scenario.simulation.robots_block:
         check_apart(scenario.robots)
-    check_base(world, scenario.base_station)
+    check_base(world.occupied, scenario.base_station)
     starts = [r.position for r in robots]
     events = [make_event(e) for e in scenario.events]
-    check_event_boxes(scenario, world)
+    check_event_boxes(scenario, world.shape)
     check_world_events(scenario, events, world)
     bodies = np.array([(*r.position, r.radius) for r in robots], dtype=np.float64)
     elements = build_elements(

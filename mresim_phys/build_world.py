@@ -1,14 +1,11 @@
-"""Composition root, the world's part: the truth map, the world's events and layers checked.
+"""Composition root, the world's part: the world's events and layers checked and built.
 
-Read by ``build.py`` only: the ground truth from its file (``load_map``), the checks of
-events that name map windows and doors, whether anything in the scenario changes the
-truth during the run, the true terrain and the degraded prior map the listed robots
-start with. Each turns a user mistake into a ScenarioError naming the field.
+Read by ``build.py`` only: the checks of events that need the map, whether anything in
+the scenario changes the truth during the run, the true terrain and the degraded prior
+map the listed robots start with. Each turns a user mistake into a ScenarioError naming the field.
 """
 
 from __future__ import annotations
-
-from pathlib import Path
 
 from mresim_phys.agents import Robot
 from mresim_phys.errors import ScenarioError
@@ -16,51 +13,23 @@ from mresim_phys.knowledge.prior import STREAM as PRIOR_STREAM
 from mresim_phys.knowledge.prior import prior_belief
 from mresim_phys.knowledge.terrain import unknown_terrain
 from mresim_phys.rng import Streams
-from mresim_phys.scenario.maps import MapSpec, PriorSpec
-from mresim_phys.scenario.readers import LoadedMap, load_image_map, load_ros_map, load_text_map
+from mresim_phys.scenario.maps import PriorSpec
+from mresim_phys.scenario.on_map import check_door_names, load_map
 from mresim_phys.scenario.schema import (
     Scenario,
 )
 from mresim_phys.types import BeliefGrid
-from mresim_phys.world.events import Event, NeedsMap
+from mresim_phys.world.element_params import TerrainSpec
+from mresim_phys.world.event_api import Event, NeedsMap
 from mresim_phys.world.space import World
-from mresim_phys.world.terrain import TerrainGrid, TerrainSpec, terrain_grid
-
-
-def load_map(spec: MapSpec) -> LoadedMap:
-    """Read the ground truth named by ``spec`` (paths already resolved)."""
-    kind, path = spec.source
-    if kind == "image":
-        return load_image_map(Path(path), spec.threshold, spec.negate, spec.max_cells)
-    if kind == "grid":
-        return load_text_map(Path(path), spec.max_cells)
-    return load_ros_map(Path(path), spec.max_cells)
-
-
-def check_event_boxes(scenario: Scenario, world: World) -> None:
-    """Every map window an event names must lie inside the map."""
-    rows, cols = world.shape
-    for i, event in enumerate(scenario.events):
-        for where, (row0, row1, col0, col1) in event.boxes():
-            if not (0 <= row0 < row1 <= rows and 0 <= col0 < col1 <= cols):
-                raise ScenarioError(
-                    f"events[{i}].{where}: the window x {col0}..{col1}, y {row0}..{row1} is not"
-                    f" inside the {cols}x{rows} map; give 0 <= x0 < x1 <= {cols} and"
-                    f" 0 <= y0 < y1 <= {rows}."
-                )
+from mresim_phys.world.terrain import TerrainGrid, terrain_grid
 
 
 def check_world_events(scenario: Scenario, events: list[Event], world: World) -> None:
     """Doors the events name must exist; an event that needs the map works out where it
     acts now, once (a collapse region must lie on the map)."""
-    doors = {d.name for d in scenario.doors}
-    for i, (params, event) in enumerate(zip(scenario.events, events, strict=True)):
-        for where, door in params.doors():
-            if door not in doors:
-                known = ", ".join(sorted(doors)) or "none: add a 'doors' list"
-                raise ScenarioError(
-                    f"events[{i}].{where}: there is no door called {door!r} (doors: {known})."
-                )
+    check_door_names(scenario)
+    for i, event in enumerate(events):
         kind = event.name
         if isinstance(event, NeedsMap):
             try:

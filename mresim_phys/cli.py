@@ -1,55 +1,33 @@
 """Command line (output edge): ``mresim run | validate | replay | view | plot | bench`` (and
 ``sweep | compare | robustness``, from ``sweeps/cli.py``).
 
-Argument parsing only; the work is delegated to ``load``, ``sim`` and
-``recorders``. Every user mistake ends in a one-paragraph message on stderr and
-exit status 2, never a traceback. A run stopped by SIGINT (Ctrl-C) or SIGTERM still
-closes its files and writes its summary (``output.session``), then exits with 130 or 143.
+Argument parsing and dispatch only, with light imports: each command's work
+(``commands.py``, ``validation.py``, ``viewer/command.py``, ``sweeps/cli.py``) is imported
+when that command runs, so ``mresim validate`` never loads numba, pymunk or OpenCV. Every
+user mistake ends in a one-paragraph message on stderr and exit status 2, never a
+traceback. A run stopped by SIGINT (Ctrl-C) or SIGTERM still closes its files and writes
+its summary (``output.session``), then exits with 130 or 143.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
 import sys
 from collections.abc import Callable, Sequence
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Literal
 
-import yaml
-from tqdm import tqdm
-
+from mresim_phys.arg_types import comma_separated, non_negative_int, positive_float, positive_int
 from mresim_phys.errors import MresimError
-from mresim_phys.metrics import StepRecord
-from mresim_phys.output.bench import PRESETS, run_bench
-from mresim_phys.output.explorable_report import print_team_report
-from mresim_phys.output.files import write_text_atomic
-from mresim_phys.output.health import print_warnings
-from mresim_phys.output.plots import plot_runs
-from mresim_phys.output.recorders import default_run_dir
-from mresim_phys.output.replay import replay_run
-from mresim_phys.output.session import INTERRUPTED, Outcome, run_session
-from mresim_phys.output.signals import StopRequest, stop_on_signals
 from mresim_phys.render.layers import GLOBAL_LAYERS, ROBOT_LAYERS
-from mresim_phys.run_args import (
-    check_video_folder,
-    comma_separated,
-    draw_plots,
-    non_negative_int,
-    positive_float,
-    positive_int,
-    render_overrides,
-    simulation_overrides,
-    summary_line,
-)
-from mresim_phys.scenario.load import resolve_map_path, validate_scenario
-from mresim_phys.scenario.team_file import read_team_file
-from mresim_phys.sim import Simulation
-from mresim_phys.strategies import STRATEGIES
+from mresim_phys.strategies.catalog import STRATEGIES
 from mresim_phys.sweeps.cli import SWEEP_COMMANDS, add_sweep_parsers
-from mresim_phys.viewer import command as viewer
+from mresim_phys.viewer.flags import add_run_view_flags, add_view_parser
 
 EXIT_USER_ERROR = 2
+BENCH_PRESETS = ("office", "original", "rooms")  # output/bench.py's PRESETS (tested equal)
 EXIT_INTERRUPTED = 130  # Ctrl-C outside a run's own handling (128 + SIGINT)
 LAYERS_HELP = (
     "comma-separated layers applied in order: 'default', 'all', NAME to add, -NAME to remove,"
@@ -98,7 +76,7 @@ def make_parser() -> argparse.ArgumentParser:
     )
     run.add_argument("--quiet", action="store_true", help="no progress bar or summary line")
     add_render_flags(run)
-    viewer.add_run_view_flags(run)
+    add_run_view_flags(run)
     run.add_argument("--no-log", action="store_true", help="do not write the run log")
     run.add_argument("--no-plots", action="store_true", help="do not draw plots at the end")
     run.add_argument(
@@ -125,13 +103,19 @@ def make_parser() -> argparse.ArgumentParser:
     team.add_argument("--out", type=Path, help="where to write the YAML (default: stdout)")
     validate = commands.add_parser("validate", help="check a scenario without running it")
     validate.add_argument("scenario", type=Path, help="scenario YAML file")
+    validate.add_argument(
+        "--explorable",
+        action="store_true",
+        help="also build the run's world (each start's clearance from the exact walls, doors,"
+        " terrain, prior map) and report where the team can go and what it can see",
+    )
     replay = commands.add_parser("replay", help="re-render a run (and its metrics) from its log")
     replay.add_argument("run_dir", type=Path, help="a run folder written by 'mresim run'")
     add_render_flags(replay)
     replay.add_argument(
         "--metrics", action="store_true", help="recompute metrics.csv from the log and compare"
     )
-    viewer.add_view_parser(commands)
+    add_view_parser(commands)
     plot = commands.add_parser("plot", help="plot one or more runs' metrics")
     plot.add_argument("run_dirs", type=Path, nargs="+", help="run folders")
     plot.add_argument("--out", type=Path, help="folder for the PNGs (default: the run's plots/)")
@@ -144,7 +128,7 @@ def make_parser() -> argparse.ArgumentParser:
     )
     bench.add_argument(
         "--preset",
-        choices=sorted(PRESETS),
+        choices=BENCH_PRESETS,
         default="office",
         help="office: speed 3, laser 100, comm 150 on the office floor (default); original:"
         " the original MRESim's settings (speed 10, laser 200, comm 200, radius 0.5) on its"
@@ -233,127 +217,27 @@ def strategy_names(text: str) -> tuple[str, ...]:
     return names
 
 
-def bench_command(args: argparse.Namespace) -> int:
-    """``mresim bench``: time full steps and print the cost split."""
-    report = run_bench(
-        args.robots, args.map, args.warmup, args.steps, args.preset, args.threads, args.strategies
-    )
-    print(report)
-    return 0
-
-
-def run_command(args: argparse.Namespace) -> int:
-    """``mresim run``: simulate, streaming metrics (and log, video, PNGs) to the run folder.
-
-    SIGINT and SIGTERM are handled from the start (building the simulation included): the
-    run stops after the current step and still writes everything (``output.session``).
-    """
-    viewer.check_run_flags(args)
-    if args.view:
-        return viewer.view_run(args)
-    linger = getattr(args, "program", False)  # see main()
-    with stop_on_signals(StopRequest(notice=not args.quiet), linger=linger) as stop:
-        sim = Simulation.from_yaml(
-            args.scenario,
-            seed=args.seed,
-            steps=args.steps,
-            render=render_overrides(args),
-            **simulation_overrides(args),
-        )
-        check_video_folder(sim.scenario, args.scenario)
-        out_dir = args.out or default_run_dir(sim.scenario)
-        plotted: list[bool] = []
-
-        def plots(folder: Path) -> None:
-            wanted = sim.scenario.render.plots
-            plotted.append(draw_plots(wanted, [folder], folder / "plots", args.quiet))
-
-        outcome = run_with_bar(sim, out_dir, args, stop, plots)
-    if not args.quiet:
-        print(summary_line(sim, outcome, any(plotted)))
-    print_warnings(outcome.summary)
-    return outcome.exit_status
-
-
-def run_with_bar(
-    sim: Simulation,
-    out_dir: Path,
-    args: argparse.Namespace,
-    stop: StopRequest,
-    finish: Callable[[Path], object],
-) -> Outcome:
-    """run_session under a tqdm progress bar whose total is the steps run when a stop rule
-    ends the run early."""
-    scenario = sim.scenario
-    with tqdm(total=scenario.steps, disable=args.quiet, unit="step", desc=scenario.name) as bar:
-
-        def progress(record: StepRecord) -> None:
-            bar.update(0 if record.step == 0 else 1)
-            bar.set_postfix(
-                explored=f"{record.explored:.3f}", base=f"{record.known_at_base:.3f}", refresh=False
-            )
-
-        outcome = run_session(
-            sim, out_dir, progress, overwrite=args.overwrite, stop=stop, finish=finish
-        )
-        if outcome.reason != INTERRUPTED:
-            bar.total = bar.n
-            bar.refresh()
-    return outcome
-
-
-def validate_command(args: argparse.Namespace) -> int:
-    """``mresim validate``: schema, plugins, map and robot starts, without running; then
-    where the team can go and what it can see, with warnings on stderr."""
-    print_team_report(Simulation.from_yaml(args.scenario), str(args.scenario))
-    return 0
-
-
-def import_team_command(args: argparse.Namespace) -> int:
-    """``mresim import-team``: the original's team file as a scenario YAML, validated."""
-    data = read_team_file(args.team_file, args.map, args.strategy, args.comm)
-    text = yaml.safe_dump(data, sort_keys=False, default_flow_style=None)
-    source = str(args.team_file)
-    folder = (args.out.parent if args.out is not None else Path.cwd()).resolve()
-    scenario = resolve_map_path(validate_scenario(data, source=source), folder, source)
-    try:
-        Simulation(scenario)  # the map is read and every start checked against it
-    except MresimError as exc:
-        raise MresimError(f"{source} on map {args.map}: {exc}") from None
-    if args.out is None:
-        print(text, end="")
-    else:
-        write_text_atomic(args.out, text)
-        print(f"{args.out}: {len(data['robots'])} robots from {args.team_file}")
-    return 0
-
-
-def replay_command(args: argparse.Namespace) -> int:
-    """``mresim replay``: frames (and metrics) from a run's log, without re-simulating."""
-    result = replay_run(args.run_dir, render_overrides(args), args.metrics)
-    for line in result.lines:
-        print(line)
-    return 0 if result.ok else 1
-
-
-def plot_command(args: argparse.Namespace) -> int:
-    """``mresim plot``: exploration, distance and link figures for the given runs."""
-    out_dir = args.out or (args.run_dirs[0] / "plots" if len(args.run_dirs) == 1 else Path("plots"))
-    for path in plot_runs(list(args.run_dirs), out_dir):
-        print(path)
-    return 0
-
-
-COMMANDS = {
-    "run": run_command,
-    "validate": validate_command,
-    "import-team": import_team_command,
-    "replay": replay_command,
-    "plot": plot_command,
-    "bench": bench_command,
-    "view": viewer.view_command,
+COMMANDS: dict[str, str | Callable[[argparse.Namespace], int]] = {
+    # command -> "module:function" doing its work, imported when the command runs
+    "run": "mresim_phys.commands:run_command",
+    "validate": "mresim_phys.validation:validate_command",
+    "import-team": "mresim_phys.commands:import_team_command",
+    "replay": "mresim_phys.commands:replay_command",
+    "plot": "mresim_phys.commands:plot_command",
+    "bench": "mresim_phys.commands:bench_command",
+    "view": "mresim_phys.viewer.command:view_command",
     **SWEEP_COMMANDS,
 }
+
+
+def handler_of(command: str) -> Callable[[argparse.Namespace], int]:
+    """The function doing ``command``'s work (its module imported now)."""
+    handler = COMMANDS[command]
+    if isinstance(handler, str):
+        module, _, name = handler.partition(":")
+        found: Callable[[argparse.Namespace], int] = getattr(importlib.import_module(module), name)
+        return found
+    return handler
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -366,9 +250,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     """
     args = make_parser().parse_args(argv)
     args.program = argv is None
-    handler = COMMANDS[args.command]
     try:
-        return handler(args)
+        return handler_of(args.command)(args)
     except KeyboardInterrupt:
         print("mresim: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED

@@ -23,13 +23,15 @@ from __future__ import annotations
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from functools import cache
-from typing import ClassVar, TypeAlias, cast
+from typing import TYPE_CHECKING, ClassVar, TypeAlias, cast
 
 import numpy as np
 
-from mresim_phys.metrics import StepRecord
 from mresim_phys.plugin import Family, Plugin, PluginParams
 from mresim_phys.registry import Registry
+
+if TYPE_CHECKING:  # the facts a column reads; validating a scenario names columns only
+    from mresim_phys.metrics import StepRecord
 
 Scalar: TypeAlias = int | float | str | None
 Value: TypeAlias = Scalar | Sequence[Scalar]

@@ -20,10 +20,11 @@ from mresim_phys.comms.network import Blackout, Network
 from mresim_phys.knowledge.coverage import Coverage
 from mresim_phys.types import BoolGrid, FloatArray
 from mresim_phys.world.changes import Change, circles_cover
-from mresim_phys.world.debris import Crush
 from mresim_phys.world.doors import Door
+from mresim_phys.world.element_params import Crush
 from mresim_phys.world.elements import WorldElement
-from mresim_phys.world.events import Box, Channels, Event, RobotInfo, RobotPart
+from mresim_phys.world.event_api import Event, RobotInfo
+from mresim_phys.world.event_params import Box, Channels, RobotPart
 from mresim_phys.world.explorable import Explorable, follow_world
 from mresim_phys.world.reach import Reachable
 from mresim_phys.world.space import World

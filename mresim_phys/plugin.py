@@ -12,6 +12,7 @@ the family's params base, and the family's methods; a class of another family gi
 
 from __future__ import annotations
 
+import importlib
 import inspect
 from dataclasses import dataclass
 from typing import ClassVar
@@ -39,15 +40,21 @@ class Plugin:
 @dataclass(frozen=True)
 class Family:
     """What a family's classes have: a ``Params`` subclassing ``params`` and the public
-    methods of ``protocol`` (the family's ``typing.Protocol``)."""
+    methods of ``protocol`` (the family's ``typing.Protocol``, or its ``module:Class``
+    reference, imported when a class is first checked: a registry of a light module can
+    name the protocol of a heavy one)."""
 
-    protocol: type
+    protocol: type | str
     params: type[BaseModel]
 
     @property
     def methods(self) -> list[str]:
         """The methods the protocol asks for (its properties are instance state)."""
-        members = vars(self.protocol).items()
+        protocol = self.protocol
+        if isinstance(protocol, str):
+            module, _, name = protocol.partition(":")
+            protocol = getattr(importlib.import_module(module), name)
+        members = vars(protocol).items()
         return [n for n, v in members if inspect.isfunction(v) and not n.startswith("_")]
 
     def misfits(self, cls: type) -> list[str]:

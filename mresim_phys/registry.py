@@ -3,8 +3,13 @@
 A registry is filled at import time by a class decorator (the class's own
 ``name`` is its key), can be extended by a third-party package through an entry
 point group, and resolves ``"package.module:ClassName"`` references for one-off
-user classes. :meth:`Registry.make` builds a plugin from its parameters. Unknown
-names raise :class:`~mresim_phys.errors.UnknownPluginError` listing the close matches.
+user classes. A built-in may also be entered *lazily* (:meth:`Registry.lazy`): its name,
+the ``module:Class`` reference of its implementation and its ``Params`` model, the way
+Gymnasium's ``EnvSpec.entry_point`` does. Validating a scenario then reads only the
+parameter models (modules of pydantic and the standard library); the implementation, with
+numba, pymunk or OpenCV behind it, is imported when the class itself is asked for.
+:meth:`Registry.make` builds a plugin from its parameters. Unknown names raise
+:class:`~mresim_phys.errors.UnknownPluginError` listing the close matches.
 
 A registry given its :class:`~mresim_phys.plugin.Family` takes only classes of that
 family: a ``module:Class`` reference or an entry point naming a class of another family
@@ -51,7 +56,16 @@ class Registry(Generic[T]):
         self._broken: dict[str, str] = {}  # entry points that failed to load: why
         self._discovered = False
         self._from_entry_points: set[str] = set()
+        self._lazy: dict[str, tuple[str, type[BaseModel]]] = {}  # name -> (module:Class, Params)
         REGISTRIES.add(self)
+
+    def lazy(self, name: str, reference: str, params: type[BaseModel]) -> None:
+        """Enter built-in ``name``, implemented by the class ``reference`` names
+        (``package.module:Class``, imported when first asked for) with parameters
+        ``params``; the class, once imported, must register itself under ``name``."""
+        if name in self._lazy or name in self._classes:
+            raise ValueError(f"{self.kind} {name!r} is already registered")
+        self._lazy[name] = (reference, params)
 
     def register(self, cls: type[T]) -> type[T]:
         """Class decorator adding ``cls`` under its ``name``; a duplicate name or a class of
@@ -61,11 +75,23 @@ class Registry(Generic[T]):
             raise ValueError(f"a {self.kind} class needs a 'name' class attribute (its YAML key)")
         if name in self._classes and self._classes[name] is not cls:
             raise ValueError(f"{self.kind} {name!r} is already registered")
-        problem = self.misfit(cls, name)
+        problem = self.misfit(cls, name) or self._unlike_entry(cls, name)
         if problem:
             raise ValueError(problem)
         self._classes[name] = cls
         return cls
+
+    def _unlike_entry(self, cls: type, name: str) -> str:
+        """Why ``cls`` is not the class entered lazily as ``name`` ('' if it is, or if
+        ``name`` was not entered lazily)."""
+        if name not in self._lazy:
+            return ""
+        reference, params = self._lazy[name]
+        if reference != f"{cls.__module__}:{cls.__qualname__}":
+            return f"{self.kind} {name!r} is entered as {reference!r}, not {cls.__qualname__!r}"
+        if getattr(cls, "Params", None) is not params:
+            return f"{self.kind} {name!r} is entered with Params {params.__name__}"
+        return ""
 
     def fits(self, cls: type) -> bool:
         """Whether ``cls`` belongs to this registry's family (a registry without one: no)."""
@@ -86,7 +112,10 @@ class Registry(Generic[T]):
         )
 
     def params_model(self, name: str) -> type[BaseModel] | None:
-        """The pydantic ``Params`` model of plugin ``name`` (None if it has none usable)."""
+        """The pydantic ``Params`` model of plugin ``name`` (None if it has none usable); a
+        lazily entered built-in's without importing its implementation."""
+        if name in self._lazy and name not in self._classes:
+            return self._lazy[name][1]
         model = getattr(self.get(name), "Params", None)
         return model if isinstance(model, type) and issubclass(model, BaseModel) else None
 
@@ -103,7 +132,7 @@ class Registry(Generic[T]):
     def names(self) -> list[str]:
         """All registered names (built-ins and discovered plugins), sorted."""
         self._discover()
-        return sorted(self._classes)
+        return sorted({*self._classes, *self._lazy})
 
     def get(self, name: str) -> type[T]:
         """The class for ``name``: a registered name or a ``package.module:Class`` path."""
@@ -112,9 +141,19 @@ class Registry(Generic[T]):
         self._discover()
         if name in self._broken:
             raise UnknownPluginError(self._broken[name])
+        if name in self._lazy and name not in self._classes:
+            self._load(name)
         if name not in self._classes:
             raise UnknownPluginError(self._unknown_message(name))
         return self._classes[name]
+
+    def _load(self, name: str) -> None:
+        """Import the implementation of lazily entered ``name`` (which registers it)."""
+        reference = self._lazy[name][0]
+        module_name, _, attr = reference.partition(":")
+        cls = getattr(importlib.import_module(module_name), attr)
+        if self._classes.get(name) is not cls:
+            raise RuntimeError(f"{reference} did not register itself as {self.kind} {name!r}")
 
     def _unknown_message(self, name: str) -> str:
         close = difflib.get_close_matches(name, self.names(), n=3, cutoff=0.5)
@@ -160,7 +199,7 @@ class Registry(Generic[T]):
             return
         self._discovered = True
         for ep in entry_points(group=self.entry_point_group):
-            if ep.name in self._classes:
+            if ep.name in self._classes or ep.name in self._lazy:
                 continue
             try:
                 cls = ep.load()

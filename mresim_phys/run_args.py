@@ -8,7 +8,6 @@ page attached) and the sweep commands (``sweeps/cli.py``), which ``cli.py`` impo
 from __future__ import annotations
 
 import argparse
-from collections.abc import Callable
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -93,44 +92,3 @@ def draw_plots(wanted: bool, run_dirs: list[Path], out_dir: Path, quiet: bool) -
         return False
     plot_runs(run_dirs, out_dir)
     return True
-
-
-def whole_number(text: str, minimum: int) -> int:
-    """``text`` as an integer >= ``minimum``, or an argparse error saying what was expected."""
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a whole number, got {text!r}") from None
-    if value < minimum:
-        raise argparse.ArgumentTypeError(f"expected a number >= {minimum}, got {value}")
-    return value
-
-
-def positive_int(text: str) -> int:
-    """argparse type: an integer >= 1."""
-    return whole_number(text, 1)
-
-
-def positive_float(text: str) -> float:
-    """argparse type: a number > 0."""
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a number, got {text!r}") from None
-    if not value > 0:
-        raise argparse.ArgumentTypeError(f"expected a number > 0, got {text}")
-    return value
-
-
-def non_negative_int(text: str) -> int:
-    """argparse type: an integer >= 0."""
-    return whole_number(text, 0)
-
-
-def comma_separated(text: str, parse: Callable[[str], T], expected: str) -> list[T]:
-    """argparse helper: the comma-separated parts of ``text``, each parsed (at least one;
-    else an error saying ``expected``, e.g. 'team sizes such as 4,8,16')."""
-    values = [parse(part) for part in text.split(",") if part.strip()]
-    if not values:
-        raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
-    return values

@@ -13,12 +13,11 @@ from mresim_phys.sim import Simulation
 from mresim_phys.strategies import STRATEGIES, RobotView
 from mresim_phys.strategies.assignment import (
     HungarianExploration,
-    HungarianParams,
     MinPosExploration,
-    MinPosParams,
     assign,
     min_pos_choice,
 )
+from mresim_phys.strategies.params import HungarianParams, MinPosParams
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 
 ROOT = Path(__file__).resolve().parent.parent

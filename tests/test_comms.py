@@ -11,9 +11,10 @@ from hypothesis import strategies as st
 
 from mresim_phys import COMM_MODELS
 from mresim_phys.comms import Radios
-from mresim_phys.comms.disk import DiskComm, DiskParams
-from mresim_phys.comms.line_of_sight import LineOfSightComm, LineOfSightParams
-from mresim_phys.comms.path_loss import PathLossComm, PathLossParams
+from mresim_phys.comms.disk import DiskComm
+from mresim_phys.comms.line_of_sight import LineOfSightComm
+from mresim_phys.comms.params import DiskParams, LineOfSightParams, PathLossParams
+from mresim_phys.comms.path_loss import PathLossComm
 from mresim_phys.types import FloatArray
 from mresim_phys.world.space import World
 from mresim_phys.world.walls import segment_walls

@@ -112,7 +112,7 @@ def test_the_plugin_contracts_in_the_guide_match_the_protocols() -> None:
     from mresim_phys.comms import CommModel
     from mresim_phys.planning import Planner
     from mresim_phys.strategies import Strategy
-    from mresim_phys.world.events import Event
+    from mresim_phys.world.event_api import Event
 
     text = (ROOT / "docs/writing-a-strategy.md").read_text(encoding="utf-8")
     for protocol, methods in (

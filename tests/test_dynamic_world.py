@@ -9,10 +9,12 @@ import numpy as np
 import pytest
 
 from mresim_phys.comms.base import Radios
-from mresim_phys.comms.line_of_sight import LineOfSightComm, LineOfSightParams
+from mresim_phys.comms.line_of_sight import LineOfSightComm
+from mresim_phys.comms.params import LineOfSightParams
 from mresim_phys.sim import Simulation
 from mresim_phys.world.changes import circles_cover
-from mresim_phys.world.doors import DoorParams, door_cells
+from mresim_phys.world.doors import door_cells
+from mresim_phys.world.element_params import DoorParams
 from mresim_phys.world.space import World
 from mresim_phys.world.walls import walls_between
 

@@ -16,7 +16,9 @@ from mresim_phys.build import run_rules
 from mresim_phys.cli import main
 from mresim_phys.plugin import Plugin
 from mresim_phys.scenario.load import load_scenario
-from mresim_phys.world.events import EVENTS, Box, Changes, EventContext, EventParams
+from mresim_phys.world.event_api import EventContext
+from mresim_phys.world.event_catalog import EVENTS
+from mresim_phys.world.event_params import Box, Changes, EventParams
 
 SMOKE_FACTORS = (1.0, 0.5)  # speed kept, laser range halved
 

@@ -18,7 +18,9 @@ from mresim_phys.plugin import Plugin
 from mresim_phys.scenario.load import load_scenario
 from mresim_phys.strategies import Decision
 from mresim_phys.types import FREE
-from mresim_phys.world.events import EVENTS, EventContext, EventParams
+from mresim_phys.world.event_api import EventContext
+from mresim_phys.world.event_catalog import EVENTS
+from mresim_phys.world.event_params import EventParams
 
 ScenarioFile = Callable[..., Path]
 

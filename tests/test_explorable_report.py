@@ -1,4 +1,4 @@
-"""``mresim validate``'s report of where a team can go and what it can see
+"""``mresim validate --explorable``'s report of where a team can go and what it can see
 (output/explorable_report.py): shares per robot size, the team's, and the warnings."""
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ from mresim_phys.cli import main
 
 
 def validate(path: Path, capsys: pytest.CaptureFixture[str]) -> tuple[list[str], list[str]]:
-    assert main(["validate", str(path)]) == 0
+    assert main(["validate", "--explorable", str(path)]) == 0
     captured = capsys.readouterr()
     return captured.out.splitlines(), captured.err.splitlines()
 

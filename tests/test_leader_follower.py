@@ -14,7 +14,8 @@ from mresim_phys.errors import ScenarioError
 from mresim_phys.knowledge.teammates import TeammateInfo
 from mresim_phys.sim import Simulation
 from mresim_phys.strategies import RobotView
-from mresim_phys.strategies.leader_follower import LeaderFollower, LeaderFollowerParams
+from mresim_phys.strategies.leader_follower import LeaderFollower
+from mresim_phys.strategies.params import LeaderFollowerParams
 from mresim_phys.types import FREE, OCCUPIED
 
 MakeScenario = Callable[..., Path]

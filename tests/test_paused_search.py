@@ -22,7 +22,8 @@ from mresim_phys.planning.dial import PausedSearch, _dijkstra
 from mresim_phys.planning.fields import distance_field, traversable
 from mresim_phys.planning.grid import Window, bbox
 from mresim_phys.strategies.base import RobotView, plan_context
-from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams
+from mresim_phys.strategies.frontier import FrontierExploration
+from mresim_phys.strategies.params import FrontierParams
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 
 SEEDS = st.integers(0, 2**32 - 1)

@@ -20,18 +20,19 @@ from mresim_phys.cli import main
 from mresim_phys.errors import ScenarioError, UnknownPluginError
 from mresim_phys.planning import BUILT_IN, PLANNERS, Planner, topocorridor, topological
 from mresim_phys.planning.astar import AStar, astar_search
-from mresim_phys.planning.base import PlannerParams
 from mresim_phys.planning.fields import distance_field, path_length, traversable
 from mresim_phys.planning.grid import Window
 from mresim_phys.planning.jps import JumpPointSearch, jps_search
+from mresim_phys.planning.params import PlannerParams, TopologicalParams
 from mresim_phys.planning.skeleton import removal_table, thin
 from mresim_phys.planning.smoothing import smooth_path
 from mresim_phys.planning.topobuild import build_map
 from mresim_phys.planning.topocache import MapCache
-from mresim_phys.planning.topological import TopologicalParams, TopologicalPlanner
+from mresim_phys.planning.topological import TopologicalPlanner
 from mresim_phys.scenario.readers import load_image_map, load_ros_map, load_text_map
 from mresim_phys.strategies import RobotView, plan_context
-from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams
+from mresim_phys.strategies.frontier import FrontierExploration
+from mresim_phys.strategies.params import FrontierParams
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 
 SEEDS = st.integers(0, 2**32 - 1)

@@ -122,7 +122,8 @@ def test_an_entry_point_of_another_family_is_named_when_asked_for(
     import mresim_phys.registry as registry_module
     from mresim_phys.planning.astar import AStar
     from mresim_phys.plugin import Family
-    from mresim_phys.strategies.base import Strategy, StrategyParams
+    from mresim_phys.strategies.base import Strategy
+    from mresim_phys.strategies.params import StrategyParams
 
     class Point:
         name, value = "astar_as_strategy", "mresim_phys.planning.astar:AStar"

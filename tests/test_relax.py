@@ -11,7 +11,8 @@ import numpy as np
 from mresim_phys import Simulation
 from mresim_phys.strategies import RobotView, relax
 from mresim_phys.strategies.base import GOAL_MET, NO_FRONTIER
-from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams
+from mresim_phys.strategies.frontier import FrontierExploration
+from mresim_phys.strategies.params import FrontierParams
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"

@@ -17,7 +17,8 @@ from mresim_phys.output.bench import PRESETS, team_scenario
 from mresim_phys.scenario.load import validate_scenario
 from mresim_phys.sim import Simulation
 from mresim_phys.strategies import RobotView
-from mresim_phys.strategies.role_switch import RoleSwitch, RoleSwitchParams, SwitchPayload
+from mresim_phys.strategies.params import RoleSwitchParams
+from mresim_phys.strategies.role_switch import RoleSwitch, SwitchPayload
 from mresim_phys.types import FREE, OCCUPIED
 
 MakeScenario = Callable[..., Path]

@@ -28,7 +28,7 @@ from mresim_phys.output.runlog import (
 )
 from mresim_phys.render import LayerSpec, Renderer, frame_scale
 from mresim_phys.render.draw import robot_label
-from mresim_phys.scenario.schema import RenderSpec
+from mresim_phys.scenario.run_specs import RenderSpec
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot
 from mresim_phys.world.explorable import follow_world
 from mresim_phys.world.maps import free_components_mask

@@ -15,7 +15,7 @@ from mresim_phys.errors import MapError, ScenarioError
 from mresim_phys.scenario.load import load_scenario
 from mresim_phys.scenario.schema import Scenario
 from mresim_phys.sim import Simulation
-from mresim_phys.strategies.frontier import FrontierParams
+from mresim_phys.strategies.params import FrontierParams
 
 MakeScenario = Callable[..., Path]
 

@@ -14,7 +14,8 @@ from mresim_phys.planning.goals import GoalCosts
 from mresim_phys.strategies import BUILT_IN, RobotView
 from mresim_phys.strategies.auction import Bidder, best_pair, greedy_auction
 from mresim_phys.strategies.base import Strategy
-from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams
+from mresim_phys.strategies.frontier import FrontierExploration
+from mresim_phys.strategies.params import FrontierParams
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 
 

@@ -24,7 +24,8 @@ from mresim_phys.sim import Simulation
 from mresim_phys.strategies import Decision, RobotView
 from mresim_phys.strategies.base import plan_context
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
-from mresim_phys.world.terrain import TerrainSpec, image_factors, terrain_grid
+from mresim_phys.world.element_params import TerrainSpec
+from mresim_phys.world.terrain import image_factors, terrain_grid
 
 MakeScenario = Callable[..., Path]
 LEFT_ROOM_MUD = {"regions": [{"box": [0, 0, 40, 60], "factor": 0.5}]}

@@ -10,11 +10,8 @@ import numpy as np
 
 from mresim_phys.knowledge.teammates import TeammateInfo
 from mresim_phys.strategies import RobotView
-from mresim_phys.strategies.utility_return import (
-    DeliveryPayload,
-    UtilityReturn,
-    UtilityReturnParams,
-)
+from mresim_phys.strategies.params import UtilityReturnParams
+from mresim_phys.strategies.utility_return import DeliveryPayload, UtilityReturn
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 
 

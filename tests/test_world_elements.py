@@ -9,16 +9,11 @@ import pytest
 
 from mresim_phys.types import BoolGrid
 from mresim_phys.world.debris import square_at
-from mresim_phys.world.doors import Door, DoorParams, door_cells, line_cells
-from mresim_phys.world.obstacles import MovingObstacle, ObstacleParams, advance
-from mresim_phys.world.shapes import (
-    BoxShape,
-    CircleRegion,
-    CircleShape,
-    PolygonShape,
-    body_cells,
-    region_cells,
-)
+from mresim_phys.world.doors import Door, door_cells, line_cells
+from mresim_phys.world.element_params import DoorParams, ObstacleParams
+from mresim_phys.world.footprints import body_cells, region_cells
+from mresim_phys.world.obstacles import MovingObstacle, advance
+from mresim_phys.world.shapes import BoxShape, CircleRegion, CircleShape, PolygonShape
 
 
 def test_a_circle_body_holds_the_cells_whose_centres_are_inside() -> None:

@@ -20,12 +20,13 @@ sys.path.insert(0, str(ROOT))
 from mresim_phys import COMM_MODELS, STRATEGIES  # noqa: E402
 from mresim_phys.faults import spec as fault_spec  # noqa: E402
 from mresim_phys.planning import PLANNERS  # noqa: E402
-from mresim_phys.scenario import schema  # noqa: E402
+from mresim_phys.scenario import run_specs, schema  # noqa: E402
 from mresim_phys.scenario.maps import PriorSpec  # noqa: E402
 from mresim_phys.scenario.yamlfile import MAX_ALIAS_VALUES, MAX_YAML_BYTES  # noqa: E402
 from mresim_phys.strict import MAX_FLOAT, MAX_INT, UNIT_BOUNDS, bounds_text  # noqa: E402
-from mresim_phys.world import debris, doors, obstacles, shapes, terrain  # noqa: E402
-from mresim_phys.world.events import EVENTS  # noqa: E402
+from mresim_phys.world import element_params as elements  # noqa: E402
+from mresim_phys.world import shapes  # noqa: E402
+from mresim_phys.world.event_catalog import EVENTS  # noqa: E402
 
 SECTIONS: list[tuple[str, type[BaseModel]]] = [
     ("Scenario (top level)", schema.Scenario),
@@ -36,19 +37,19 @@ SECTIONS: list[tuple[str, type[BaseModel]]] = [
     ("sensor", schema.SensorSpec),
     ("communication", schema.CommSpec),
     ("strategy and planner", schema.PluginSpec),
-    ("stop", schema.StopSpec),
-    ("simulation", schema.SimulationSpec),
-    ("simulation.start_jitter", schema.StartJitterSpec),
-    ("render", schema.RenderSpec),
-    ("obstacles[i]", obstacles.ObstacleParams),
+    ("stop", run_specs.StopSpec),
+    ("simulation", run_specs.SimulationSpec),
+    ("simulation.start_jitter", run_specs.StartJitterSpec),
+    ("render", run_specs.RenderSpec),
+    ("obstacles[i]", elements.ObstacleParams),
     ("obstacles[i].shape: one of", shapes.CircleShape),
     ("", shapes.BoxShape),
     ("", shapes.PolygonShape),
-    ("obstacles[i].motion: one of", obstacles.WaypointsMotion),
-    ("", obstacles.RandomWalkMotion),
-    ("", obstacles.StillMotion),
-    ("doors[i]", doors.DoorParams),
-    ("random_debris", debris.RandomDebrisParams),
+    ("obstacles[i].motion: one of", elements.WaypointsMotion),
+    ("", elements.RandomWalkMotion),
+    ("", elements.StillMotion),
+    ("doors[i]", elements.DoorParams),
+    ("random_debris", elements.RandomDebrisParams),
     (
         "regions (collapse, random_debris.region, faults.hazards[i].region): one of",
         shapes.BoxRegion,
@@ -56,8 +57,8 @@ SECTIONS: list[tuple[str, type[BaseModel]]] = [
     ("", shapes.CircleRegion),
     ("", shapes.PolygonRegion),
     ("", shapes.MaskRegion),
-    ("terrain", terrain.TerrainSpec),
-    ("terrain.regions[i]", terrain.TerrainRegion),
+    ("terrain", elements.TerrainSpec),
+    ("terrain.regions[i]", elements.TerrainRegion),
     ("prior", PriorSpec),
     ("faults", fault_spec.FaultsSpec),
     ("faults.random[i]", fault_spec.RandomFaultSpec),

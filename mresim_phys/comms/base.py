@@ -18,14 +18,9 @@ from typing import ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
-from mresim_phys.plugin import Family, PluginParams
-from mresim_phys.registry import Registry
+from mresim_phys.comms.params import CommParams
 from mresim_phys.types import FloatArray, IntArray
 from mresim_phys.world.space import World
-
-
-class CommParams(PluginParams):
-    """Base for comm-model parameters: unknown keys are errors."""
 
 
 @dataclass(frozen=True)
@@ -72,11 +67,6 @@ class CommModel(Protocol):
     def reach(self, radios: Radios, index: int, angles: FloatArray, world: World) -> FloatArray:
         """Per direction, how far from agent ``index`` a receiver still hears it (cells)."""
         ...
-
-
-COMM_MODELS: Registry[CommModel] = Registry(
-    "communication model", "mresim_phys.comm_models", Family(CommModel, CommParams)
-)
 
 
 def pair_distances(positions: FloatArray) -> FloatArray:

@@ -12,20 +12,12 @@ from typing import ClassVar
 
 import numpy as np
 
-from mresim_phys.comms.base import (
-    COMM_MODELS,
-    CommParams,
-    Radios,
-    pair_distances,
-    without_self_links,
-)
+from mresim_phys.comms.base import Radios, pair_distances, without_self_links
+from mresim_phys.comms.catalog import COMM_MODELS
+from mresim_phys.comms.params import CommParams, DiskParams
 from mresim_phys.plugin import Plugin
 from mresim_phys.types import FloatArray
 from mresim_phys.world.space import World
-
-
-class DiskParams(CommParams):
-    """The disk model has no parameters: ranges come from each agent."""
 
 
 def disk_reach(radios: Radios) -> FloatArray:

@@ -12,21 +12,14 @@ from __future__ import annotations
 from typing import ClassVar
 
 import numpy as np
-from pydantic import Field
 
-from mresim_phys.comms.base import COMM_MODELS, CommParams, Radios, candidate_pairs, symmetric_links
+from mresim_phys.comms.base import Radios, candidate_pairs, symmetric_links
+from mresim_phys.comms.catalog import COMM_MODELS
 from mresim_phys.comms.disk import disk_reach
+from mresim_phys.comms.params import CommParams, LineOfSightParams
 from mresim_phys.plugin import Plugin
 from mresim_phys.types import FloatArray
 from mresim_phys.world.space import World
-
-
-class LineOfSightParams(CommParams):
-    """How thick the sight line is."""
-
-    clearance: float = Field(
-        0.0, ge=0, description="Radius (cells) of the sight line; the original used 0.5 px."
-    )
 
 
 @COMM_MODELS.register

@@ -22,46 +22,17 @@ passes through instead, so thick concrete attenuates more than a thin partition
 
 from __future__ import annotations
 
-from typing import ClassVar, Literal
+from typing import ClassVar
 
 import numpy as np
-from pydantic import Field
 
-from mresim_phys.comms.base import (
-    COMM_MODELS,
-    CommParams,
-    Radios,
-    candidate_pairs,
-    pair_distances,
-    symmetric_links,
-)
+from mresim_phys.comms.base import Radios, candidate_pairs, pair_distances, symmetric_links
+from mresim_phys.comms.catalog import COMM_MODELS
+from mresim_phys.comms.params import CommParams, PathLossParams
 from mresim_phys.plugin import Plugin
 from mresim_phys.types import FloatArray, IntArray
 from mresim_phys.world.space import World
 from mresim_phys.world.walls import reach_along_rays, walls_between
-
-
-class PathLossParams(CommParams):
-    """The original's PropModel1 constants by default."""
-
-    reference_dbm: float = Field(
-        -93.0, description="Signal (dBm) at the reference distance, i.e. at the agent's comm_range."
-    )
-    exponent: float = Field(
-        2.5,
-        ge=1.0,
-        le=10.0,
-        description="Path-loss exponent n (2 in free space, 1.6-6 indoors).",
-    )
-    wall_db: float = Field(3.65, ge=0, description="Attenuation per wall crossed (WAF, dB).")
-    max_walls: float = Field(125, ge=0, description="Cap C on the walls (or wall cells) counted.")
-    cutoff_dbm: float = Field(-93.0, description="Weakest signal (dBm) that still links.")
-    walls: Literal["count", "thickness"] = Field(
-        "count", description="count: separate walls crossed; thickness: cells of wall crossed."
-    )
-    cell_db: float = Field(
-        1.0, ge=0, description="thickness mode: attenuation per cell of wall crossed (dB)."
-    )
 
 
 @COMM_MODELS.register

@@ -28,7 +28,7 @@ from mresim_phys.faults.clocks import FailureClock, exposure_budget
 from mresim_phys.faults.spec import BatterySpec, FaultsSpec, HazardSpec, RandomFaultSpec, chosen
 from mresim_phys.rng import Streams
 from mresim_phys.types import BoolGrid
-from mresim_phys.world.shapes import region_cells
+from mresim_phys.world.footprints import region_cells
 
 HAZARD_STREAM, FAULT_STREAM = "hazard", "fault"
 

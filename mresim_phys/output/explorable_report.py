@@ -22,6 +22,7 @@ import numpy as np
 from scipy import ndimage
 
 from mresim_phys.types import BoolGrid
+from mresim_phys.validation import ok_line
 from mresim_phys.world.explorable import Explorable
 from mresim_phys.world.maps import FOUR_CONNECTED, free_components_mask
 
@@ -89,9 +90,8 @@ def size_lines(explorable: Explorable, names: Sequence[str], free: int) -> list[
 def print_team_report(sim: Simulation, label: str) -> None:
     """``mresim validate``'s output: ``label: ok``, the scenario in a few words and
     :func:`team_report`'s lines on stdout, its warnings on stderr."""
-    robots, source = len(sim.scenario.robots), sim.scenario.map.source[1]
     lines, warnings = team_report(sim)
-    print("\n  ".join([f"{label}: ok ({robots} robots, map {source})", *lines]))
+    print("\n  ".join([ok_line(sim.scenario, label), *lines]))
     for warning in warnings:
         print(f"mresim: warning: {warning}", file=sys.stderr)
 

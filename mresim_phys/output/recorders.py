@@ -33,7 +33,8 @@ from mresim_phys.output.video import (
     write_png,
 )
 from mresim_phys.render import LayerSpec, Renderer, frame_scale, parse_layers
-from mresim_phys.scenario.schema import RenderSpec, Scenario
+from mresim_phys.scenario.run_specs import RenderSpec
+from mresim_phys.scenario.schema import Scenario
 from mresim_phys.snapshot import Snapshot
 from mresim_phys.tracking import CommTotals, Milestones
 

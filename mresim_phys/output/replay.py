@@ -31,7 +31,8 @@ from mresim_phys.output.runlog import Replay, RunLog
 from mresim_phys.output.video import chosen_video_path
 from mresim_phys.scenario.load import validate_scenario
 from mresim_phys.scenario.readers import read_yaml_mapping
-from mresim_phys.scenario.schema import RenderSpec, Scenario
+from mresim_phys.scenario.run_specs import RenderSpec
+from mresim_phys.scenario.schema import Scenario
 from mresim_phys.snapshot import MovableSnapshot
 from mresim_phys.types import BoolGrid
 from mresim_phys.world.space import World

@@ -14,8 +14,9 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from mresim_phys.planning.base import PLANNERS, GridPlanner, no_path
+from mresim_phys.planning.base import GridPlanner, no_path
 from mresim_phys.planning.bestfirst import astar_kernel
+from mresim_phys.planning.catalog import PLANNERS
 from mresim_phys.planning.grid import Window, search_arrays, walk_back
 from mresim_phys.types import BoolGrid, FloatArray
 

@@ -16,7 +16,7 @@ fall back to a planner that does (``jps``, ``topological``), and smoothing short
 across cells of slowness 1. Callers pass ``slowness`` only when it is not None, so a
 planner written before terrain existed still works on maps without it.
 
-Typical use: ``PLANNERS.get("jps")(JumpPointParams()).plan(passable, (x, y), (row, col))``.
+Typical use: ``PLANNERS.get("jps")(PlannerParams()).plan(passable, (x, y), (row, col))``.
 """
 
 from __future__ import annotations
@@ -25,24 +25,14 @@ from collections.abc import Mapping
 from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
-from pydantic import Field
 
 from mresim_phys.planning.fields import snap_to_passable
+from mresim_phys.planning.params import PlannerParams
 from mresim_phys.planning.smoothing import smooth_path
-from mresim_phys.plugin import Family, Plugin, PluginParams
-from mresim_phys.registry import Registry
+from mresim_phys.plugin import Plugin
 from mresim_phys.types import BoolGrid, FloatArray
 
 MAX_SNAP = 3.0  # cells: as distance_field, a start off the passable cells snaps this far
-
-
-class PlannerParams(PluginParams):
-    """Base for planner parameters: unknown keys are errors."""
-
-    smooth: bool = Field(
-        False,
-        description="Shorten the grid path by line-of-sight shortcuts through passable cells.",
-    )
 
 
 @runtime_checkable
@@ -72,11 +62,6 @@ class Planner(Protocol):
     def info(self) -> Mapping[str, Any]:
         """Extra views for renderers (merged into ``Decision.info``), e.g. ``skeleton``."""
         ...
-
-
-PLANNERS: Registry[Planner] = Registry(
-    "planner", "mresim_phys.planners", Family(Planner, PlannerParams)
-)
 
 
 def no_path() -> FloatArray:

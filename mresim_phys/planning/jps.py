@@ -30,7 +30,8 @@ from numba import njit
 from numpy.typing import NDArray
 
 from mresim_phys.planning.astar import weighted_astar
-from mresim_phys.planning.base import PLANNERS, GridPlanner, no_path
+from mresim_phys.planning.base import GridPlanner, no_path
+from mresim_phys.planning.catalog import PLANNERS
 from mresim_phys.planning.grid import (
     CLOSED,
     MOVES,

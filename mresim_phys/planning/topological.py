@@ -36,36 +36,17 @@ from typing import Any, ClassVar
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
-from pydantic import Field
 
 from mresim_phys.planning.astar import astar_search, weighted_astar
-from mresim_phys.planning.base import PLANNERS, GridPlanner, PlannerParams
+from mresim_phys.planning.base import GridPlanner
+from mresim_phys.planning.catalog import PLANNERS
 from mresim_phys.planning.grid import Window
+from mresim_phys.planning.params import PlannerParams, TopologicalParams
 from mresim_phys.planning.topoanchor import anchor
 from mresim_phys.planning.topocache import SHARED, MapCache
 from mresim_phys.planning.topocorridor import corridor_path
 from mresim_phys.planning.topomap import TopologicalMap
 from mresim_phys.types import BoolGrid, FloatArray
-
-
-class TopologicalParams(PlannerParams):
-    """Parameters of the topological planner."""
-
-    node_spacing: int = Field(
-        10, ge=2, le=200, description="Skeleton node spacing: one node per block of this size."
-    )
-    rebuild_fraction: float = Field(
-        0.05,
-        ge=0,
-        le=1,
-        description="Rebuild when this fraction of the built map's passable cells changed.",
-    )
-    corridor: int = Field(
-        1,
-        ge=0,
-        le=5,
-        description="Rings of neighbouring regions searched besides the route's (0 = none).",
-    )
 
 
 @njit(cache=True, nogil=True)

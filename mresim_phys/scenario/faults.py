@@ -15,7 +15,7 @@ it (no shipped event draws from its stream).
 from __future__ import annotations
 
 from mresim_phys.scenario.schema import Scenario
-from mresim_phys.world.events import FailParams
+from mresim_phys.world.event_params import FailParams
 
 
 def fault_events(scenario: Scenario) -> list[FailParams]:

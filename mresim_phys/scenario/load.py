@@ -34,9 +34,9 @@ from mresim_phys.scenario.schema import (
 )
 from mresim_phys.scenario.units import to_cells
 from mresim_phys.strategies import STRATEGIES
-from mresim_phys.world.events import EVENTS
+from mresim_phys.world.element_params import absolute_terrain
+from mresim_phys.world.event_catalog import EVENTS
 from mresim_phys.world.shapes import region_under
-from mresim_phys.world.terrain import absolute_terrain
 
 RobotT = TypeVar("RobotT", bound=RobotParams)
 
@@ -212,11 +212,10 @@ def resolve_params(
 ) -> dict[str, Any]:
     """``params`` validated (defaults filled) by the ``Params`` model of plugin ``name``."""
     try:
-        cls = registry.get(name)
+        params_model = registry.params_model(name)
     except UnknownPluginError as exc:
         raise ScenarioError(f"{source}: {where}: {exc}") from None
-    params_model = getattr(cls, "Params", None)
-    if not (isinstance(params_model, type) and issubclass(params_model, BaseModel)):
+    if params_model is None:
         raise ScenarioError(
             f"{source}: {where}: {name!r} is not a usable {registry.kind}: its class needs a"
             " 'Params' attribute that is a pydantic model of its parameters (subclass"
@@ -349,7 +348,7 @@ def untagged(loc: tuple[Any, ...]) -> tuple[tuple[Any, ...], type[BaseModel] | N
     ('events', 0, 'until')
     """
     if len(loc) > 2 and loc[0] == "events" and loc[2] in EVENTS.names():
-        return (*loc[:2], *loc[3:]), EVENTS.get(str(loc[2])).Params
+        return (*loc[:2], *loc[3:]), EVENTS.params_model(str(loc[2]))
     return loc, None
 
 

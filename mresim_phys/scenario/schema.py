@@ -3,43 +3,41 @@
 Pure: no file I/O here (``readers.py`` reads files, ``load.py`` turns a file into a
 validated :class:`Scenario`). Every model forbids unknown keys, so a typo at any
 depth is an error naming its field path. ``team`` holds the defaults every robot
-inherits; a robot entry may override any of them (nested ``sensor`` keys merge).
+inherits; a robot entry may override any of them (nested ``sensor`` keys merge). The run's
+settings (``stop``, ``simulation``, ``render``, ``metrics``) are in ``run_specs.py``, the
+events' union in ``event_union.py``; pydantic and the standard library only, all of them.
 """
 
 from __future__ import annotations
 
 import re
-from functools import lru_cache
-from typing import Annotated, Any, Literal, Union
+from typing import Annotated, Any, Literal
 
 from pydantic import (
     AfterValidator,
-    Discriminator,
     Field,
-    SerializeAsAny,
-    Tag,
-    TypeAdapter,
-    ValidatorFunctionWrapHandler,
-    WrapValidator,
     field_validator,
     model_validator,
 )
 
 from mresim_phys.faults.spec import FaultsSpec
+from mresim_phys.scenario.event_union import EventList
 from mresim_phys.scenario.hierarchy import check_hierarchy
 from mresim_phys.scenario.maps import MapSpec, PriorSpec
+from mresim_phys.scenario.run_specs import MetricsSpec, RenderSpec, SimulationSpec, StopSpec
 from mresim_phys.strict import Strict
-from mresim_phys.world.debris import RandomDebrisParams
-from mresim_phys.world.doors import DoorParams
-from mresim_phys.world.events import EVENTS, EventParams, FailParams
-from mresim_phys.world.obstacles import ObstacleParams
-from mresim_phys.world.terrain import TerrainSpec
+from mresim_phys.world.element_params import (
+    DoorParams,
+    ObstacleParams,
+    RandomDebrisParams,
+    TerrainSpec,
+)
+from mresim_phys.world.event_params import FailParams
 
 Point = tuple[float, float]
 MAX_RANGE = 100_000.0  # cells: sensor and radio ranges (a 1000x map diagonal is far less)
 MAX_BODY = 1000.0  # cells: speed per step, body radius, planner margins
 NAME_PATTERN = re.compile(r"[A-Za-z0-9_.-]*[A-Za-z0-9_][A-Za-z0-9_.-]*")  # never '.' or '..'
-MAX_THREADS = 1024  # simulation.threads: more than any machine's cores, fewer than a typo's
 MAX_NAME = 64  # characters: a name becomes part of folder and file names
 NAME_RULE = f"1 to {MAX_NAME} letters, digits, '_', '.' or '-', not only dots"
 
@@ -179,165 +177,6 @@ class BaseStationSpec(Strict):
     comm_power_dbm: float | None = Field(
         None, description="path_loss: signal (dBm) at comm_range; None = the model's default."
     )
-
-
-class StopSpec(Strict):
-    """Optional early stop rules (the run also stops at ``steps``)."""
-
-    explored: float | None = Field(None, gt=0, le=1, description="Team-known fraction.")
-    known_at_base: float | None = Field(None, gt=0, le=1, description="Base-known fraction.")
-    all_done: bool = Field(True, description="Stop when every robot is done or failed.")
-    stalled_for: int | None = Field(
-        300,
-        ge=1,
-        le=1_000_000,
-        description=(
-            "Stop when neither explored nor known at base has gained stalled_gain in this"
-            " many steps (stop reason 'stalled'); null = never."
-        ),
-    )
-    stalled_gain: float = Field(
-        0.001,
-        ge=0,
-        le=1,
-        description="Smallest gain (fraction of the free area) that counts as progress.",
-    )
-
-
-class StartJitterSpec(Strict):
-    """Per-robot random offsets of the declared starts, drawn from the seed."""
-
-    position: float = Field(
-        0.0, ge=0, le=1000, description="Largest shift of a start (cells, uniform in a disk)."
-    )
-    heading_deg: float = Field(
-        0.0, ge=0, le=180, description="Largest turn of a start heading (degrees, uniform, +-)."
-    )
-
-
-class SimulationSpec(Strict):
-    """How the cycle runs."""
-
-    scan: Literal["point", "step"] = Field(
-        "point", description="Scan after every path point (as the original) or once per step."
-    )
-    robots_block: bool = Field(False, description="Robots block each other's rays and motion.")
-    multi_hop: bool = Field(
-        True, description="Information flows along chains of linked agents within a step."
-    )
-    presume_lost_after: int = Field(
-        200,
-        ge=1,
-        description="Steps without news after which a strategy sees a teammate as presumed lost.",
-    )
-    vary_with_seed: bool = Field(
-        True,
-        description=(
-            "The seed varies the run: initial random-walk steps, auction tie-breaks and"
-            " start_jitter; false makes every seed give the same run (noise and dropouts"
-            " you turn on still draw from the seed)."
-        ),
-    )
-    start_jitter: StartJitterSpec = Field(
-        default_factory=StartJitterSpec,
-        description="Random shifts of the robots' starts (position and heading) per seed.",
-    )
-    belief: Literal["auto", "latest", "grow"] = Field(
-        "auto",
-        description=(
-            "How robots' maps change: 'latest' (each cell holds its latest observation: a"
-            " scan overwrites what it sees, an exchange keeps the newer observation, ties go"
-            " to the obstacle), 'grow' (known cells only grow: unknown < free < obstacle, as"
-            " the original), or 'auto': latest when the world can change (obstacles, doors,"
-            " debris, collapse or cells events), grow otherwise."
-        ),
-    )
-    paired: bool = Field(
-        False,
-        description=(
-            "Also run the same scenario and seed with every fault switched off (no fail"
-            " events) as a baseline, and write robustness.json (as `mresim run --paired`)."
-        ),
-    )
-    threads: Annotated[int, Field(ge=1, le=MAX_THREADS)] | Literal["auto"] = Field(
-        1,
-        description=(
-            "Threads (a number, or auto = one per core) for the robots' replans, moves,"
-            " scans and map updates within a step; 1 = one robot after another. The results"
-            " are the same."
-        ),
-    )
-
-
-class RenderSpec(Strict):
-    """What a run leaves besides its metrics: video, pictures, run log, plots."""
-
-    video: bool | str = Field(
-        False, description="Write a video: true = videos/<name>-seed<seed>.mp4, or a path."
-    )
-    fps: float = Field(20.0, gt=0, le=240, description="Video frames per second.")
-    every: int = Field(1, ge=1, description="One video frame every this many steps.")
-    layers: str = Field(
-        "default", description="Layers to draw, e.g. 'default', 'all', 'default,B:free_space'."
-    )
-    scale: float = Field(1.0, gt=0, le=8, description="Frame scale (2 = twice the map size).")
-    snapshots: list[Annotated[int, Field(ge=0)]] = Field(
-        default_factory=list,
-        description="Steps at which to write PNG frames (0 .. steps).",
-    )
-    final_png: bool = Field(True, description="Write final.png of the last step.")
-    log: bool = Field(True, description="Write the run log (for replay without re-running).")
-    plots: bool = Field(True, description="Write plots at the end (needs the plot extra).")
-
-
-class MetricsSpec(Strict):
-    """What ``metrics.csv`` holds beyond its default columns."""
-
-    columns: list[str] = Field(
-        default_factory=list,
-        description="Optional metric columns written after the default ones, in this order:"
-        " a column's name (robots_done, base_links, robot_base_link, or one a package"
-        " registers) or package.module:Class; see docs/metric-columns.md.",
-    )
-
-
-def event_kind(value: Any) -> str | None:
-    """Which registered event a YAML entry is: the first event name among its keys."""
-    if isinstance(value, EventParams):
-        return next((n for n in EVENTS.names() if isinstance(value, EVENTS.get(n).Params)), None)
-    if isinstance(value, dict):
-        return next((n for n in EVENTS.names() if n in value), None)
-    return None
-
-
-@lru_cache(maxsize=8)
-def event_adapter(names: tuple[str, ...]) -> TypeAdapter[Any]:
-    """A validator of one ``events[i]`` entry: one tagged member per registered event's
-    ``Params`` (``names``: the registry's event names when it is asked)."""
-    members = tuple(Annotated[EVENTS.get(n).Params, Tag(n)] for n in names)
-    union: Any = Annotated[
-        Union[members],  # noqa: UP007 (a union built from a tuple of types)
-        Discriminator(
-            event_kind,
-            custom_error_type="unknown_event",
-            custom_error_message="an event needs one of the keys "
-            + ", ".join(repr(n) for n in names),
-        ),
-    ]
-    return TypeAdapter(union)
-
-
-def validate_event(value: Any, handler: ValidatorFunctionWrapHandler) -> EventParams:
-    """One ``events[i]`` entry validated by the ``Params`` of its event, looked up in the
-    registry now (an event registered in code or by an entry point since the last
-    scenario is known at once; nothing is rebuilt)."""
-    if isinstance(value, EventParams):
-        return value
-    event: EventParams = event_adapter(tuple(EVENTS.names())).validate_python(value)
-    return event
-
-
-EventList = list[SerializeAsAny[Annotated[EventParams, WrapValidator(validate_event)]]]
 
 
 class Scenario(Strict):

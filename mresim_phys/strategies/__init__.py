@@ -1,53 +1,33 @@
 """Exploration strategies (phase 4): a plugin family keyed by the YAML name.
 
-Built-ins register themselves on import. Third-party strategies register through
-the ``mresim_phys.strategies`` entry-point group, or are named in a scenario as
-``package.module:ClassName``. See docs/writing-a-strategy.md.
+Importing the package is light: :data:`STRATEGIES` (``catalog``) holds every built-in by
+name, with its ``Params`` model (``params``) and a reference to its class, imported when a
+run asks for it. Third-party strategies register through the ``mresim_phys.strategies``
+entry-point group, or are named in a scenario as ``package.module:ClassName``. The
+strategy interface (``Strategy``, ``RobotView``, ``Decision``, ``plan_context``) comes from
+``base`` when first used. See docs/writing-a-strategy.md.
 """
 
 from __future__ import annotations
 
-from mresim_phys.strategies import (
-    assignment,
-    frontier,
-    leader_follower,
-    random_walk,
-    role_based,
-    role_switch,
-    sector,
-    utility_return,
-)
-from mresim_phys.strategies.base import (
-    STRATEGIES,
-    Decision,
-    RobotView,
-    Strategy,
-    StrategyParams,
-    plan_context,
-)
+import importlib
+from typing import TYPE_CHECKING
 
-BUILT_IN = (
-    "frontier",
-    "random_walk",
-    "hungarian",
-    "min_pos",
-    "utility_return",
-    "leader_follower",
-    "role_based",
-    "role_switch",
-    "sector_rendezvous",
-)
-assert {
-    frontier.FrontierExploration.name,
-    random_walk.RandomWalk.name,
-    assignment.HungarianExploration.name,
-    assignment.MinPosExploration.name,
-    utility_return.UtilityReturn.name,
-    leader_follower.LeaderFollower.name,
-    role_based.RoleBased.name,
-    role_switch.RoleSwitch.name,
-    sector.SectorRendezvous.name,
-} == set(BUILT_IN)
+from mresim_phys.strategies.catalog import BUILT_IN, STRATEGIES
+from mresim_phys.strategies.params import StrategyParams
+
+if TYPE_CHECKING:
+    from mresim_phys.strategies.base import Decision, RobotView, Strategy, plan_context
+
+INTERFACE = ("Decision", "RobotView", "Strategy", "plan_context")  # from base, on first use
+
+
+def __getattr__(name: str) -> object:
+    """The strategy interface's names, imported from ``base`` when first asked for."""
+    if name in INTERFACE:
+        return getattr(importlib.import_module("mresim_phys.strategies.base"), name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
 
 __all__ = [
     "BUILT_IN",

@@ -29,32 +29,21 @@ from dataclasses import dataclass, replace
 from typing import ClassVar
 
 import numpy as np
-from pydantic import Field
 from scipy.optimize import linear_sum_assignment
 
 from mresim_phys.knowledge.teammates import TeammateInfo
-from mresim_phys.strategies.base import STRATEGIES, PlanContext, RobotView, StrategyParams
-from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams, default_parts
+from mresim_phys.strategies.base import PlanContext, RobotView
+from mresim_phys.strategies.catalog import STRATEGIES
+from mresim_phys.strategies.frontier import FrontierExploration, default_parts
+from mresim_phys.strategies.params import (
+    HungarianParams,
+    MinPosParams,
+    StrategyParams,
+)
 from mresim_phys.strategies.parts import Offer, auction_team
 from mresim_phys.types import FloatArray, IntArray
 
 UNREACHABLE = 1e9  # cost of an unreachable (robot, frontier) pair in the assignment
-
-
-class HungarianParams(FrontierParams):
-    """Frontier exploration's parameters; ``max_frontiers`` bounds the assignment's columns."""
-
-    max_frontiers: int = Field(
-        8, ge=1, description="Best frontiers (by this robot's utility) in the assignment."
-    )
-
-
-class MinPosParams(FrontierParams):
-    """Frontier exploration's parameters; ``max_frontiers`` bounds the frontiers ranked."""
-
-    max_frontiers: int = Field(
-        20, ge=1, description="Best frontiers (by this robot's utility) it ranks itself on."
-    )
 
 
 def teammate_costs(

@@ -42,15 +42,8 @@ from mresim_phys.planning.fields import (
 )
 from mresim_phys.planning.grid import Box, bbox, remember_window
 from mresim_phys.planning.topological import TopologicalPlanner
-from mresim_phys.plugin import Family, PluginParams
-from mresim_phys.registry import Registry
+from mresim_phys.strategies.params import StrategyParams
 from mresim_phys.types import FREE, BeliefGrid, BoolGrid, FloatArray
-
-
-class StrategyParams(PluginParams):
-    """Base for strategy parameters: unknown keys are errors."""
-
-    replan_interval: int = 15
 
 
 @dataclass(frozen=True)
@@ -132,11 +125,6 @@ class Strategy(Protocol):
     def decide(self, view: RobotView) -> Decision:
         """Choose the robot's next path from what it knows."""
         ...
-
-
-STRATEGIES: Registry[Strategy] = Registry(
-    "strategy", "mresim_phys.strategies", Family(Strategy, StrategyParams)
-)
 
 
 @runtime_checkable

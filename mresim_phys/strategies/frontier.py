@@ -28,10 +28,9 @@ random-walk steps.
 from __future__ import annotations
 
 from dataclasses import replace
-from typing import ClassVar, Literal
+from typing import ClassVar
 
 import numpy as np
-from pydantic import Field
 
 from mresim_phys.knowledge.frontier_regions import region_sizes
 from mresim_phys.knowledge.frontiers import Frontiers, any_frontier, frontiers_in
@@ -41,15 +40,15 @@ from mresim_phys.plugin import Plugin
 from mresim_phys.strategies.base import (
     GOAL_MET,
     NO_FRONTIER,
-    STRATEGIES,
     Decision,
     PlanContext,
     RobotView,
-    StrategyParams,
     plan_context,
     return_to_base,
 )
+from mresim_phys.strategies.catalog import STRATEGIES
 from mresim_phys.strategies.giveup import Tried
+from mresim_phys.strategies.params import FrontierParams, StrategyParams
 from mresim_phys.strategies.parts import (
     AllFrontiers,
     FrontierParts,
@@ -60,76 +59,6 @@ from mresim_phys.strategies.parts import (
 )
 from mresim_phys.strategies.random_walk import random_step
 from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray, IntArray
-
-
-class FrontierParams(StrategyParams):
-    """Parameters of greedy frontier exploration (defaults: the original's constants)."""
-
-    replan_interval: int = Field(15, ge=1, description="Steps between replans.")
-    min_frontier_size: int = Field(3, ge=1, description="Smallest frontier cluster (cells).")
-    max_frontiers: int = Field(6, ge=1, description="Best frontiers entered in the auction.")
-    teammate_memory: int = Field(500, ge=0, description="Steps a teammate's report stays valid.")
-    horizon: float = Field(
-        1.0,
-        gt=0,
-        description=(
-            "First search horizon, in sensor ranges; doubles until no frontier beyond it"
-            " could enter the best max_frontiers."
-        ),
-    )
-    init_cycles: int = Field(
-        3,
-        ge=0,
-        description=(
-            "First steps taken as random-walk steps (the original's INIT_CYCLES), from the"
-            " robot's seeded stream; none when the scenario sets vary_with_seed: false."
-        ),
-    )
-    done_fraction: float | None = Field(
-        0.95,
-        gt=0,
-        le=1,
-        description=(
-            "Mission complete (return to the base) once the robot's own map holds this"
-            " fraction of the team's explorable area (docs/explorable.md), as the original's"
-            " TERRITORY_PERCENT_EXPLORED_GOAL; null: only when no frontier is left."
-        ),
-    )
-    done_after: int = Field(
-        100, ge=0, description="Steps before the done_fraction rule may fire (the original: 100)."
-    )
-    replan_on_contact: bool = Field(
-        True,
-        description=(
-            "Replan on the step after a contact when the frontier the robot chases has"
-            " left its map (the original replans every step while in contact)."
-        ),
-    )
-    give_up_radius: float = Field(
-        10.0,
-        gt=0,
-        description=(
-            "On reaching a frontier that is still there after facing it, its cells within"
-            " this distance (cells) count a try: set aside until no untried frontier is"
-            " left, then tried from another spot, given up after two tries (giveup.py)."
-        ),
-    )
-    frontier_size: Literal["region", "cells"] = Field(
-        "region",
-        description=(
-            "A frontier's size in its utility: 'region', the seen-but-unvisited region it"
-            " borders (free cells outside safe space, as the original's frontier polygons;"
-            " knowledge/frontier_regions.py), or 'cells', its own cells."
-        ),
-    )
-    reach: float | None = Field(
-        None,
-        gt=0,
-        description=(
-            "How far (cells) a target may be from its frontier; default: max(clearance + 1,"
-            " 1.41 (clearance + 0.5)), knowledge.targets.target_reach."
-        ),
-    )
 
 
 @STRATEGIES.register

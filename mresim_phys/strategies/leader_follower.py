@@ -31,31 +31,15 @@ from dataclasses import replace
 from typing import ClassVar
 
 import numpy as np
-from pydantic import Field
 
 from mresim_phys.knowledge.frontiers import Frontiers
-from mresim_phys.strategies.base import (
-    STRATEGIES,
-    Decision,
-    PlanContext,
-    RobotView,
-    StrategyParams,
-    heading_for,
-    plan_context,
-)
-from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams, default_parts
+from mresim_phys.strategies.base import Decision, PlanContext, RobotView, heading_for, plan_context
+from mresim_phys.strategies.catalog import STRATEGIES
+from mresim_phys.strategies.frontier import FrontierExploration, default_parts
+from mresim_phys.strategies.params import LeaderFollowerParams, StrategyParams
 from mresim_phys.types import FloatArray
 
 LEADER_MARGIN = 5.0  # cells: the original's frontier radius is comm_range * hops - 5
-
-
-class LeaderFollowerParams(FrontierParams):
-    """Greedy frontier exploration's parameters for the leader, and the chain's."""
-
-    replan_interval: int = Field(1, ge=1, description="Steps between decisions (the chain: 1).")
-    frontier_interval: int = Field(
-        10, ge=1, description="Steps between the leader's frontier searches (the original: 10)."
-    )
 
 
 @STRATEGIES.register

@@ -13,17 +13,11 @@ from __future__ import annotations
 from typing import ClassVar
 
 import numpy as np
-from pydantic import Field
 
 from mresim_phys.plugin import Plugin
-from mresim_phys.strategies.base import (
-    STRATEGIES,
-    Decision,
-    PlanContext,
-    RobotView,
-    StrategyParams,
-    plan_context,
-)
+from mresim_phys.strategies.base import Decision, PlanContext, RobotView, plan_context
+from mresim_phys.strategies.catalog import STRATEGIES
+from mresim_phys.strategies.params import RandomWalkParams, StrategyParams
 
 # The original's RandomWalk: heading changes and their odds (out of 26).
 TURNS_DEG = np.array([-45.0, -22.5, 0.0, 22.5, 45.0])
@@ -66,13 +60,6 @@ def segment_passable(
     if rows.min() < 0 or cols.min() < 0 or rows.max() >= rows_n or cols.max() >= cols_n:
         return False
     return bool(passable[rows, cols].all())
-
-
-class RandomWalkParams(StrategyParams):
-    """How far a random walk leg may go."""
-
-    replan_interval: int = Field(15, ge=1, description="Steps between new random goals.")
-    distance: float = Field(30.0, gt=0, description="Longest path (cells) to a random goal.")
 
 
 @STRATEGIES.register

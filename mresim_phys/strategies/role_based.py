@@ -36,47 +36,17 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
-from typing import ClassVar, Literal
-
-from pydantic import Field
+from typing import ClassVar
 
 from mresim_phys.knowledge.teammates import Payload, TeammateInfo
-from mresim_phys.strategies.base import (
-    STRATEGIES,
-    Decision,
-    RobotView,
-    StrategyParams,
-    heading_for,
-    plan_context,
-)
-from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams
+from mresim_phys.strategies.base import Decision, RobotView, heading_for, plan_context
+from mresim_phys.strategies.catalog import STRATEGIES
+from mresim_phys.strategies.frontier import FrontierExploration
 from mresim_phys.strategies.meetings import MeetingPlanner, Rendezvous, overdue
+from mresim_phys.strategies.params import RoleBasedParams, StrategyParams
 from mresim_phys.types import FloatArray
 
 START_HOLD = 2  # steps a relay without an agreement holds still at the start (the original)
-
-
-class RoleBasedParams(FrontierParams):
-    """Greedy frontier exploration's parameters and the rendezvous rules (original values)."""
-
-    wait: int = Field(60, ge=0, description="Steps to wait at the point after the agreed time.")
-    backup_wait: int = Field(
-        60, ge=0, description="Relay: further steps it waits before it gives its explorer up."
-    )
-    check_interval: int = Field(
-        2, ge=1, description="Steps between checks whether to head for the meeting."
-    )
-    rendezvous: Literal["basic", "improved", "multi_point"] = Field(
-        "basic",
-        description=(
-            "Meeting points: 'basic' (the frontier target, else where the explorer stands),"
-            " 'improved' (the best skeleton junction near the frontier, as the original's"
-            " useImprovedRendezvous) or 'multi_point' (the improved point for the explorer"
-            " and, for the relay, the point linked with it through walls that is nearest the"
-            " base's range, with a backup meeting where they agreed: the original's"
-            " RVThroughWalls, SSRR 2014)."
-        ),
-    )
 
 
 @STRATEGIES.register

@@ -34,24 +34,16 @@ from dataclasses import dataclass, replace
 from typing import ClassVar
 
 import numpy as np
-from pydantic import Field
 
 from mresim_phys.knowledge.teammates import Payload, TeammateInfo
-from mresim_phys.strategies.base import STRATEGIES, Decision, RobotView, StrategyParams
+from mresim_phys.strategies.base import Decision, RobotView
 from mresim_phys.strategies.base import plan_context as context_of
+from mresim_phys.strategies.catalog import STRATEGIES
 from mresim_phys.strategies.meetings import Rendezvous
-from mresim_phys.strategies.role_based import RoleBased, RoleBasedParams
+from mresim_phys.strategies.params import RoleSwitchParams, StrategyParams
+from mresim_phys.strategies.role_based import RoleBased
 
 FIRST_CHECK = 5  # steps: no switch before (the original: after cycle 5)
-
-
-class RoleSwitchParams(RoleBasedParams):
-    """Role-based parameters and the dynamic hierarchy's (the original's values)."""
-
-    switch_interval: int = Field(10, ge=1, description="Steps between role switch checks.")
-    min_between: int = Field(
-        4, ge=0, description="Steps a robot waits after a switch before it switches again."
-    )
 
 
 @dataclass(frozen=True)

@@ -32,45 +32,16 @@ from dataclasses import dataclass, field, replace
 from typing import ClassVar
 
 import numpy as np
-from pydantic import Field
 
 from mresim_phys.knowledge.frontiers import Frontiers
 from mresim_phys.knowledge.teammates import Payload
 from mresim_phys.strategies.auction import utility
-from mresim_phys.strategies.base import (
-    STRATEGIES,
-    Decision,
-    PlanContext,
-    RobotView,
-    StrategyParams,
-    heading_for,
-    plan_context,
-)
-from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams, default_parts
+from mresim_phys.strategies.base import Decision, PlanContext, RobotView, heading_for, plan_context
+from mresim_phys.strategies.catalog import STRATEGIES
+from mresim_phys.strategies.frontier import FrontierExploration, default_parts
+from mresim_phys.strategies.params import SectorParams, StrategyParams
 from mresim_phys.strategies.parts import Allocation, Offer, UtilityRanking
 from mresim_phys.types import FloatArray, IntArray
-
-
-class SectorParams(FrontierParams):
-    """Frontier exploration's parameters and the sector meetings'."""
-
-    meet_interval: int = Field(100, ge=1, description="Steps from an agreement to the meeting.")
-    wait: int = Field(30, ge=0, description="Steps to wait at the meeting after its time.")
-    check_interval: int = Field(
-        2, ge=1, description="Steps between checks whether to head for a meeting."
-    )
-    first_bearing_deg: float = Field(
-        0.0, description="Bearing from the base (degrees, x axis, y down) where sector 0 starts."
-    )
-    span_deg: float = Field(
-        360.0,
-        gt=0,
-        le=360,
-        description=(
-            "The turn (degrees, from first_bearing_deg) the sectors share: less than 360 when"
-            " the base stands at an edge of the open space."
-        ),
-    )
 
 
 @dataclass(frozen=True)

@@ -31,41 +31,14 @@ from dataclasses import dataclass, replace
 from typing import ClassVar
 
 import numpy as np
-from pydantic import Field
 
 from mresim_phys.knowledge.teammates import Payload, TeammateInfo
-from mresim_phys.strategies.base import (
-    STRATEGIES,
-    Decision,
-    RobotView,
-    StrategyParams,
-    heading_for,
-)
+from mresim_phys.strategies.base import Decision, RobotView, heading_for
 from mresim_phys.strategies.base import plan_context as make_context
-from mresim_phys.strategies.frontier import FrontierExploration, FrontierParams
+from mresim_phys.strategies.catalog import STRATEGIES
+from mresim_phys.strategies.frontier import FrontierExploration
+from mresim_phys.strategies.params import StrategyParams, UtilityReturnParams
 from mresim_phys.types import FREE
-
-
-class UtilityReturnParams(FrontierParams):
-    """Greedy frontier exploration's parameters and the return rule's."""
-
-    target_ratio: float = Field(
-        0.9,
-        gt=0,
-        le=1,
-        description=(
-            "Go home when B / (B + N) falls below this (the original's TARGET_INFO_RATIO:"
-            " 0.9 by default, 0.7 in its shipped configuration)."
-        ),
-    )
-    handover_margin: float = Field(
-        3.0,
-        ge=0,
-        description=(
-            "Cells: of two robots that meet, the one farther from the base by more than"
-            " this hands its undelivered cells to the other."
-        ),
-    )
 
 
 @dataclass(frozen=True)

@@ -11,8 +11,8 @@ import argparse
 import importlib.util
 from pathlib import Path
 
+from mresim_phys.arg_types import comma_separated, positive_float, positive_int, whole_number
 from mresim_phys.errors import MresimError
-from mresim_phys.run_args import comma_separated, positive_float, positive_int, whole_number
 from mresim_phys.sweeps.study import Study  # no pandas, pyarrow or matplotlib behind it
 
 NEEDED = ("pandas", "pyarrow", "matplotlib", "scipy", "statsmodels")

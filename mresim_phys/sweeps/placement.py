@@ -14,8 +14,8 @@ from __future__ import annotations
 import copy
 from typing import Any
 
-from mresim_phys.build_world import load_map
 from mresim_phys.output.bench import SPACING, row_starts, spots_near
+from mresim_phys.scenario.on_map import load_map
 from mresim_phys.scenario.schema import Scenario
 from mresim_phys.sweeps.study import StudyError
 from mresim_phys.world.space import World

@@ -23,52 +23,12 @@ from mresim_phys.output.session import Outcome, run_session
 from mresim_phys.output.signals import StopRequest, stop_on_signals
 from mresim_phys.run_args import draw_plots, render_overrides, simulation_overrides, summary_line
 from mresim_phys.sim import Simulation
+from mresim_phys.viewer.flags import DEFAULT_HOST, DEFAULT_PORT
 from mresim_phys.viewer.frames import FrameMaker
 from mresim_phys.viewer.guard import is_local
 from mresim_phys.viewer.livesource import LiveSource, ViewerStop
 from mresim_phys.viewer.replaysource import ReplaySource
 from mresim_phys.viewer.server import ViewerServer
-
-DEFAULT_HOST, DEFAULT_PORT = "127.0.0.1", 8765
-VIEW_FLAGS = ("host", "port", "open", "allow_remote", "allow_host")
-
-
-def add_server_flags(parser: argparse.ArgumentParser) -> None:
-    """--host, --port, --open, --allow-remote, --allow-host."""
-    parser.add_argument("--host", help=f"address to serve on (default {DEFAULT_HOST})")
-    parser.add_argument(
-        "--port", type=int, help=f"port to serve on (default {DEFAULT_PORT}; 0: any free port)"
-    )
-    parser.add_argument("--open", action="store_true", help="open the page in a web browser")
-    parser.add_argument(
-        "--allow-remote",
-        action="store_true",
-        help="serve clients on other machines too (refused by default)",
-    )
-    parser.add_argument(
-        "--allow-host",
-        action="append",
-        metavar="NAME[:PORT]",
-        help="also accept this name in a request's Host and Origin (repeatable; e.g. the"
-        " name of a proxy in front of the viewer); by default only the served address",
-    )
-
-
-def add_view_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
-    """The ``view`` command."""
-    view = commands.add_parser("view", help="explore a run in the browser, from its log")
-    view.add_argument("run_dir", type=Path, help="a run folder written by 'mresim run'")
-    add_server_flags(view)
-
-
-def add_run_view_flags(run: argparse.ArgumentParser) -> None:
-    """``--view`` and the server flags of ``mresim run``."""
-    run.add_argument(
-        "--view",
-        action="store_true",
-        help="watch and drive the run in the browser (it starts when a page connects)",
-    )
-    add_server_flags(run)
 
 
 def server_for(source: LiveSource | ReplaySource, args: argparse.Namespace) -> ViewerServer:
@@ -116,16 +76,6 @@ def view_command(args: argparse.Namespace) -> int:
     announce(server, f"{args.run_dir} ({source.steps} steps, indexed in {took:.1f} s)", args)
     serve_until_stopped(server)
     return 0
-
-
-def check_run_flags(args: argparse.Namespace) -> None:
-    """The server flags of ``mresim run`` need --view."""
-    given = [f for f in VIEW_FLAGS if getattr(args, f, None) not in (None, False)]
-    if given and not args.view:
-        flag = "--" + given[0].replace("_", "-")
-        raise MresimError(
-            f"{flag} only applies with --view (mresim run SCENARIO --view {flag} ...)"
-        )
 
 
 def view_run(args: argparse.Namespace) -> int:

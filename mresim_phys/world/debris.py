@@ -20,16 +20,13 @@ by it until it moves on.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import ClassVar, Literal, Protocol
+from typing import ClassVar, Protocol
 
 import numpy as np
-from pydantic import Field, model_validator
 
-from mresim_phys.strict import Strict
 from mresim_phys.types import BoolGrid
-from mresim_phys.world.shapes import Region, region_cells
-
-Crush = Literal["avoid", "fail"]
+from mresim_phys.world.element_params import Crush, RandomDebrisParams
+from mresim_phys.world.footprints import region_cells
 
 
 class DebrisWorld(Protocol):
@@ -53,26 +50,6 @@ class DebrisWorld(Protocol):
     def log(self, line: str) -> None:
         """Note what happened this step."""
         ...
-
-
-class RandomDebrisParams(Strict):
-    """Rubble falling at random (``random_debris``)."""
-
-    rate: float = Field(ge=0, le=1, description="Probability that a piece falls at a step.")
-    size: tuple[int, int] = Field((2, 6), description="[min, max] side of a piece, cells.")
-    region: Region | None = Field(None, description="Where pieces fall (null: anywhere).")
-    after: int = Field(0, ge=0, description="First step at which pieces may fall.")
-    until: int | None = Field(None, ge=1, description="Last step (null: to the end of the run).")
-    crush: Crush = Field("avoid", description="avoid: rubble lands around robots; fail: buries.")
-
-    @model_validator(mode="after")
-    def _ranges(self) -> RandomDebrisParams:
-        low, high = self.size
-        if not 1 <= low <= high <= 1000:
-            raise ValueError(f"'size' {list(self.size)} must be [min, max] with 1 <= min <= max")
-        if self.until is not None and self.until < self.after:
-            raise ValueError(f"'until' ({self.until}) must not come before 'after' ({self.after})")
-        return self
 
 
 def square_at(shape: tuple[int, int], row: int, col: int, side: int) -> BoolGrid:

@@ -20,54 +20,12 @@ import math
 from typing import ClassVar
 
 import numpy as np
-from pydantic import Field, model_validator
 
-from mresim_phys.strict import Strict
 from mresim_phys.types import BoolGrid
+from mresim_phys.world.element_params import DoorParams
 from mresim_phys.world.obstacles import ObstacleWorld
 
 Point = tuple[float, float]
-
-
-class DoorParams(Strict):
-    """One door of a scenario (``doors[i]``)."""
-
-    name: str = Field(min_length=1, description="Its name, used by close / open events.")
-    between: tuple[Point, Point] = Field(description="Its two ends [[x0, y0], [x1, y1]], cells.")
-    thickness: float = Field(1.0, gt=0, le=100, description="Width of the door leaf, cells.")
-    closed: bool = Field(False, description="Closed at step 0.")
-    period: int | None = Field(
-        None, ge=2, description="Cycle length in steps (null: it changes only on events)."
-    )
-    open_for: int | None = Field(None, ge=1, description="Open steps at the start of each cycle.")
-    offset: int = Field(0, ge=0, description="Step at which the first cycle starts.")
-
-    @model_validator(mode="after")
-    def _cycle(self) -> DoorParams:
-        (x0, y0), (x1, y1) = self.between
-        if math.hypot(x1 - x0, y1 - y0) < 1.0:
-            raise ValueError(
-                f"'between': the door's ends {list(self.between[0])} and {list(self.between[1])}"
-                " are less than a cell apart; give the two ends of the doorway"
-            )
-        if (self.period is None) != (self.open_for is None):
-            raise ValueError("a periodic door needs both 'period' and 'open_for'")
-        if self.period is not None and self.open_for is not None and self.open_for >= self.period:
-            raise ValueError(
-                f"'open_for' ({self.open_for}) must be less than 'period' ({self.period})"
-            )
-        return self
-
-    def points(self) -> list[Point]:
-        """Both ends (checked against the map when the run is built)."""
-        return list(self.between)
-
-    def wanted_closed(self, step: int, scheduled: bool) -> bool:
-        """Whether the door should be closed at ``step``; ``scheduled`` is the state the
-        close / open events have asked for (used when the door does not cycle)."""
-        if self.period is None or self.open_for is None or step < self.offset:
-            return scheduled
-        return (step - self.offset) % self.period >= self.open_for
 
 
 def line_cells(start: Point, end: Point) -> list[tuple[int, int]]:

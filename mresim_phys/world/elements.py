@@ -22,9 +22,10 @@ from typing import Protocol
 from mresim_phys.errors import ScenarioError
 from mresim_phys.rng import Streams
 from mresim_phys.types import FloatArray
-from mresim_phys.world.debris import DebrisWorld, RandomDebris, RandomDebrisParams
-from mresim_phys.world.doors import Door, DoorParams
-from mresim_phys.world.obstacles import MovingObstacle, ObstacleParams, ObstacleWorld
+from mresim_phys.world.debris import DebrisWorld, RandomDebris
+from mresim_phys.world.doors import Door
+from mresim_phys.world.element_params import DoorParams, ObstacleParams, RandomDebrisParams
+from mresim_phys.world.obstacles import MovingObstacle, ObstacleWorld
 from mresim_phys.world.space import World
 
 

@@ -24,80 +24,15 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from typing import Annotated, ClassVar, Literal, Protocol
+from typing import ClassVar, Protocol
 
 import numpy as np
-from pydantic import Field, Tag, model_validator
 
-from mresim_phys.strict import Strict
 from mresim_phys.types import BoolGrid
-from mresim_phys.world.shapes import BodyShape, body_cells, keyed
+from mresim_phys.world.element_params import ObstacleParams, RandomWalkMotion, WaypointsMotion
+from mresim_phys.world.footprints import body_cells
 
 Point = tuple[float, float]
-
-
-class WaypointsMotion(Strict):
-    """Along a list of points at a constant speed."""
-
-    waypoints: list[Point] = Field(min_length=1, description="Points [[x, y], ...] in cells.")
-    speed: float = Field(1.0, gt=0, le=1000, description="Cells per step.")
-    mode: Literal["loop", "back_and_forth", "once"] = Field(
-        "loop", description="After the last point: back to the first, reverse, or stop."
-    )
-
-
-class RandomWalkMotion(Strict):
-    """A random walk from a start point."""
-
-    random_walk: Point = Field(description="The start [x, y] in cells.")
-    speed: float = Field(1.0, gt=0, le=1000, description="Cells per step.")
-    turn_rate: float = Field(
-        30.0, ge=0, le=180, description="Largest change of heading per step, degrees."
-    )
-
-
-class StillMotion(Strict):
-    """Standing at one point."""
-
-    still: Point = Field(description="Where it stands [x, y] in cells.")
-
-
-Motion = Annotated[
-    Annotated[WaypointsMotion, Tag("waypoints")]
-    | Annotated[RandomWalkMotion, Tag("random_walk")]
-    | Annotated[StillMotion, Tag("still")],
-    keyed("waypoints", "random_walk", "still"),
-]
-
-
-class ObstacleParams(Strict):
-    """One moving obstacle of a scenario (``obstacles[i]``)."""
-
-    name: str = Field(min_length=1, description="Its name, unique among obstacles and doors.")
-    shape: BodyShape = Field(description="{circle: r}, {box: [w, h]} or {polygon: [[x, y], ...]}.")
-    motion: Motion = Field(
-        description="{waypoints: [[x, y], ...]}, {random_walk: [x, y]} or {still: [x, y]}."
-    )
-    appear: int = Field(0, ge=0, description="Step at which it enters the map.")
-    remove: int | None = Field(None, ge=1, description="Step at which it leaves (null: never).")
-    blocks_radio: bool = Field(
-        True, description="Whether line of sight and path loss count it as a wall."
-    )
-
-    @model_validator(mode="after")
-    def _life(self) -> ObstacleParams:
-        if self.remove is not None and self.remove <= self.appear:
-            raise ValueError(f"'remove' ({self.remove}) must come after 'appear' ({self.appear})")
-        return self
-
-    def points(self) -> list[Point]:
-        """Every point of its motion (checked against the map when the run is built)."""
-        motion = self.motion
-        if isinstance(motion, WaypointsMotion):
-            return list(motion.waypoints)
-        if isinstance(motion, RandomWalkMotion):
-            return [motion.random_walk]
-        return [motion.still]
 
 
 class ObstacleWorld(Protocol):

@@ -22,88 +22,11 @@ from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
-from pydantic import Field, model_validator
 
-from mresim_phys.strict import Strict
-from mresim_phys.world.shapes import (
-    BoxRegion,
-    CircleRegion,
-    MaskRegion,
-    PolygonRegion,
-    Region,
-    read_grey,
-    region_cells,
-)
+from mresim_phys.world.element_params import TerrainSpec
+from mresim_phys.world.footprints import read_grey, region_cells
 
 TerrainGrid = NDArray[np.float32]
-SHAPE_KEYS = ("box", "circle", "polygon", "mask")
-
-
-class TerrainRegion(Strict):
-    """One region of slower ground: one of ``box``, ``circle``, ``polygon``, ``mask``."""
-
-    box: tuple[int, int, int, int] | None = Field(None, description="[x0, y0, x1, y1] in cells.")
-    circle: tuple[float, float, float] | None = Field(None, description="[x, y, r] in cells.")
-    polygon: list[tuple[float, float]] | None = Field(
-        None, min_length=3, description="Vertices [[x, y], ...] in cells."
-    )
-    mask: Path | None = Field(None, description="PNG the size of the map; dark pixels are in.")
-    factor: float = Field(gt=0, le=1, description="Speed factor on the region, in (0, 1].")
-
-    @model_validator(mode="after")
-    def _one_shape(self) -> TerrainRegion:
-        given = [k for k in SHAPE_KEYS if getattr(self, k) is not None]
-        if len(given) != 1:
-            raise ValueError(
-                "a terrain region needs exactly one of 'box', 'circle', 'polygon' or 'mask'"
-                f" (got {given or 'none'})"
-            )
-        self.region()  # the shape's own checks (a box's corners in order, r > 0)
-        return self
-
-    def region(self) -> Region:
-        """The shape as a region model of :mod:`mresim_phys.world.shapes`."""
-        if self.box is not None:
-            return BoxRegion(box=self.box)
-        if self.circle is not None:
-            return CircleRegion(circle=self.circle)
-        if self.polygon is not None:
-            return PolygonRegion(polygon=self.polygon)
-        assert self.mask is not None
-        return MaskRegion(mask=self.mask)
-
-
-class TerrainSpec(Strict):
-    """Variable terrain: a greyscale ``image`` or a list of ``regions`` (exactly one)."""
-
-    image: Path | None = Field(
-        None,
-        description="Greyscale image the size of the map: factor = max(min_factor, value/255).",
-    )
-    min_factor: float = Field(
-        0.1, gt=0, le=1, description="Image terrain: the slowest factor (black pixels)."
-    )
-    regions: list[TerrainRegion] | None = Field(
-        None, description="Regions with a speed factor each; other cells are 1 (later wins)."
-    )
-
-    @model_validator(mode="after")
-    def _one_source(self) -> TerrainSpec:
-        if (self.image is None) == (self.regions is None):
-            raise ValueError("give exactly one of 'image: file.png' or 'regions: [...]'")
-        return self
-
-
-def absolute_terrain(spec: TerrainSpec | None, folder: Path) -> TerrainSpec | None:
-    """``spec`` with its image and mask paths made absolute (relative to ``folder``)."""
-    if spec is None:
-        return None
-    image = spec.image and (folder / spec.image.expanduser()).resolve()
-    regions = spec.regions and [
-        r.model_copy(update={"mask": r.mask and (folder / r.mask.expanduser()).resolve()})
-        for r in spec.regions
-    ]
-    return spec.model_copy(update={"image": image, "regions": regions})
 
 
 def terrain_grid(spec: TerrainSpec | None, shape: tuple[int, int]) -> TerrainGrid | None:

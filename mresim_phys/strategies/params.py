@@ -1,0 +1,199 @@
+"""Strategy parameters (phase 0, input): every built-in strategy's ``Params`` model.
+
+Pydantic and the standard library only, so validating a scenario never imports a strategy's
+implementation (numba, pymunk, OpenCV): :mod:`mresim_phys.strategies.catalog` enters each
+built-in with its model here and its class by reference. A strategy of your own may keep its
+``Params`` beside its class (docs/writing-a-strategy.md).
+"""
+
+from __future__ import annotations
+
+from typing import Literal
+
+from pydantic import Field
+
+from mresim_phys.plugin import PluginParams
+
+
+class StrategyParams(PluginParams):
+    """Base for strategy parameters: unknown keys are errors."""
+
+    replan_interval: int = 15
+
+
+class FrontierParams(StrategyParams):
+    """Parameters of greedy frontier exploration (defaults: the original's constants)."""
+
+    replan_interval: int = Field(15, ge=1, description="Steps between replans.")
+    min_frontier_size: int = Field(3, ge=1, description="Smallest frontier cluster (cells).")
+    max_frontiers: int = Field(6, ge=1, description="Best frontiers entered in the auction.")
+    teammate_memory: int = Field(500, ge=0, description="Steps a teammate's report stays valid.")
+    horizon: float = Field(
+        1.0,
+        gt=0,
+        description=(
+            "First search horizon, in sensor ranges; doubles until no frontier beyond it"
+            " could enter the best max_frontiers."
+        ),
+    )
+    init_cycles: int = Field(
+        3,
+        ge=0,
+        description=(
+            "First steps taken as random-walk steps (the original's INIT_CYCLES), from the"
+            " robot's seeded stream; none when the scenario sets vary_with_seed: false."
+        ),
+    )
+    done_fraction: float | None = Field(
+        0.95,
+        gt=0,
+        le=1,
+        description=(
+            "Mission complete (return to the base) once the robot's own map holds this"
+            " fraction of the team's explorable area (docs/explorable.md), as the original's"
+            " TERRITORY_PERCENT_EXPLORED_GOAL; null: only when no frontier is left."
+        ),
+    )
+    done_after: int = Field(
+        100, ge=0, description="Steps before the done_fraction rule may fire (the original: 100)."
+    )
+    replan_on_contact: bool = Field(
+        True,
+        description=(
+            "Replan on the step after a contact when the frontier the robot chases has"
+            " left its map (the original replans every step while in contact)."
+        ),
+    )
+    give_up_radius: float = Field(
+        10.0,
+        gt=0,
+        description=(
+            "On reaching a frontier that is still there after facing it, its cells within"
+            " this distance (cells) count a try: set aside until no untried frontier is"
+            " left, then tried from another spot, given up after two tries (giveup.py)."
+        ),
+    )
+    frontier_size: Literal["region", "cells"] = Field(
+        "region",
+        description=(
+            "A frontier's size in its utility: 'region', the seen-but-unvisited region it"
+            " borders (free cells outside safe space, as the original's frontier polygons;"
+            " knowledge/frontier_regions.py), or 'cells', its own cells."
+        ),
+    )
+    reach: float | None = Field(
+        None,
+        gt=0,
+        description=(
+            "How far (cells) a target may be from its frontier; default: max(clearance + 1,"
+            " 1.41 (clearance + 0.5)), knowledge.targets.target_reach."
+        ),
+    )
+
+
+class HungarianParams(FrontierParams):
+    """Frontier exploration's parameters; ``max_frontiers`` bounds the assignment's columns."""
+
+    max_frontiers: int = Field(
+        8, ge=1, description="Best frontiers (by this robot's utility) in the assignment."
+    )
+
+
+class MinPosParams(FrontierParams):
+    """Frontier exploration's parameters; ``max_frontiers`` bounds the frontiers ranked."""
+
+    max_frontiers: int = Field(
+        20, ge=1, description="Best frontiers (by this robot's utility) it ranks itself on."
+    )
+
+
+class RoleBasedParams(FrontierParams):
+    """Greedy frontier exploration's parameters and the rendezvous rules (original values)."""
+
+    wait: int = Field(60, ge=0, description="Steps to wait at the point after the agreed time.")
+    backup_wait: int = Field(
+        60, ge=0, description="Relay: further steps it waits before it gives its explorer up."
+    )
+    check_interval: int = Field(
+        2, ge=1, description="Steps between checks whether to head for the meeting."
+    )
+    rendezvous: Literal["basic", "improved", "multi_point"] = Field(
+        "basic",
+        description=(
+            "Meeting points: 'basic' (the frontier target, else where the explorer stands),"
+            " 'improved' (the best skeleton junction near the frontier, as the original's"
+            " useImprovedRendezvous) or 'multi_point' (the improved point for the explorer"
+            " and, for the relay, the point linked with it through walls that is nearest the"
+            " base's range, with a backup meeting where they agreed: the original's"
+            " RVThroughWalls, SSRR 2014)."
+        ),
+    )
+
+
+class RoleSwitchParams(RoleBasedParams):
+    """Role-based parameters and the dynamic hierarchy's (the original's values)."""
+
+    switch_interval: int = Field(10, ge=1, description="Steps between role switch checks.")
+    min_between: int = Field(
+        4, ge=0, description="Steps a robot waits after a switch before it switches again."
+    )
+
+
+class UtilityReturnParams(FrontierParams):
+    """Greedy frontier exploration's parameters and the return rule's."""
+
+    target_ratio: float = Field(
+        0.9,
+        gt=0,
+        le=1,
+        description=(
+            "Go home when B / (B + N) falls below this (the original's TARGET_INFO_RATIO:"
+            " 0.9 by default, 0.7 in its shipped configuration)."
+        ),
+    )
+    handover_margin: float = Field(
+        3.0,
+        ge=0,
+        description=(
+            "Cells: of two robots that meet, the one farther from the base by more than"
+            " this hands its undelivered cells to the other."
+        ),
+    )
+
+
+class SectorParams(FrontierParams):
+    """Frontier exploration's parameters and the sector meetings'."""
+
+    meet_interval: int = Field(100, ge=1, description="Steps from an agreement to the meeting.")
+    wait: int = Field(30, ge=0, description="Steps to wait at the meeting after its time.")
+    check_interval: int = Field(
+        2, ge=1, description="Steps between checks whether to head for a meeting."
+    )
+    first_bearing_deg: float = Field(
+        0.0, description="Bearing from the base (degrees, x axis, y down) where sector 0 starts."
+    )
+    span_deg: float = Field(
+        360.0,
+        gt=0,
+        le=360,
+        description=(
+            "The turn (degrees, from first_bearing_deg) the sectors share: less than 360 when"
+            " the base stands at an edge of the open space."
+        ),
+    )
+
+
+class RandomWalkParams(StrategyParams):
+    """How far a random walk leg may go."""
+
+    replan_interval: int = Field(15, ge=1, description="Steps between new random goals.")
+    distance: float = Field(30.0, gt=0, description="Longest path (cells) to a random goal.")
+
+
+class LeaderFollowerParams(FrontierParams):
+    """Greedy frontier exploration's parameters for the leader, and the chain's."""
+
+    replan_interval: int = Field(1, ge=1, description="Steps between decisions (the chain: 1).")
+    frontier_interval: int = Field(
+        10, ge=1, description="Steps between the leader's frontier searches (the original: 10)."
+    )
