@@ -11,6 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from mresim_phys.agents import Agent, Robot
+from mresim_phys.features import FEATURES
 from mresim_phys.knowledge.teammates import presumed_lost
 from mresim_phys.snapshot import AgentSnapshot, bool_view, points_or_none, read_only
 from mresim_phys.strategies import RobotView
@@ -28,7 +29,6 @@ def robot_view(
     free_area: int,
 ) -> RobotView:
     """``robot``'s knowledge at ``step``, read-only, as its strategy may see it."""
-    assert robot.body is not None
     belief = robot.belief.view()
     belief.flags.writeable = False
     return RobotView(
@@ -57,7 +57,7 @@ def robot_view(
         free_area=free_area,
         terrain=read_only(robot.terrain) if robot.terrain is not None else None,
         prior=robot.prior,
-        battery=robot.battery,
+        features=FEATURES.values(robot.features),
         parent=robot.parent,
         children=robot.children,
         hops=robot.hops,
@@ -69,7 +69,6 @@ def robot_view(
 def clearance_of(robot: Robot) -> float:
     """What its planner keeps from known walls: radius + wall margin, and wider while it
     escapes a collision that taught it nothing (``relax.escape_clearance``)."""
-    assert robot.body is not None
     clearance = robot.radius + robot.body.wall_margin
     if robot.escape_from is None:
         return clearance
@@ -114,7 +113,7 @@ def agent_snapshot(
         base_contact=agent.last_base_contact,
         broken=tuple(sorted(robot.broken)) if robot else (),
         presumed_lost=tuple(sorted(lost)) if agent.alive else (),
-        battery=robot.battery if robot else None,
+        features=FEATURES.values(robot.features) if robot else {},
         parent=info.get("parent", agent.parent),  # a strategy that changes the hierarchy
         activity=health[0],
         state_reason=health[1],

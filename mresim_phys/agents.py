@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
-from typing import Literal
+from typing import Any, Literal
 
 import numpy as np
 from numpy.typing import NDArray
@@ -93,12 +93,12 @@ class Agent:
 class Robot(Agent):
     """A mobile robot following its strategy's paths."""
 
-    body: Body | None = None
+    body: Body = field(kw_only=True)  # required: every robot has its hardware
     strategy: Strategy | None = None
     planner: Planner | None = None
     holds: dict[str, int] = field(default_factory=dict)  # failures in force per part
     degradations: tuple[Factors, ...] = ()  # (speed, range) factors of degradations in force
-    battery: float | None = None  # level left, a fraction of the capacity; None: no battery
+    features: dict[str, Any] = field(default_factory=dict)  # each feature's state (features.py)
     scans: int = 0  # scans taken so far (a battery drains per scan)
     payload: Payload | None = None  # what its strategy sends with its record
     heading: float = 0.0
@@ -181,7 +181,6 @@ class Robot(Agent):
     @property
     def laser(self) -> Laser:
         """Its laser as it works now (range scaled while degraded)."""
-        assert self.body is not None
         factor = self.range_factor
         laser = self.body.laser
         return laser if factor == 1.0 else replace(laser, range=laser.range * factor)
@@ -228,14 +227,12 @@ class Robot(Agent):
     @property
     def speed(self) -> float:
         """Cells moved at most per step (scaled while degraded)."""
-        assert self.body is not None
         factor = self.speed_factor
         return self.body.speed if factor == 1.0 else self.body.speed * factor
 
     @property
     def radius(self) -> float:
         """Body radius in cells."""
-        assert self.body is not None
         return self.body.radius
 
     def advance_to(self, point: tuple[float, float]) -> None:

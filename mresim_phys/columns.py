@@ -325,3 +325,8 @@ def robot_base_link(r: StepRecord) -> list[int]:
 DEFAULTS: tuple[str, ...] = tuple(c.name for c in COLUMNS.registered() if not c.optional)
 """The default columns (built in here, not optional), in ``metrics.csv``'s order; a column
 registered later (a plugin's) is never a default."""
+
+# Optional columns a feature's own module registers (``features.py``), imported when named.
+FEATURE_COLUMNS = {"robot_battery": "mresim_phys.faults.battery:robot_battery"}
+for _name, _reference in FEATURE_COLUMNS.items():
+    COLUMNS.lazy(_name, _reference, ColumnParams)

@@ -20,8 +20,9 @@ stall rule, curves, communication totals: ``tracking``) read those columns.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -39,6 +40,7 @@ class RobotRecord:
     distance: float
     state: str
     base_contact: int = -1
+    features: Mapping[str, Any] = field(default_factory=dict)  # each feature's value
 
 
 @dataclass(frozen=True)

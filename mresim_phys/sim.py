@@ -37,6 +37,7 @@ from mresim_phys.comms.ledger import box_around, sensed_tick
 from mresim_phys.errors import ScenarioError, UnknownRobotError
 from mresim_phys.event_context import RunEventContext
 from mresim_phys.faults.runtime import hazard_grid
+from mresim_phys.features import FEATURES
 from mresim_phys.health_phase import robot_steps
 from mresim_phys.knowledge.health import HealthWatch
 from mresim_phys.knowledge.latest import LatestCoverage
@@ -379,7 +380,10 @@ class Simulation:
         started = perf_counter()
         self.coverage.settle()
         robots = tuple(
-            RobotRecord(r.name, r.distance, r.state, r.last_base_contact) for r in self.robots
+            RobotRecord(
+                r.name, r.distance, r.state, r.last_base_contact, FEATURES.values(r.features)
+            )
+            for r in self.robots
         )
         heard = {name: info.step for name, info in self.base.teammates.items()}
         watch, coverage = self.failures, self.coverage

@@ -11,6 +11,7 @@ equals the live one.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -63,7 +64,7 @@ class AgentSnapshot:
     base_contact: int = -1  # last step this agent's data reached the base (-1: never)
     broken: tuple[str, ...] = ()  # parts that do not work now (drive, radio, sensor, degraded)
     presumed_lost: tuple[str, ...] = ()  # teammates it has not heard of for too long
-    battery: float | None = None  # battery level left, a fraction of capacity; None: none
+    features: Mapping[str, Any] = field(default_factory=dict)  # each feature's value (features.py)
     activity: str = ""  # working / waiting / idle / stuck ("": not assessed; knowledge.health)
     state_reason: str | None = None  # why ``state`` changed this step (None: it did not)
     given_up: BoolGrid | None = None  # frontier cells its strategy tried in vain, gave up

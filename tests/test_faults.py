@@ -23,6 +23,7 @@ from hypothesis import strategies as st
 from mresim_phys import Simulation
 from mresim_phys.cli import main
 from mresim_phys.errors import ScenarioError
+from mresim_phys.faults.battery import BATTERY
 from mresim_phys.faults.clocks import FailureClock, exposure_budget
 from mresim_phys.faults.spec import RandomFaultSpec
 from mresim_phys.scenario.load import load_scenario
@@ -267,25 +268,25 @@ def test_a_battery_drains_with_motion_scans_and_messages_then_the_robot_fails(
     battery = {"capacity": 30, "per_cell": 1.0, "per_scan": 0.1, "per_message": 0.5}
     sim = Simulation.from_yaml(scenario_file(faults={"battery": battery}, steps=60))
     a = sim.robot("A")
-    levels = [a.battery]
+    levels = [BATTERY.value_in(a.features)]
     while a.alive and sim.t < 40:
         sim.step()
-        levels.append(a.battery)
+        levels.append(BATTERY.value_in(a.features))
     assert levels[0] is not None and levels[0] < 1.0  # step 0: a scan and messages
     assert all(x is not None and y is not None and y <= x for x, y in itertools.pairwise(levels))
-    assert not a.alive and a.battery == 0.0
+    assert not a.alive and BATTERY.value_in(a.features) == 0.0
     assert f"fail {a.name} (battery empty)" in sim.events_now
-    assert a.distance <= 30 and sim.view_of(sim.robot("B")).battery is not None
+    assert a.distance <= 30 and BATTERY.of(sim.view_of(sim.robot("B"))) is not None
 
 
 def test_battery_is_none_without_one_and_only_for_the_listed_robots(
     scenario_file: ScenarioFile,
 ) -> None:
     sim = Simulation.from_yaml(scenario_file())
-    assert sim.view_of(sim.robot("A")).battery is None
+    assert BATTERY.of(sim.view_of(sim.robot("A"))) is None
     faults = {"battery": {"capacity": 100, "robots": ["B"]}}
     sim = Simulation.from_yaml(scenario_file(faults=faults))
-    assert sim.robot("A").battery is None and sim.robot("B").battery is not None
+    assert "battery" not in sim.robot("A").features and "battery" in sim.robot("B").features
 
 
 def test_a_robot_out_of_contact_too_long_fails(scenario_file: ScenarioFile) -> None:

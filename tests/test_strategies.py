@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from mresim_phys import STRATEGIES, Simulation, UnknownPluginError
-from mresim_phys.agents import TeammateInfo
+from mresim_phys.agents import Body, TeammateInfo
 from mresim_phys.planning.goals import GoalCosts
 from mresim_phys.strategies import BUILT_IN, RobotView
 from mresim_phys.strategies.auction import Bidder, best_pair, greedy_auction
@@ -17,6 +17,7 @@ from mresim_phys.strategies.base import Strategy
 from mresim_phys.strategies.frontier import FrontierExploration
 from mresim_phys.strategies.params import FrontierParams
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
+from mresim_phys.world.sensing import Laser
 
 
 def test_registry_holds_the_built_ins() -> None:
@@ -281,7 +282,10 @@ def test_a_robot_in_contact_replans_once_its_frontier_is_gone(enabled: bool) -> 
     belief[5:15, :20] = FREE  # the left end explored by a teammate
     belief[5:15, 80:] = FREE  # and the right one
     assert strategy.replan_on_contact(belief) is enabled
-    robot = Robot("A", 1, view.position, 10.0, belief, np.zeros_like(belief, bool), "explorer")
+    body = Body(1.0, 1.0, 0.5, Laser(10.0))
+    robot = Robot(
+        "A", 1, view.position, 10.0, belief, np.zeros_like(belief, bool), "explorer", body=body
+    )
     robot.strategy, robot.last_plan_step = strategy, view.step
     assert not wants_plan(robot, view.step + 1, 15)  # no contact, no replan
     robot.links = ("B",)

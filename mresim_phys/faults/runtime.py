@@ -8,7 +8,8 @@ repairs) robots whose clocks are due, counts a step of exposure for every workin
 robot standing in a hazard zone (and fails it when its budget is spent), and fails
 robots that have been out of contact for too long. After the communication phase,
 :meth:`Faults.drain` takes from each battery what the step cost (distance moved,
-scans, messages sent); a robot whose battery is empty fails there and then.
+scans, messages sent); a robot whose battery is empty fails there and then (the battery,
+a per-robot feature, is ``faults/battery.py``).
 
 Nobody is told: a failure changes only the robot (``Robot.fail``); teammates notice
 its silence (``knowledge/teammates.py``: presumed lost).
@@ -24,8 +25,9 @@ from numpy.typing import NDArray
 
 from mresim_phys.agents import Robot
 from mresim_phys.errors import ScenarioError
+from mresim_phys.faults.battery import battery_of, give_battery, use
 from mresim_phys.faults.clocks import FailureClock, exposure_budget
-from mresim_phys.faults.spec import BatterySpec, FaultsSpec, HazardSpec, RandomFaultSpec, chosen
+from mresim_phys.faults.spec import FaultsSpec, HazardSpec, RandomFaultSpec, chosen
 from mresim_phys.rng import Streams
 from mresim_phys.types import BoolGrid
 from mresim_phys.world.footprints import region_cells
@@ -58,16 +60,6 @@ class Hazard:
         return False
 
 
-@dataclass
-class Battery:
-    """A robot's battery: its charge and what it had done when last drained."""
-
-    spec: BatterySpec
-    charge: float
-    distance: float = 0.0
-    scans: int = 0
-
-
 class Faults:
     """The ``faults:`` block of one run, acting on its robots."""
 
@@ -89,12 +81,10 @@ class Faults:
             Hazard(h, cells, budgets(h, self.robots, streams, k))
             for k, (h, cells) in enumerate(zip(spec.hazards, zones, strict=True))
         ]
-        self.batteries: dict[str, Battery] = {}
         if spec.battery is not None:
             for robot in self.robots:
                 if chosen(spec.battery.robots, robot.name):
-                    self.batteries[robot.name] = Battery(spec.battery, spec.battery.capacity)
-                    robot.battery = 1.0
+                    give_battery(robot, spec.battery)
         self.contact_limit = spec.fail_if_out_of_contact_for
         self.last_contact = dict.fromkeys((r.name for r in self.robots), 0)
         self.by_name = {r.name: r for r in self.robots}
@@ -134,7 +124,7 @@ class Faults:
                 self.last_contact[robot.name] = step
         lines = []
         for robot in self.robots:
-            battery = self.batteries.get(robot.name)
+            battery = battery_of(robot)
             if battery is None or battery.charge <= 0:
                 continue
             messages = sum(int(np.count_nonzero(s[robot.index])) for s in sent)
@@ -142,17 +132,6 @@ class Faults:
                 robot.fail("robot")
                 lines.append(f"fail {robot.name} (battery empty)")
         return lines
-
-
-def use(battery: Battery, robot: Robot, messages: int) -> bool:
-    """Take what ``robot`` did since the last drain from ``battery``; True if it is empty."""
-    spec = battery.spec
-    cost = spec.per_cell * (robot.distance - battery.distance)
-    cost += spec.per_scan * (robot.scans - battery.scans) + spec.per_message * messages
-    battery.distance, battery.scans = robot.distance, robot.scans
-    battery.charge = max(battery.charge - cost, 0.0)
-    robot.battery = battery.charge / spec.capacity
-    return battery.charge <= 0
 
 
 def budgets(spec: HazardSpec, robots: Sequence[Robot], streams: Streams, k: int) -> dict[str, int]:

@@ -9,8 +9,8 @@ Each field of :class:`~mresim_phys.snapshot.Snapshot` and of its
 * ``steps.jsonl``, one JSON line per step (:class:`LineField`): ``step``, ``events``,
   ``links``, ``comm``, ``world_version`` (:data:`SNAPSHOT_LINE`) and per agent
   ``position``, ``heading``, ``state``, ``role``, ``goal``, ``distance``, ``parent``,
-  ``base_contact``, ``broken``, ``presumed_lost``, ``battery``, ``state_reason``
-  (:data:`AGENT_LINE`);
+  ``base_contact``, ``broken``, ``presumed_lost``, each per-robot feature's value under its
+  key (``battery``; :class:`SpreadField`), ``state_reason`` (:data:`AGENT_LINE`);
 * delta chunks, as changes since the previous logged step: grids (:class:`GridField`:
   ``belief``, ``safe``, ``skeleton``, the ``truth`` when the world changed, ``rubble``
   and ``gave_way``) and point arrays (:class:`PointsField`: ``path``, ``rendezvous``,
@@ -36,6 +36,7 @@ from typing import Any
 
 import numpy as np
 
+from mresim_phys.features import FEATURES
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
 from mresim_phys.types import FloatArray, IntArray
 
@@ -106,13 +107,32 @@ class LineField:
     omit_empty: bool = False
 
 
+@dataclass(frozen=True)
+class SpreadField:
+    """A mapping of per-robot feature values stored as one key per feature, in
+    :data:`~mresim_phys.features.FEATURES` order, each by that feature's codec; a robot
+    without a feature has no key for it."""
+
+    def encode_into(self, out: dict[str, Any], values: Mapping[str, Any]) -> None:
+        """Add each feature's value in ``values`` to the line ``out``."""
+        for feature in FEATURES.all():
+            if values.get(feature.key) is not None:
+                out[feature.key] = feature.encode(values[feature.key])
+
+    def decode_from(self, line: Mapping[str, Any]) -> dict[str, Any]:
+        """The features' values in ``line``."""
+        return {f.key: f.decode(line[f.key]) for f in FEATURES.all() if f.key in line}
+
+
+SPREAD = SpreadField()
+Codec = LineField | SpreadField
 STATIC_AGENT = {
     "name": LineField(str, plain),
     "kind": LineField(str, plain),
     "radius": LineField(float, to_float),
     "comm_range": LineField(float, to_float),
 }
-AGENT_LINE = {
+AGENT_LINE: dict[str, Codec] = {
     "position": LineField(point, to_point),
     "heading": LineField(float, to_float),
     "state": LineField(str, plain),
@@ -123,7 +143,7 @@ AGENT_LINE = {
     "base_contact": LineField(int, to_int),
     "broken": LineField(list, to_events, omit_empty=True),
     "presumed_lost": LineField(list, to_events, omit_empty=True),
-    "battery": LineField(float, to_float, omit_none=True),
+    "features": SPREAD,  # each feature's value under its own key (features.py): battery
     "state_reason": LineField(str, plain, omit_none=True),  # only at a change of state
 }
 SNAPSHOT_LINE = {
@@ -144,24 +164,28 @@ RECOMPUTED = ("explored", "known_at_base", "alive", "lost_knowledge", "failures"
 AGENT_RECOMPUTED = ("activity",)  # replayed by the run-health watch (knowledge.health)
 
 
-def encode_line(codecs: Mapping[str, LineField], obj: object) -> dict[str, Any]:
+def encode_line(codecs: Mapping[str, Codec], obj: object) -> dict[str, Any]:
     """The JSON object of ``obj``'s fields named in ``codecs``."""
-    out = {}
+    out: dict[str, Any] = {}
     for name, codec in codecs.items():
         value = getattr(obj, name)
-        if not (codec.omit_none and value is None) and not (codec.omit_empty and not value):
+        if isinstance(codec, SpreadField):
+            codec.encode_into(out, value)
+        elif not (codec.omit_none and value is None) and not (codec.omit_empty and not value):
             out[name] = codec.encode(value)
     return out
 
 
 def decode_line(
-    codecs: Mapping[str, LineField], cls: type, line: Mapping[str, Any], n: int
+    codecs: Mapping[str, Codec], cls: type, line: Mapping[str, Any], n: int
 ) -> dict[str, Any]:
     """Keyword arguments of ``cls`` read back from ``line`` (``n`` agents); KeyError if a
     field without a default is missing."""
     defaults, out = field_defaults(cls), {}
     for name, codec in codecs.items():
-        if name in line:
+        if isinstance(codec, SpreadField):
+            out[name] = codec.decode_from(line)
+        elif name in line:
             out[name] = codec.decode(line[name], n)
         elif name in defaults:
             out[name] = defaults[name]()

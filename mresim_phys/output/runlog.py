@@ -344,7 +344,10 @@ class Replay:
             step,
             self.coverage,
             self.known_at_base,
-            [RobotRecord(a.name, a.distance, a.state, a.base_contact) for a in agents[1:]],
+            [
+                RobotRecord(a.name, a.distance, a.state, a.base_contact, a.features)
+                for a in agents[1:]
+            ],
             links,
             control_links=comm.control_links,
             comm_bytes=comm.comm_bytes,

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 import cv2
 import numpy as np
 
+from mresim_phys.features import FEATURES
 from mresim_phys.render.labels import Label, place_labels
 from mresim_phys.render.layers import LayerSpec
 from mresim_phys.render.legend import legend_band
@@ -284,12 +285,15 @@ def draw_ring(image: np.ndarray, at: np.ndarray, size: float, colour: BGR) -> No
 
 
 def robot_label(robot: AgentSnapshot, lost: bool = False) -> str:
-    """A robot's name, with its failed parts if any, its battery level if it has one, what
+    """A robot's name, with its failed parts if any, its features' labels (its battery
+    level if it has one: ``features.py``), what
     it is doing when that is not work (``done``, ``idle``, ``stuck``: ``B [radio] 73%
     idle``) and, with ``lost``, the teammates it presumes lost (``A lost?B,C``: the
     ``presumed_lost`` layer)."""
     text = f"{robot.name} [{','.join(robot.broken)}]" if robot.broken else robot.name
-    text = text if robot.battery is None else f"{text} {robot.battery:.0%}"
+    text += "".join(
+        f.label(robot.features[f.key]) for f in FEATURES.all() if f.key in robot.features
+    )
     tag = state_tag(robot)
     text = f"{text} {tag}" if tag else text
     return f"{text} lost?{','.join(robot.presumed_lost)}" if lost and robot.presumed_lost else text

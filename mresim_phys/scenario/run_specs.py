@@ -130,6 +130,6 @@ class MetricsSpec(Strict):
     columns: list[str] = Field(
         default_factory=list,
         description="Optional metric columns written after the default ones, in this order:"
-        " a column's name (robots_done, base_links, robot_base_link, or one a package"
-        " registers) or package.module:Class; see docs/metric-columns.md.",
+        " a column's name (robots_done, base_links, robot_base_link, robot_battery, or one a"
+        " package registers) or package.module:Class; see docs/metric-columns.md.",
     )

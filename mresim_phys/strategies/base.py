@@ -75,7 +75,7 @@ class RobotView:
     free_area: int = 0  # the team's explorable cells, known before the mission (0: not known)
     terrain: FloatArray | None = None  # known terrain speed factors (1: open or unsensed); None
     prior: BeliefGrid | None = None  # the map it knew before the mission; None: none
-    battery: float | None = None  # its battery level left, a fraction of capacity; None: none
+    features: Mapping[str, Any] = field(default_factory=dict)  # each feature's value (features.py)
     parent: str | None = None  # its parent in the team's hierarchy: 'base', a robot, or None
     children: tuple[str, ...] = ()  # the robots whose parent it is
     hops: int = 0  # robots from the base down to it along its parents (0: not under the base)

@@ -20,6 +20,7 @@ import cv2
 import numpy as np
 
 from mresim_phys.comms.regions import RegionProbe
+from mresim_phys.features import FEATURES
 from mresim_phys.render import LayerSpec, Renderer, frame_scale
 from mresim_phys.snapshot import AgentSnapshot, Snapshot
 
@@ -108,6 +109,12 @@ def agent_rows(snapshot: Snapshot, renderer: Renderer) -> list[dict[str, Any]]:
     ]
 
 
+def feature_entries(agent: AgentSnapshot) -> dict[str, Any]:
+    """Each feature's hover entry (None where the agent has no such feature)."""
+    values = agent.features
+    return {f.key: f.hover(values[f.key]) if f.key in values else None for f in FEATURES.all()}
+
+
 def agent_row(agent: AgentSnapshot, px: tuple[float, float], radius: float) -> dict[str, Any]:
     """One agent's hover row (JSON-ready; distances in cells)."""
     start = np.array([agent.position], dtype=float)
@@ -121,7 +128,7 @@ def agent_row(agent: AgentSnapshot, px: tuple[float, float], radius: float) -> d
         "role": agent.role,
         "distance": round(agent.distance, 2),
         "path_left": round(path_length(np.concatenate([start, agent.path])), 2),
-        "battery": None if agent.battery is None else round(agent.battery, 4),
+        **feature_entries(agent),
         "base_contact": agent.base_contact,
         "broken": list(agent.broken),
         "position": [round(v, 2) for v in agent.position],

@@ -1,0 +1,114 @@
+"""Per-robot features (shared): a feature of a robot, owned in one module.
+
+A feature (a battery, and the ones to come) is a :class:`RobotFeature` declared in its own
+module with everything about it:
+
+* its per-robot *state*, kept in ``Robot.features[key]`` by the code that runs it (the
+  battery: ``faults/runtime.py``); a robot without the feature has no entry;
+* its *value*: what a strategy sees (``RobotView.features[key]``) and a snapshot records
+  (``AgentSnapshot.features[key]``), read by ``feature.of(view)``;
+* the run log's *codec*: the value under ``key`` in each agent's line of ``steps.jsonl``
+  (``encode``, ``decode``), so a replay has it back;
+* its *label* beside the robot's name in frames and its entry in the viewer's hover row;
+* its *metric columns*: ``@column`` registrations in the same module, reading
+  ``RobotRecord.features`` (``metrics.py``), which the live run and the replay fill alike.
+
+:data:`FEATURES` lists the features in a fixed order (built-ins first, as entered here by
+``module:attribute`` reference and imported on first use; then those registered by other
+packages), which is the order of their keys in log lines, labels and hover rows.
+"""
+
+from __future__ import annotations
+
+import importlib
+from collections.abc import Mapping
+from typing import Any, ClassVar, Generic, Protocol, TypeVar
+
+S = TypeVar("S")  # a feature's per-robot state
+V = TypeVar("V")  # the value a strategy sees and a snapshot records
+
+
+class HasFeatures(Protocol):
+    """A robot's view, snapshot or record: its features' values by key."""
+
+    @property
+    def features(self) -> Mapping[str, Any]:
+        """Each feature's value, by key (a robot without a feature has no entry)."""
+        ...
+
+
+class RobotFeature(Generic[S, V]):
+    """A per-robot feature: ``key`` names its value in views, snapshots, log lines and hover
+    rows. Subclasses give :meth:`value` and, for values that are not plain JSON numbers or
+    strings, :meth:`encode` and :meth:`decode`."""
+
+    key: ClassVar[str]
+
+    def value(self, state: S) -> V:
+        """What a strategy sees and a snapshot records of a robot's state."""
+        raise NotImplementedError
+
+    def encode(self, value: V) -> Any:
+        """``value`` as JSON for the run log's agent line."""
+        return value
+
+    def decode(self, raw: Any) -> V:
+        """A logged value read back."""
+        value: V = raw
+        return value
+
+    def label(self, value: V) -> str:
+        """Text after the robot's name in frames ('' for none)."""
+        return ""
+
+    def hover(self, value: V) -> Any:
+        """The viewer's hover-row entry (JSON)."""
+        return self.encode(value)
+
+    def of(self, holder: HasFeatures) -> V | None:
+        """This feature's value in a view, snapshot or record (None: the robot has none)."""
+        found: V | None = holder.features.get(self.key)
+        return found
+
+    def value_in(self, states: Mapping[str, Any]) -> V | None:
+        """The value of this feature's state among a robot's ``states`` (``Robot.features``;
+        None: the robot has none)."""
+        return self.value(states[self.key]) if self.key in states else None
+
+
+class FeatureList:
+    """The run's features in a fixed order: built-ins entered by reference (imported when
+    the list is first read), then features registered in code."""
+
+    def __init__(self, built_in: Mapping[str, str]) -> None:
+        self._built_in = dict(built_in)  # key -> "module:attribute" of the feature instance
+        self._registered: dict[str, RobotFeature[Any, Any]] = {}
+        self._all: tuple[RobotFeature[Any, Any], ...] | None = None
+
+    def register(self, feature: RobotFeature[Any, Any]) -> RobotFeature[Any, Any]:
+        """Add a feature after the built-ins; a key already taken is an error."""
+        if feature.key in self._built_in or feature.key in self._registered:
+            raise ValueError(f"a feature {feature.key!r} is already registered")
+        self._registered[feature.key] = feature
+        self._all = None
+        return feature
+
+    def all(self) -> tuple[RobotFeature[Any, Any], ...]:
+        """Every feature, built-ins first."""
+        if self._all is None:
+            self._all = (*map(_load, self._built_in.values()), *self._registered.values())
+        return self._all
+
+    def values(self, states: Mapping[str, Any]) -> dict[str, Any]:
+        """Each feature's value of a robot's ``states`` (``Robot.features``), in order."""
+        return {f.key: f.value(states[f.key]) for f in self.all() if f.key in states}
+
+
+def _load(reference: str) -> RobotFeature[Any, Any]:
+    """The feature instance a ``module:attribute`` reference names."""
+    module, _, name = reference.partition(":")
+    feature: RobotFeature[Any, Any] = getattr(importlib.import_module(module), name)
+    return feature
+
+
+FEATURES = FeatureList({"battery": "mresim_phys.faults.battery:BATTERY"})
