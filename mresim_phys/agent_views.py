@@ -55,8 +55,6 @@ def robot_view(
         team_order=team_order,
         vary_with_seed=vary_with_seed,
         free_area=free_area,
-        terrain=read_only(robot.terrain) if robot.terrain is not None else None,
-        prior=robot.prior,
         features=FEATURES.values(robot.features),
         parent=robot.parent,
         children=robot.children,
@@ -113,7 +111,7 @@ def agent_snapshot(
         base_contact=agent.last_base_contact,
         broken=tuple(sorted(robot.broken)) if robot else (),
         presumed_lost=tuple(sorted(lost)) if agent.alive else (),
-        features=FEATURES.values(robot.features) if robot else {},
+        features=FEATURES.recorded_values(robot.features) if robot else {},
         parent=info.get("parent", agent.parent),  # a strategy that changes the hierarchy
         activity=health[0],
         state_reason=health[1],

@@ -22,7 +22,6 @@ from mresim_phys.planning import Planner
 from mresim_phys.strategies.base import Decision, Strategy
 from mresim_phys.types import UNKNOWN, BeliefGrid, BoolGrid, FloatArray
 from mresim_phys.world.sensing import Laser
-from mresim_phys.world.terrain import TerrainGrid
 
 RobotState = Literal["active", "error", "done", "failed"]
 Part = Literal["drive", "sensor", "radio"]
@@ -111,8 +110,6 @@ class Robot(Agent):
     reached_goal: bool = False
     rng: np.random.Generator = field(default_factory=lambda: np.random.default_rng(0))
     decision: Decision | None = None
-    terrain: TerrainGrid | None = None  # known terrain factors (knowledge/terrain.py); None: none
-    prior: BeliefGrid | None = None  # the map it knew before the mission (knowledge/prior.py)
     escape_from: tuple[float, float] | None = None  # where a bump taught its map nothing
 
     @property

@@ -9,9 +9,9 @@ from __future__ import annotations
 
 from mresim_phys.agents import Robot
 from mresim_phys.errors import ScenarioError
+from mresim_phys.knowledge.prior import PRIOR, prior_belief
 from mresim_phys.knowledge.prior import STREAM as PRIOR_STREAM
-from mresim_phys.knowledge.prior import prior_belief
-from mresim_phys.knowledge.terrain import unknown_terrain
+from mresim_phys.knowledge.terrain import TERRAIN, unknown_terrain
 from mresim_phys.rng import Streams
 from mresim_phys.scenario.maps import PriorSpec
 from mresim_phys.scenario.on_map import check_door_names, load_map
@@ -54,7 +54,9 @@ def build_terrain(
     except ValueError as exc:
         raise ScenarioError(str(exc)) from None
     for robot in robots:
-        robot.terrain = unknown_terrain(truth)
+        known = unknown_terrain(truth)
+        if known is not None:
+            robot.features[TERRAIN.key] = known
     return truth
 
 
@@ -75,5 +77,5 @@ def build_prior(
     grid = prior_belief(loaded.occupied, spec.drop, spec.flip, streams.get(PRIOR_STREAM))
     for robot in robots:
         if spec.robots == "all" or robot.name in spec.robots:
-            robot.prior = grid
+            robot.features[PRIOR.key] = grid
     return grid

@@ -5,8 +5,10 @@ module with everything about it:
 
 * its per-robot *state*, kept in ``Robot.features[key]`` by the code that runs it (the
   battery: ``faults/runtime.py``); a robot without the feature has no entry;
-* its *value*: what a strategy sees (``RobotView.features[key]``) and a snapshot records
-  (``AgentSnapshot.features[key]``), read by ``feature.of(view)``;
+* its *value*: what a strategy sees (``RobotView.features[key]``) and, unless the feature
+  is not ``recorded`` (known terrain and the prior map: grids the run's ``truth.npz`` or
+  the robot's scans give back), what a snapshot records (``AgentSnapshot.features[key]``);
+  read by ``feature.of(view)``;
 * the run log's *codec*: the value under ``key`` in each agent's line of ``steps.jsonl``
   (``encode``, ``decode``), so a replay has it back;
 * its *label* beside the robot's name in frames and its entry in the viewer's hover row;
@@ -43,6 +45,7 @@ class RobotFeature(Generic[S, V]):
     strings, :meth:`encode` and :meth:`decode`."""
 
     key: ClassVar[str]
+    recorded: ClassVar[bool] = True  # False: a strategy sees it; snapshots and logs do not
 
     def value(self, state: S) -> V:
         """What a strategy sees and a snapshot records of a robot's state."""
@@ -68,6 +71,11 @@ class RobotFeature(Generic[S, V]):
     def of(self, holder: HasFeatures) -> V | None:
         """This feature's value in a view, snapshot or record (None: the robot has none)."""
         found: V | None = holder.features.get(self.key)
+        return found
+
+    def state_of(self, states: Mapping[str, Any]) -> S | None:
+        """This feature's state among a robot's ``states`` (None: the robot has none)."""
+        found: S | None = states.get(self.key)
         return found
 
     def value_in(self, states: Mapping[str, Any]) -> V | None:
@@ -99,9 +107,19 @@ class FeatureList:
             self._all = (*map(_load, self._built_in.values()), *self._registered.values())
         return self._all
 
+    def recorded(self) -> tuple[RobotFeature[Any, Any], ...]:
+        """The features snapshots, records, logs, labels and hover rows carry."""
+        return tuple(f for f in self.all() if f.recorded)
+
     def values(self, states: Mapping[str, Any]) -> dict[str, Any]:
-        """Each feature's value of a robot's ``states`` (``Robot.features``), in order."""
+        """Each feature's value of a robot's ``states`` (``Robot.features``), in order: what
+        its strategy sees."""
         return {f.key: f.value(states[f.key]) for f in self.all() if f.key in states}
+
+    def recorded_values(self, states: Mapping[str, Any]) -> dict[str, Any]:
+        """The recorded features' values of a robot's ``states``: what its snapshot and
+        its metrics record hold."""
+        return {f.key: f.value(states[f.key]) for f in self.recorded() if f.key in states}
 
 
 def _load(reference: str) -> RobotFeature[Any, Any]:
@@ -111,4 +129,10 @@ def _load(reference: str) -> RobotFeature[Any, Any]:
     return feature
 
 
-FEATURES = FeatureList({"battery": "mresim_phys.faults.battery:BATTERY"})
+FEATURES = FeatureList(
+    {
+        "battery": "mresim_phys.faults.battery:BATTERY",
+        "terrain": "mresim_phys.knowledge.terrain:TERRAIN",
+        "prior": "mresim_phys.knowledge.prior:PRIOR",
+    }
+)

@@ -19,8 +19,9 @@ import numpy as np
 
 from mresim_phys.agents import Robot
 from mresim_phys.knowledge.mapping import integrate_scan
+from mresim_phys.knowledge.prior import PRIOR
 from mresim_phys.knowledge.scanfold import ScanQueue, folds_in_one_call, scan_into_map
-from mresim_phys.knowledge.terrain import learn_terrain
+from mresim_phys.knowledge.terrain import TERRAIN, learn_terrain
 from mresim_phys.motion import path_blocked
 from mresim_phys.parallel import Effects
 from mresim_phys.world.queries import QueryFilter
@@ -70,12 +71,13 @@ class Senses:
             update = integrate_scan(
                 robot.belief, robot.safe, result, laser.safe_fraction, robot.observed, step
             )
-        if update is not None and robot.terrain is not None and self.terrain is not None:
-            learn_terrain(robot.terrain, self.terrain, update)
+        known = TERRAIN.state_of(robot.features)
+        if update is not None and known is not None and self.terrain is not None:
+            learn_terrain(known, self.terrain, update)
         effects.spend("sensing", scanned - started)
         effects.spend("mapping", perf_counter() - scanned)
         lookahead = LOOKAHEAD_STEPS * robot.speed
-        checks_path = robot.observed is not None or robot.prior is not None
+        checks_path = robot.observed is not None or PRIOR.key in robot.features
         if checks_path and path_blocked(robot.belief, robot.path, robot.radius, lookahead):
             robot.stop_for_replan()
         if update is not None:
@@ -85,9 +87,9 @@ class Senses:
         """A queue for the robot's scans of this turn (:class:`ScanQueue`), or None when
         each scan must fold at once: range noise or latest observations (see
         ``folds_in_one_call``), a path to check against every scan, terrain to learn."""
-        if not folds_in_one_call(robot.laser, robot.observed) or robot.prior is not None:
+        if not folds_in_one_call(robot.laser, robot.observed) or PRIOR.key in robot.features:
             return None
-        if robot.terrain is not None and self.terrain is not None:
+        if TERRAIN.key in robot.features and self.terrain is not None:
             return None
         return ScanQueue(self.world, robot.laser, self.filter_of(robot), robot)
 

@@ -381,7 +381,11 @@ class Simulation:
         self.coverage.settle()
         robots = tuple(
             RobotRecord(
-                r.name, r.distance, r.state, r.last_base_contact, FEATURES.values(r.features)
+                r.name,
+                r.distance,
+                r.state,
+                r.last_base_contact,
+                FEATURES.recorded_values(r.features),
             )
             for r in self.robots
         )

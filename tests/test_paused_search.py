@@ -129,7 +129,7 @@ def test_terrain_costs_fall_back_to_growing_bounded_fields() -> None:
     view = belief_view(belief, (2.5, 2.5), clearance=0.8)
     mud = np.ones((20, 20))
     mud[5:9, :] = 0.5  # a band of slow ground across the room
-    context = plan_context(RobotView(**{**view.__dict__, "terrain": mud}))
+    context = plan_context(RobotView(**{**view.__dict__, "features": {"terrain": mud}}))
     assert context.slowness is not None and context.search is None
     stages = list(context.fields_staged(4.0))
     assert stages[-1][0] == np.inf and all(final == np.inf for _, _, final in stages)

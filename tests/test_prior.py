@@ -12,7 +12,7 @@ from conftest import csv_row, rooms_grid, write_png
 
 from mresim_phys.cli import main
 from mresim_phys.errors import MapError, ScenarioError
-from mresim_phys.knowledge.prior import planning_map, prior_belief, walled_in
+from mresim_phys.knowledge.prior import PRIOR, planning_map, prior_belief, walled_in
 from mresim_phys.output.runlog import RunLog, RunLogWriter, recompute_metrics
 from mresim_phys.render import Renderer
 from mresim_phys.render.layers import parse_layers
@@ -63,7 +63,7 @@ def test_prior_cells_never_count_as_explored_nor_enter_beliefs(
     plan_file(rooms_grid())
     plain = Simulation.from_yaml(scenario_file())
     given = Simulation.from_yaml(scenario_file(prior=PLAN))
-    assert all(r.prior is not None for r in given.setup.robots)
+    assert all("prior" in r.features for r in given.setup.robots)
     for _ in range(3):
         a, b = plain.step(), given.step()
         assert (a.explored, a.known_at_base) == (b.explored, b.known_at_base)
@@ -78,8 +78,8 @@ def test_only_the_listed_robots_get_the_prior(
 ) -> None:
     plan_file(rooms_grid())
     sim = Simulation.from_yaml(scenario_file(prior={**PLAN, "robots": ["B"]}))
-    assert sim.robot("A").prior is None and sim.robot("B").prior is not None
-    assert sim.view_of(sim.robot("B")).prior is not None
+    assert "prior" not in sim.robot("A").features and "prior" in sim.robot("B").features
+    assert PRIOR.of(sim.view_of(sim.robot("B"))) is not None
 
 
 def test_a_scan_overrides_the_prior_in_the_planning_map() -> None:
@@ -101,7 +101,8 @@ def two_rooms_view(prior: np.ndarray | None) -> RobotView:
     return RobotView(
         step=0, name="A", position=(10.5, 30.5), heading=0.0, belief=belief, radius=0.5,
         clearance=1.0, speed=2.0, sensor_range=10.0, role="explorer",
-        base_position=(10.5, 30.5), teammates={}, rng=np.random.default_rng(0), prior=prior,
+        base_position=(10.5, 30.5), teammates={}, rng=np.random.default_rng(0),
+        features={} if prior is None else {"prior": prior},
     )  # fmt: skip
 
 

@@ -13,6 +13,7 @@ from PIL import Image
 
 from mresim_phys.cli import main
 from mresim_phys.errors import ScenarioError
+from mresim_phys.knowledge.terrain import TERRAIN
 from mresim_phys.planning import PLANNERS
 from mresim_phys.planning.astar import AStar, weighted_astar
 from mresim_phys.planning.costs import slowness_of
@@ -91,19 +92,21 @@ def test_a_robot_learns_the_terrain_it_senses_and_nothing_else(
     )
     sim = Simulation.from_yaml(path)
     robot, truth = sim.robot("A"), sim.setup.terrain
-    assert robot.terrain is not None and truth is not None
+    known = TERRAIN.state_of(robot.features)
+    assert known is not None and truth is not None
     seen = robot.belief == FREE
     assert seen.any() and (robot.belief == UNKNOWN).any()
-    assert np.array_equal(robot.terrain[seen], truth[seen])
-    assert (robot.terrain[~seen] == 1.0).all()  # unknown ground counts as open floor
+    assert np.array_equal(known[seen], truth[seen])
+    assert (known[~seen] == 1.0).all()  # unknown ground counts as open floor
 
 
 def test_the_view_carries_known_terrain_read_only(scenario_file: MakeScenario) -> None:
     sim = Simulation.from_yaml(scenario_file(terrain=LEFT_ROOM_MUD))
-    view = sim.view_of(sim.robot("A"))
-    assert view.terrain is not None and not view.terrain.flags.writeable
+    known = TERRAIN.of(sim.view_of(sim.robot("A")))
+    assert known is not None and not known.flags.writeable
     plain = Simulation.from_yaml(scenario_file())
-    assert plain.view_of(plain.robot("A")).terrain is None
+    assert TERRAIN.of(plain.view_of(plain.robot("A"))) is None
+    assert "terrain" not in sim.snapshot().agents[1].features  # not recorded
 
 
 # ---------------------------------------------------------------- planning
@@ -130,7 +133,7 @@ def open_view(terrain: np.ndarray | None, planner: str = "astar") -> RobotView:
         teammates={},
         rng=np.random.default_rng(0),
         planner=PLANNERS.make(planner, {}),
-        terrain=terrain,
+        features={} if terrain is None else {"terrain": terrain},
     )
 
 

@@ -16,6 +16,10 @@ and the first scan of a cell overrides the plan there. A robot whose sensed map
 then blocks its path replans (``motion.path_blocked``). Frontier strategies may
 also skip frontiers behind which the plan shows only walls (:func:`walled_in`): an
 out-of-date plan then hides the space where a wall has since given way.
+
+The prior is a per-robot feature (``features.py``): the shared grid is the state in
+``Robot.features["prior"]`` of every robot given it, and its strategy sees it
+(``PRIOR.of(view)``); snapshots and logs do not carry it per robot (``truth.npz`` has it).
 """
 
 from __future__ import annotations
@@ -23,9 +27,24 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
+from mresim_phys.features import RobotFeature
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN, BeliefGrid, BoolGrid
 
 STREAM = "prior"  # the named random stream the degradation draws from
+
+
+class PriorMap(RobotFeature[BeliefGrid, BeliefGrid]):
+    """The map a robot knew before the mission (read-only, shared by the robots given it)."""
+
+    key = "prior"
+    recorded = False
+
+    def value(self, state: BeliefGrid) -> BeliefGrid:
+        """The grid itself (read-only already)."""
+        return state
+
+
+PRIOR = PriorMap()
 
 
 def prior_belief(

@@ -6,14 +6,35 @@ of every cell a scan of its has marked FREE (the scan's :class:`Update`). A robo
 reads the truth otherwise; its planners use this grid (``planning.costs``). Known
 terrain is not exchanged between robots (a limitation: each robot learns the ground
 it has seen itself). Without terrain in the scenario there is no grid (``None``).
+
+Known terrain is a per-robot feature (``features.py``): the grid is the state in
+``Robot.features["terrain"]``, and its strategy sees it read-only (``TERRAIN.of(view)``);
+snapshots and logs do not carry it (the truth's terrain is in ``truth.npz``).
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from mresim_phys.features import RobotFeature
 from mresim_phys.knowledge.mapping import Update
 from mresim_phys.world.terrain import TerrainGrid
+
+
+class KnownTerrain(RobotFeature[TerrainGrid, TerrainGrid]):
+    """The terrain factors a robot knows; its strategy sees them read-only."""
+
+    key = "terrain"
+    recorded = False
+
+    def value(self, state: TerrainGrid) -> TerrainGrid:
+        """A read-only view of the robot's grid."""
+        view: TerrainGrid = state.view()
+        view.flags.writeable = False
+        return view
+
+
+TERRAIN = KnownTerrain()
 
 
 def unknown_terrain(truth: TerrainGrid | None) -> TerrainGrid | None:

@@ -115,13 +115,13 @@ class SpreadField:
 
     def encode_into(self, out: dict[str, Any], values: Mapping[str, Any]) -> None:
         """Add each feature's value in ``values`` to the line ``out``."""
-        for feature in FEATURES.all():
+        for feature in FEATURES.recorded():
             if values.get(feature.key) is not None:
                 out[feature.key] = feature.encode(values[feature.key])
 
     def decode_from(self, line: Mapping[str, Any]) -> dict[str, Any]:
         """The features' values in ``line``."""
-        return {f.key: f.decode(line[f.key]) for f in FEATURES.all() if f.key in line}
+        return {f.key: f.decode(line[f.key]) for f in FEATURES.recorded() if f.key in line}
 
 
 SPREAD = SpreadField()

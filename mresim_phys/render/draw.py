@@ -292,7 +292,7 @@ def robot_label(robot: AgentSnapshot, lost: bool = False) -> str:
     ``presumed_lost`` layer)."""
     text = f"{robot.name} [{','.join(robot.broken)}]" if robot.broken else robot.name
     text += "".join(
-        f.label(robot.features[f.key]) for f in FEATURES.all() if f.key in robot.features
+        f.label(robot.features[f.key]) for f in FEATURES.recorded() if f.key in robot.features
     )
     tag = state_tag(robot)
     text = f"{text} {tag}" if tag else text

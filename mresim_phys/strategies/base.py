@@ -16,7 +16,7 @@ topological map of its known space (skeleton, junctions, node regions). A robot
 given a prior map plans on it where its own map is unknown (``RobotView.planning_map``).
 With
 terrain in the scenario, its fields and plans price moves by the terrain the robot
-KNOWS (``RobotView.terrain``, never the truth): ``PlanContext.slowness``.
+KNOWS (``TERRAIN.of(view)``, never the truth): ``PlanContext.slowness``.
 """
 
 from __future__ import annotations
@@ -28,8 +28,10 @@ from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
+from mresim_phys.knowledge.prior import PRIOR
 from mresim_phys.knowledge.prior import planning_map as belief_with_prior
 from mresim_phys.knowledge.teammates import Payload, TeammateInfo
+from mresim_phys.knowledge.terrain import TERRAIN
 from mresim_phys.planning import Planner, TopologicalMap, shared_map
 from mresim_phys.planning.costs import slowness_of
 from mresim_phys.planning.dial import PausedSearch
@@ -73,8 +75,6 @@ class RobotView:
     team_order: tuple[str, ...] = ()  # the team's tie-break order (from the seed), the same for all
     vary_with_seed: bool = True  # the scenario lets the seed vary the run (initial random steps)
     free_area: int = 0  # the team's explorable cells, known before the mission (0: not known)
-    terrain: FloatArray | None = None  # known terrain speed factors (1: open or unsensed); None
-    prior: BeliefGrid | None = None  # the map it knew before the mission; None: none
     features: Mapping[str, Any] = field(default_factory=dict)  # each feature's value (features.py)
     parent: str | None = None  # its parent in the team's hierarchy: 'base', a robot, or None
     children: tuple[str, ...] = ()  # the robots whose parent it is
@@ -86,7 +86,7 @@ class RobotView:
     def planning_map(self) -> BeliefGrid:
         """Its belief, and the prior map where its belief is unknown (``knowledge/prior.py``):
         what its paths and distance fields run on. Frontiers stay on its belief."""
-        return belief_with_prior(self.belief, self.prior)
+        return belief_with_prior(self.belief, PRIOR.of(self))
 
     def tie_rank(self, name: str) -> int:
         """Where ``name`` stands in the team's tie-break order (unknown names last)."""
@@ -168,7 +168,7 @@ class PlanContext:
 
     @cached_property
     def _passable(self) -> tuple[np.ndarray, Box | None]:
-        if self.view.prior is None:
+        if PRIOR.of(self.view) is None:
             return passable_cells(self.view.belief, self.view.clearance, self.free_box)
         planned = self.view.planning_map  # the prior fills what the belief does not know
         return passable_cells(planned, self.view.clearance, bbox(planned == FREE))
@@ -188,7 +188,7 @@ class PlanContext:
     def slowness(self) -> FloatArray | None:
         """Cost multipliers of the terrain the robot knows (``planning.costs``); None while
         it knows no slow ground (or the run has no terrain): uniform costs."""
-        return slowness_of(self.view.terrain)
+        return slowness_of(TERRAIN.of(self.view))
 
     @cached_property
     def search(self) -> PausedSearch | None:

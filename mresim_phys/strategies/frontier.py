@@ -34,7 +34,7 @@ import numpy as np
 
 from mresim_phys.knowledge.frontier_regions import region_sizes
 from mresim_phys.knowledge.frontiers import Frontiers, any_frontier, frontiers_in
-from mresim_phys.knowledge.prior import walled_in
+from mresim_phys.knowledge.prior import PRIOR, walled_in
 from mresim_phys.knowledge.targets import TargetFinder, target_reach
 from mresim_phys.plugin import Plugin
 from mresim_phys.strategies.base import (
@@ -151,8 +151,9 @@ class FrontierExploration(Plugin):
         """This robot's frontier clusters without the ``tried`` cells (nor, with a prior
         map, those behind which the plan shows only walls), as its filter keeps them."""
         exclude = tried
-        if view.prior is not None:  # the plan shows only walls behind these cells
-            exclude = exclude | walled_in(view.belief, view.prior)
+        prior = PRIOR.of(view)
+        if prior is not None:  # the plan shows only walls behind these cells
+            exclude = exclude | walled_in(view.belief, prior)
         size = self.params.min_frontier_size
         found = frontiers_in(view.belief, context.free_box, size, exclude)
         box = context.free_box

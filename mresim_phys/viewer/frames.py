@@ -112,7 +112,7 @@ def agent_rows(snapshot: Snapshot, renderer: Renderer) -> list[dict[str, Any]]:
 def feature_entries(agent: AgentSnapshot) -> dict[str, Any]:
     """Each feature's hover entry (None where the agent has no such feature)."""
     values = agent.features
-    return {f.key: f.hover(values[f.key]) if f.key in values else None for f in FEATURES.all()}
+    return {f.key: f.hover(values[f.key]) if f.key in values else None for f in FEATURES.recorded()}
 
 
 def agent_row(agent: AgentSnapshot, px: tuple[float, float], radius: float) -> dict[str, Any]:
