@@ -21,6 +21,8 @@ import sys
 import tempfile
 from pathlib import Path
 
+from worktree import checked_out
+
 ROOT = Path(__file__).resolve().parent.parent
 ONE_RUN = """
 import sys
@@ -60,20 +62,8 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=4)
     parser.add_argument("--map", default="", help="map image (default: the preset's)")
     args = parser.parse_args()
-    with tempfile.TemporaryDirectory() as scratch:
-        old = Path(scratch) / "before"
-        added = subprocess.run(
-            ["git", "-C", str(ROOT), "worktree", "add", "--detach", str(old), args.rev],
-            capture_output=True,
-            text=True,
-        )
-        if added.returncode != 0:
-            print(f"bench_against.py: cannot check out {args.rev!r}: {added.stderr.strip()}")
-            raise SystemExit(2)
-        try:
-            compare(old, args)
-        finally:
-            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(old)])
+    with checked_out(ROOT, args.rev, "bench_against.py") as old:
+        compare(old, args)
 
 
 def compare(old: Path, args: argparse.Namespace) -> None:

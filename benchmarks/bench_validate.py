@@ -22,6 +22,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from worktree import checked_out
+
 ROOT = Path(__file__).resolve().parent.parent
 HEAVY = ("numba", "pymunk", "cv2")
 
@@ -51,20 +53,8 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=5)
     args = parser.parse_args()
     scenarios = [p.resolve() for p in args.scenarios] or sorted((ROOT / "scenarios").glob("*.yaml"))
-    with tempfile.TemporaryDirectory() as scratch:
-        old = Path(scratch) / "before"
-        added = subprocess.run(
-            ["git", "-C", str(ROOT), "worktree", "add", "--detach", str(old), args.rev],
-            capture_output=True,
-            text=True,
-        )
-        if added.returncode != 0:
-            print(f"bench_validate.py: cannot check out {args.rev!r}: {added.stderr.strip()}")
-            raise SystemExit(2)
-        try:
-            compare(old, scenarios, args)
-        finally:
-            subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(old)])
+    with checked_out(ROOT, args.rev, "bench_validate.py") as old:
+        compare(old, scenarios, args)
 
 
 def compare(old: Path, scenarios: list[Path], args: argparse.Namespace) -> None:

@@ -81,6 +81,12 @@ class Registry(Generic[T]):
         self._classes[name] = cls
         return cls
 
+    def enter(self, prefix: str, entries: Mapping[str, tuple[str, type[BaseModel]]]) -> None:
+        """:meth:`lazy` for each ``name: (reference, Params)`` of ``entries``, the reference
+        read after ``prefix`` (``"mresim_phys.strategies."`` + ``"frontier:Frontier"``)."""
+        for name, (reference, params) in entries.items():
+            self.lazy(name, prefix + reference, params)
+
     def _unlike_entry(self, cls: type, name: str) -> str:
         """Why ``cls`` is not the class entered lazily as ``name`` ('' if it is, or if
         ``name`` was not entered lazily)."""

@@ -29,5 +29,4 @@ BUILT_IN: dict[str, tuple[str, type[BaseModel]]] = {
     "line_of_sight": ("line_of_sight:LineOfSightComm", p.LineOfSightParams),
     "path_loss": ("path_loss:PathLossComm", p.PathLossParams),
 }
-for _name, (_where, _params) in BUILT_IN.items():
-    COMM_MODELS.lazy(_name, f"mresim_phys.comms.{_where}", _params)
+COMM_MODELS.enter("mresim_phys.comms.", BUILT_IN)

@@ -27,5 +27,4 @@ BUILT_IN: dict[str, tuple[str, type[BaseModel]]] = {
     "jps": ("jps:JumpPointSearch", p.PlannerParams),
     "topological": ("topological:TopologicalPlanner", p.TopologicalParams),
 }
-for _name, (_where, _params) in BUILT_IN.items():
-    PLANNERS.lazy(_name, f"mresim_phys.planning.{_where}", _params)
+PLANNERS.enter("mresim_phys.planning.", BUILT_IN)

@@ -35,5 +35,4 @@ BUILT_IN: dict[str, tuple[str, type[BaseModel]]] = {
     "role_switch": ("role_switch:RoleSwitch", p.RoleSwitchParams),
     "sector_rendezvous": ("sector:SectorRendezvous", p.SectorParams),
 }
-for _name, (_where, _params) in BUILT_IN.items():
-    STRATEGIES.lazy(_name, f"mresim_phys.strategies.{_where}", _params)
+STRATEGIES.enter("mresim_phys.strategies.", BUILT_IN)

@@ -32,5 +32,4 @@ BUILT_IN: dict[str, tuple[str, type[BaseModel]]] = {
     "close": ("Close", p.CloseParams),
     "open": ("Open", p.OpenParams),
 }
-for _name, (_class, _params) in BUILT_IN.items():
-    EVENTS.lazy(_name, f"mresim_phys.world.events:{_class}", _params)
+EVENTS.enter("mresim_phys.world.events:", BUILT_IN)
