@@ -4,8 +4,9 @@ Prints medians (``time.perf_counter``, wall clock, ms) for the link computation 
 every comm model with 8, 16 and 32 agents (plus the base station) at random free
 positions of ``maps/office.png`` (800x600); each repeat moves every agent by up
 to 3 cells, as a step does. It also times one agent's communication region (129
-rays) per model, and the whole communication phase (links + delta exchange + counts)
-of an 8-robot ``mresim bench``-style run.
+rays) per model, the whole communication phase (links + delta exchange + counts)
+of an 8-robot ``mresim bench``-style run with 'grow' and with 'latest' beliefs, and
+the merge of one received transmission into a map (:meth:`Ledger.merge`) for both.
 
 Run from the repository root: ``python benchmarks/bench_comms.py``.
 """
@@ -20,6 +21,8 @@ from pathlib import Path
 import numpy as np
 
 from mresim_phys.comms import COMM_MODELS, Radios
+from mresim_phys.comms.deltas import Cells
+from mresim_phys.comms.ledger import Ledger
 from mresim_phys.output.bench import team_scenario
 from mresim_phys.scenario.load import validate_scenario
 from mresim_phys.scenario.readers import load_image_map
@@ -34,6 +37,8 @@ MODELS = {
     "path_loss": {},
     "path_loss thickness": {"walls": "thickness"},
 }
+PHASES = (("disk", "grow"), ("path_loss", "grow"), ("disk", "latest"))  # model, beliefs
+MERGE_SHAPE, MERGE_BOX = (600, 800), 120  # the office map; the side of a transmission's box
 
 
 def median_ms(run: Callable[[], object], repeats: int = REPEATS) -> tuple[float, float]:
@@ -98,9 +103,12 @@ def bench_regions(world: World, rng: np.random.Generator) -> None:
 
 def bench_phase() -> None:
     """The communication phase of an 8-robot office run (after 60 warm-up steps)."""
-    for model in ("disk", "path_loss"):
+    for model, belief in PHASES:
         data = team_scenario(8, ROOT / "maps" / "office.png", 200)
-        sim = Simulation(validate_scenario({**data, "communication": model}))
+        simulation = {**data["simulation"], "belief": belief}
+        sim = Simulation(
+            validate_scenario({**data, "communication": model, "simulation": simulation})
+        )
         for _ in range(60):
             sim.step()
         times = []
@@ -109,9 +117,41 @@ def bench_phase() -> None:
             sim.step()
             times.append((sim.phase_times["communication"] - before) * 1e3)
         print(
-            f"phase {model:10s} 8 robots: communication median {statistics.median(times):.3f} ms"
-            f" p90 {np.percentile(times, 90):.3f} ms (links + delta exchange + counts)"
+            f"phase {model:10s} {belief:6s} 8 robots: communication median"
+            f" {statistics.median(times):.3f} ms p90 {np.percentile(times, 90):.3f} ms"
+            " (links + delta exchange + counts)"
         )
+
+
+def transmission(rng: np.random.Generator) -> tuple[Cells, np.ndarray]:
+    """Half the cells of a box, in raster order, as one transmission carries them (their
+    codes and observation steps), and the receiver's codes of the map."""
+    rows, cols = MERGE_SHAPE
+    box = np.add.outer(np.arange(200, 200 + MERGE_BOX) * cols, np.arange(300, 300 + MERGE_BOX))
+    flat = np.sort(rng.choice(box.ravel(), box.size // 2, replace=False))
+    states = np.array([0, 1, 2, 5, 6], np.uint8)  # unknown, free, obstacle; with safe space
+    theirs, seen = rng.choice(states, flat.size), rng.integers(0, 60, flat.size, np.int32)
+    return Cells(flat, theirs, seen), rng.choice(states, (rows, cols))
+
+
+def bench_merge(rng: np.random.Generator) -> None:
+    """Median time of :meth:`Ledger.merge` of one transmission (a fresh receiver each time)."""
+    cells, codes = transmission(rng)
+    observed = rng.integers(0, 60, MERGE_SHAPE).astype(np.int32)
+    for belief in ("grow", "latest"):
+        latest = belief == "latest"
+        message = cells if latest else cells._replace(seen=None)
+        times = []
+        for _ in range(REPEATS + 1):  # the first one compiles
+            ledger = Ledger(MERGE_SHAPE, 2, latest=latest)
+            ledger.copies[1][:] = codes
+            grids = (codes & 3, (codes & 4) != 0)
+            steps = observed.copy() if latest else None
+            started = time.perf_counter()
+            ledger.merge(1, message, grids, 60, 0, steps)
+            times.append((time.perf_counter() - started) * 1e3)
+        median, p90 = statistics.median(times[1:]), float(np.percentile(times[1:], 90))
+        print(f"merge {belief:6s} {cells.flat.size} cells: median {median:7.4f} ms  p90 {p90:7.4f}")
 
 
 def main() -> None:
@@ -120,6 +160,7 @@ def main() -> None:
     for agents in (8, 16, 32):
         bench_links(world, agents, rng)
     bench_regions(world, rng)
+    bench_merge(rng)
     bench_phase()
 
 

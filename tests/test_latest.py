@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from mresim_phys.comms.deltas import merge_latest, tile_shape
+from mresim_phys.comms.deltas import merge_cells, tile_shape
 from mresim_phys.knowledge.latest import LatestCoverage
 from mresim_phys.knowledge.mapping import integrate_scan
 from mresim_phys.motion import path_blocked
@@ -73,8 +73,8 @@ def test_exchange_keeps_the_newer_observation(
     tiles = np.full(tile_shape((1, 4)), -1, np.int32)
     origins = np.full((1, 4), -1, np.int16)
     index = np.array([2], np.int64)
-    merge_latest(index, np.array([theirs[0]], np.uint8), np.array([theirs[1]], np.int32),
-                 belief, safe, observed, codes, stamps, tiles, origins, 11, 1)  # fmt: skip
+    merge_cells(index, np.array([theirs[0]], np.uint8), np.array([theirs[1]], np.int32),
+                belief, safe, observed, codes, stamps, tiles, origins, 11, 1)  # fmt: skip
     assert (int(belief[0, 2]), int(observed[0, 2])) == expected
 
 

@@ -4,10 +4,11 @@ Each cell of an agent has a *code* (occupancy value, plus 4 where it is safe
 space), the *tick* it last changed and the agent its value came from. A
 transmission selects, inside a few boxes, the sender's cells newer than the
 pair's last sync and not received from the receiver; the receiver merges them
-(``max`` of occupancy, OR of safe space) and stamps what changed, naming the sender
-as the value's origin only when the merged value is exactly the sender's (a value
-mixed from both sides, say the receiver's obstacle with the sender's safe flag, must
-still travel back to the sender). ``numba``
+(``max`` of occupancy, OR of safe space; with 'latest' beliefs the occupancy of the newer
+observation) and stamps what changed, naming the sender as the value's origin only when
+the merged value is exactly the sender's (a value mixed from both sides, say the
+receiver's obstacle with the sender's safe flag, must still travel back to the sender).
+One merge kernel serves both kinds of belief, its per-cell rule inlined. ``numba``
 kernels visit each box cell once with no temporary grids: the numpy version of
 the same steps cost 8-10 ms per 8-robot step on the office map, mostly in
 temporaries over the union of every robot's scan windows. Each agent also keeps the
@@ -118,37 +119,6 @@ def store(
 
 
 @njit(cache=True, nogil=True)
-def merge_cells(
-    index: IntArray,
-    values: np.ndarray,
-    belief: BeliefGrid,
-    safe: BoolGrid,
-    codes: np.ndarray,
-    stamps: np.ndarray,
-    tiles: np.ndarray,
-    origins: np.ndarray,
-    tick: int,
-    sender: int,
-) -> tuple[int, int, int, int, int]:
-    """Merge received cells; return (cells changed, r0, r1, c0, c1 of the changed ones)."""
-    cols = belief.shape[1]
-    changed, r0, r1, c0, c1 = 0, belief.shape[0], 0, cols, 0
-    for k in range(len(index)):
-        r, c = index[k] // cols, index[k] % cols
-        old = codes[r, c]
-        new = max(old & 3, values[k] & 3) | ((old | values[k]) & 4)
-        if new == old:
-            continue
-        # a value mixed from both sides (e.g. the receiver's obstacle with the sender's
-        # safe flag) is news to the sender too: it counts as the receiver's own
-        origin = sender if new == values[k] else -1
-        store(belief, safe, codes, stamps, tiles, origins, r, c, new, origin, tick)
-        changed += 1
-        r0, r1, c0, c1 = min(r0, r), max(r1, r + 1), min(c0, c), max(c1, c + 1)
-    return changed, r0, r1, c0, c1
-
-
-@njit(cache=True, nogil=True)
 def stamp_changes(
     box: IntArray,
     belief: BeliefGrid,
@@ -174,14 +144,34 @@ def stamp_changes(
     return changed, r0, r1, c0, c1
 
 
+@njit(cache=True, nogil=True, inline="always")
+def grown_code(old: int, theirs: int) -> int:
+    """The merged code with 'grow' beliefs: the larger occupancy, safe space OR-ed."""
+    return max(old & 3, theirs & 3) | ((old | theirs) & 4)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def latest_code(old: int, theirs: int, seen: int, observed: np.ndarray, r: int, c: int) -> int:
+    """The merged code with 'latest' beliefs: the side observed earlier keeps only its safe
+    flag, so the newer observation's occupancy wins (the larger one, the obstacle, at the
+    same step). A newer ``seen`` becomes the cell's observation step, even for an equal value."""
+    own = observed[r, c]
+    if seen > own:
+        observed[r, c] = seen
+        return grown_code(old & 4, theirs)
+    if seen < own:
+        return grown_code(old, theirs & 4)
+    return grown_code(old, theirs)
+
+
 @njit(cache=True, nogil=True)
-def merge_latest(
+def merge_cells(
     index: IntArray,
     values: np.ndarray,
-    seen: np.ndarray,
+    seen: np.ndarray | None,
     belief: BeliefGrid,
     safe: BoolGrid,
-    observed: np.ndarray,
+    observed: np.ndarray | None,
     codes: np.ndarray,
     stamps: np.ndarray,
     tiles: np.ndarray,
@@ -189,26 +179,27 @@ def merge_latest(
     tick: int,
     sender: int,
 ) -> tuple[int, int, int, int, int]:
-    """Merge received cells keeping each cell's newer observation: the sender's value
-    when it was observed later, the larger one (the obstacle) when at the same step, the
-    receiver's own when earlier; safe space is OR-ed either way. Return (cells changed,
-    r0, r1, c0, c1 of the changed ones); a newer observation of an equal value only
-    moves the cell's observation step."""
+    """Merge received cells (flat ``index``, codes ``values``); return (cells changed, r0, r1,
+    c0, c1 of the changed ones).
+
+    With 'latest' beliefs ``seen`` holds each value's observation step and ``observed`` the
+    receiver's, and the rule is :func:`latest_code`; when either is None it is
+    :func:`grown_code`. The rule is chosen at compile time (numba prunes branches on an
+    argument ``is None``), so each kind of belief gets its own machine code of the one loop.
+    """
     cols = belief.shape[1]
     changed, r0, r1, c0, c1 = 0, belief.shape[0], 0, cols, 0
     for k in range(len(index)):
         r, c = index[k] // cols, index[k] % cols
-        old, theirs, own = codes[r, c], values[k], observed[r, c]
-        if seen[k] > own:
-            value = theirs & 3
-            observed[r, c] = seen[k]
-        elif seen[k] == own:
-            value = max(old & 3, theirs & 3)
+        old, theirs = codes[r, c], values[k]
+        if seen is None or observed is None:
+            new = grown_code(old, theirs)
         else:
-            value = old & 3
-        new = value | ((old | theirs) & 4)
+            new = latest_code(old, theirs, seen[k], observed, r, c)
         if new == old:
             continue
+        # a value mixed from both sides (e.g. the receiver's obstacle with the sender's
+        # safe flag) is news to the sender too: it counts as the receiver's own
         origin = sender if new == theirs else -1
         store(belief, safe, codes, stamps, tiles, origins, r, c, new, origin, tick)
         changed += 1

@@ -10,7 +10,7 @@ cells), which is why merging deltas ends in exactly the maps a full exchange
 gives (tests/test_comms.py checks it step by step). With 'latest' beliefs a cell may
 change back (a scan overwrites what it sees); every change of a value is stamped like
 any other, and the value travels with the step of its observation, so a receiver keeps
-whichever observation is newer (:func:`~mresim_phys.comms.deltas.merge_latest`).
+whichever observation is newer (:func:`~mresim_phys.comms.deltas.latest_code`).
 
 Changes are found without full-grid passes: the simulation reports the window
 of every scan (:meth:`Ledger.note`), and each agent's windows are compared with
@@ -23,7 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from mresim_phys.comms.deltas import Cells, merge_cells, merge_latest, stamp_changes, tile_shape
+from mresim_phys.comms.deltas import Cells, merge_cells, stamp_changes, tile_shape
 from mresim_phys.types import BeliefGrid, BoolGrid
 
 Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)
@@ -109,12 +109,9 @@ class Ledger:
         ``index``'s grids (and its ``observed`` steps, with 'latest' beliefs)."""
         tick = received_tick(step)
         grid = (self.copies[index], self.stamps[index], self.tiles[index], self.origins[index])
-        if cells.seen is not None and observed is not None:
-            changed, *tight = merge_latest(
-                cells.flat, cells.codes, cells.seen, *grids, observed, *grid, tick, sender
-            )
-        else:
-            changed, *tight = merge_cells(cells.flat, cells.codes, *grids, *grid, tick, sender)
+        changed, *tight = merge_cells(
+            cells.flat, cells.codes, cells.seen, *grids, observed, *grid, tick, sender
+        )
         if changed:
             self.add_box(index, tick, (tight[0], tight[1], tight[2], tight[3]))
         return changed
