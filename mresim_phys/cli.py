@@ -12,7 +12,6 @@ its summary (``output.session``), then exits with 130 or 143.
 from __future__ import annotations
 
 import argparse
-import importlib
 import sys
 from collections.abc import Callable, Sequence
 from importlib.metadata import PackageNotFoundError, version
@@ -21,6 +20,7 @@ from typing import Literal
 
 from mresim_phys.arg_types import comma_separated, non_negative_int, positive_float, positive_int
 from mresim_phys.errors import MresimError
+from mresim_phys.plugin import named_object
 from mresim_phys.render.layers import GLOBAL_LAYERS, ROBOT_LAYERS
 from mresim_phys.strategies.catalog import STRATEGIES
 from mresim_phys.sweeps.cli import SWEEP_COMMANDS, add_sweep_parsers
@@ -233,11 +233,10 @@ COMMANDS: dict[str, str | Callable[[argparse.Namespace], int]] = {
 def handler_of(command: str) -> Callable[[argparse.Namespace], int]:
     """The function doing ``command``'s work (its module imported now)."""
     handler = COMMANDS[command]
-    if isinstance(handler, str):
-        module, _, name = handler.partition(":")
-        found: Callable[[argparse.Namespace], int] = getattr(importlib.import_module(module), name)
-        return found
-    return handler
+    found: Callable[[argparse.Namespace], int] = (
+        named_object(handler) if isinstance(handler, str) else handler
+    )
+    return found
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -22,9 +22,10 @@ packages), which is the order of their keys in log lines, labels and hover rows.
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Mapping
 from typing import Any, ClassVar, Generic, Protocol, TypeVar
+
+from mresim_phys.plugin import named_object
 
 S = TypeVar("S")  # a feature's per-robot state
 V = TypeVar("V")  # the value a strategy sees and a snapshot records
@@ -92,6 +93,7 @@ class FeatureList:
         self._built_in = dict(built_in)  # key -> "module:attribute" of the feature instance
         self._registered: dict[str, RobotFeature[Any, Any]] = {}
         self._all: tuple[RobotFeature[Any, Any], ...] | None = None
+        self._recorded: tuple[RobotFeature[Any, Any], ...] = ()
 
     def register(self, feature: RobotFeature[Any, Any]) -> RobotFeature[Any, Any]:
         """Add a feature after the built-ins; a key already taken is an error."""
@@ -104,12 +106,15 @@ class FeatureList:
     def all(self) -> tuple[RobotFeature[Any, Any], ...]:
         """Every feature, built-ins first."""
         if self._all is None:
-            self._all = (*map(_load, self._built_in.values()), *self._registered.values())
+            self._all = (*map(named_object, self._built_in.values()), *self._registered.values())
+            self._recorded = tuple(f for f in self._all if f.recorded)
         return self._all
 
     def recorded(self) -> tuple[RobotFeature[Any, Any], ...]:
-        """The features snapshots, records, logs, labels and hover rows carry."""
-        return tuple(f for f in self.all() if f.recorded)
+        """The features snapshots, records, logs, labels and hover rows carry (every step,
+        for every robot: found once, with :meth:`all`)."""
+        self.all()
+        return self._recorded
 
     def values(self, states: Mapping[str, Any]) -> dict[str, Any]:
         """Each feature's value of a robot's ``states`` (``Robot.features``), in order: what
@@ -120,13 +125,6 @@ class FeatureList:
         """The recorded features' values of a robot's ``states``: what its snapshot and
         its metrics record hold."""
         return {f.key: f.value(states[f.key]) for f in self.recorded() if f.key in states}
-
-
-def _load(reference: str) -> RobotFeature[Any, Any]:
-    """The feature instance a ``module:attribute`` reference names."""
-    module, _, name = reference.partition(":")
-    feature: RobotFeature[Any, Any] = getattr(importlib.import_module(module), name)
-    return feature
 
 
 FEATURES = FeatureList(

@@ -15,11 +15,19 @@ from __future__ import annotations
 import importlib
 import inspect
 from dataclasses import dataclass
-from typing import ClassVar
+from typing import Any, ClassVar
 
 from pydantic import BaseModel
 
 from mresim_phys.strict import Strict
+
+
+def named_object(reference: str) -> Any:
+    """The object a ``package.module:attribute`` reference names, its module imported now
+    (the lazy entries of registries, features and commands; a user's reference goes through
+    :meth:`~mresim_phys.registry.Registry.get`, which explains a bad one)."""
+    module, _, attribute = reference.partition(":")
+    return getattr(importlib.import_module(module), attribute)
 
 
 class PluginParams(Strict):
@@ -52,8 +60,7 @@ class Family:
         """The methods the protocol asks for (its properties are instance state)."""
         protocol = self.protocol
         if isinstance(protocol, str):
-            module, _, name = protocol.partition(":")
-            protocol = getattr(importlib.import_module(module), name)
+            protocol = named_object(protocol)
         members = vars(protocol).items()
         return [n for n, v in members if inspect.isfunction(v) and not n.startswith("_")]
 

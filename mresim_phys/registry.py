@@ -30,7 +30,7 @@ from typing import Any, Generic, TypeVar
 from pydantic import BaseModel
 
 from mresim_phys.errors import UnknownPluginError
-from mresim_phys.plugin import Family
+from mresim_phys.plugin import Family, named_object
 
 T = TypeVar("T")
 REGISTRIES: weakref.WeakSet[Registry[Any]] = weakref.WeakSet()  # to name a class's family
@@ -156,8 +156,7 @@ class Registry(Generic[T]):
     def _load(self, name: str) -> None:
         """Import the implementation of lazily entered ``name`` (which registers it)."""
         reference = self._lazy[name][0]
-        module_name, _, attr = reference.partition(":")
-        cls = getattr(importlib.import_module(module_name), attr)
+        cls = named_object(reference)  # first: importing it registers it
         if self._classes.get(name) is not cls:
             raise RuntimeError(f"{reference} did not register itself as {self.kind} {name!r}")
 

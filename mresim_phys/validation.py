@@ -11,12 +11,12 @@ it can see (``commands.explorable_command``).
 from __future__ import annotations
 
 import argparse
-import importlib
 from collections.abc import Callable
 
 import numpy as np
 
 from mresim_phys.errors import ScenarioError
+from mresim_phys.plugin import named_object
 from mresim_phys.scenario.load import load_scenario
 from mresim_phys.scenario.on_map import check_on_map
 from mresim_phys.scenario.schema import Scenario
@@ -29,7 +29,8 @@ def validate_command(args: argparse.Namespace) -> int:
     """Check the scenario at ``args.scenario`` and print one ``ok`` line (or, with
     ``--explorable``, the explorable report)."""
     if args.explorable:
-        return explorable_command()(args)
+        explorable: Callable[[argparse.Namespace], int] = named_object(EXPLORABLE)
+        return explorable(args)
     scenario = load_scenario(args.scenario)
     try:
         truth = check_on_map(scenario)
@@ -60,10 +61,3 @@ def left_to_the_world(scenario: Scenario) -> list[str]:
 def ok_line(scenario: Scenario, label: str) -> str:
     """``label: ok (N robots, map PATH)``."""
     return f"{label}: ok ({len(scenario.robots)} robots, map {scenario.map.source[1]})"
-
-
-def explorable_command() -> Callable[[argparse.Namespace], int]:
-    """``validate --explorable``'s work, imported now (it brings the simulator)."""
-    module, _, name = EXPLORABLE.partition(":")
-    found: Callable[[argparse.Namespace], int] = getattr(importlib.import_module(module), name)
-    return found

@@ -101,6 +101,24 @@ def test_a_lazy_builtin_is_the_class_it_names_with_its_params(registry: Registry
         assert cls.Params is entered
 
 
+@pytest.mark.parametrize(
+    ("catalog", "registry", "name"),
+    [
+        ("strategies.catalog", "STRATEGIES", "frontier"),
+        ("planning.catalog", "PLANNERS", "jps"),
+        ("comms.catalog", "COMM_MODELS", "path_loss"),
+        ("world.event_catalog", "EVENTS", "collapse"),
+    ],
+)
+def test_a_lazy_builtin_loads_in_a_fresh_interpreter(
+    catalog: str, registry: str, name: str
+) -> None:
+    found = imported_after(
+        f"from mresim_phys.{catalog} import {registry}\nresult = {registry}.get({name!r}).name"
+    )
+    assert found["result"] == name
+
+
 def test_a_class_unlike_its_lazy_entry_is_refused() -> None:
     class Probe:
         """A protocol of one method."""
