@@ -412,5 +412,6 @@ class Simulation:
         self.curves.update(record)
         self.comm_totals.update(record)
         self.stall.update(record)
+        self.health.note_progress(self.t, record.explored, record.known_at_base)
         self.phase_times["metrics"] += perf_counter() - started
         return record

@@ -16,7 +16,14 @@ from mresim_phys import Simulation
 from mresim_phys.cli import main
 from mresim_phys.knowledge import health
 from mresim_phys.knowledge.frontier_reach import frontier_check
-from mresim_phys.knowledge.health import CHECK_EVERY, WARN_AFTER, HealthWatch, RobotStep
+from mresim_phys.knowledge.health import (
+    CHECK_EVERY,
+    FRUITLESS_AFTER,
+    WARN_AFTER,
+    WARN_FRUITLESS,
+    HealthWatch,
+    RobotStep,
+)
 from mresim_phys.output.health import replayed_health, run_health
 from mresim_phys.output.runlog import RunLog
 from mresim_phys.strategies import Decision
@@ -376,3 +383,61 @@ def test_relays_that_wait_for_their_partners_raise_no_warning() -> None:
         assert counts["idle_with_frontier"] == counts["idle_steps"] == 0
         assert counts["waiting_steps"] >= 200
         assert not any(w.startswith(f"robot {relay} ") for w in record["warnings"])
+
+
+# --- fruitless work: working while the team makes no progress ----------------------------
+
+
+def test_a_robot_working_while_the_team_gains_nothing_is_fruitless_and_warned_about() -> None:
+    """Moving every step, the team's fractions flat: from FRUITLESS_AFTER steps on each
+    step is fruitless; a waiting or done robot never is; progress stops the count."""
+    watch = HealthWatch(["A", "B", "C"])
+    last = FRUITLESS_AFTER + WARN_FRUITLESS + 9
+    for n in range(last + 1):
+        robots = [
+            step(distance=float(n)),  # works every step
+            RobotStep(**{**step(goal=(10.5, 10.5)).__dict__, "name": "B"}),  # waits
+            RobotStep(**{**step("done", distance=float(n)).__dict__, "name": "C"}),  # going home
+        ]
+        watch.update(n, robots)
+        watch.note_progress(n, 0.5 if n >= 5 else 0.1, 0.2)  # progress up to step 5
+    report = watch.report(robots)
+    a = report.summary()["robots"]["A"]
+    assert a["first_fruitless"] == 5 + FRUITLESS_AFTER
+    assert a["fruitless_steps"] == last - (5 + FRUITLESS_AFTER) + 1
+    assert [r["fruitless_steps"] for n, r in report.summary()["robots"].items() if n != "A"] == [
+        0,
+        0,
+    ]
+    assert report.totals()["robots_fruitless"] == 1
+    assert report.totals()["fruitless_robot_steps"] == a["fruitless_steps"]
+    warned = [w for w in report.warnings if w.startswith("robot A worked")]
+    assert len(warned) == 1 and f"from step {5 + FRUITLESS_AFTER}" in warned[0]
+    watch.note_progress(last + 1, 0.6, 0.2)  # the team gains again: no more counted
+    watch.update(last + 2, [step(distance=float(last + 2))])
+    watch.note_progress(last + 2, 0.6, 0.2)
+    assert watch.robots["A"].fruitless == a["fruitless_steps"]
+
+
+def test_a_shuttling_robot_is_flagged_live_and_in_the_replay(
+    scenario_file: ScenarioFile, tmp_path: Path
+) -> None:
+    """A robot driving back and forth for ever never idles: only the fruitless count and
+    its warning show it, in summary.json and recomputed from the run log alike."""
+    steps = FRUITLESS_AFTER + WARN_FRUITLESS + 40
+    shuttle = {"name": "health_plugins:Shuttles", "params": {"replan_interval": 4}}
+    path = scenario_file(
+        robots=[{**ONE_ROBOT[0], "strategy": shuttle}],
+        stop={"all_done": False, "stalled_for": None},
+        steps=steps,
+    )
+    out = tmp_path / "run"
+    assert main(["run", str(path), "--out", str(out), "--quiet"]) == 0
+    record = json.loads((out / "summary.json").read_text())["health"]
+    a = record["robots"]["A"]
+    assert a["idle_steps"] == 0 and a["fruitless_steps"] >= WARN_FRUITLESS
+    assert record["robots_fruitless"] == 1
+    assert any(w.startswith("robot A worked") for w in record["warnings"])
+    assert replayed_health(RunLog.open(out / "log")) == record
+    last = list(RunLog.open(out / "log").snapshots())[-1]
+    assert last.robots[0].activity == "fruitless"  # drawn and labelled so on frames

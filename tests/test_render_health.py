@@ -75,6 +75,12 @@ def test_a_stuck_robot_is_ringed_in_red() -> None:
     assert ring_hits(frame, STYLE.stuck, 10) > 24  # most of the circle (labels cover a bit)
 
 
+def test_a_fruitless_robot_is_filled_and_ringed_in_grey_not_red() -> None:
+    frame = frame_of(activity="fruitless")
+    assert pixel(frame, CENTRE) == STYLE.robot_colour(0)
+    assert ring_hits(frame, STYLE.idle, 10) > 24 and ring_hits(frame, STYLE.stuck, 10) == 0
+
+
 def test_a_done_robot_is_hollow_even_when_idle() -> None:
     frame = frame_of("done", "idle")
     assert pixel(frame, CENTRE) == STYLE.unexplored  # the map shows through
@@ -91,6 +97,7 @@ def test_a_failed_robot_keeps_its_grey_and_red_x_whatever_its_activity() -> None
         ("active", "working", "A"),
         ("active", "idle", "A idle"),
         ("error", "stuck", "A stuck"),
+        ("active", "fruitless", "A fruitless"),
         ("done", "idle", "A done"),
         ("failed", "", "A"),
         ("active", "", "A"),

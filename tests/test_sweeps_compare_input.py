@@ -24,7 +24,8 @@ RUNS_COLUMNS = [
     "comm_bytes", "control_bytes", "mean_links", "latency_max", "latency_mean",
     "auc_explored", "auc_known_at_base", "alive_fraction", "base_deficit_at_end",
     "base_deficit_fraction_at_end", "failed_robots", "robots_idle_with_frontier",
-    "idle_robot_steps", "stuck_robot_steps", "waiting_robot_steps", "explorable_cells",
+    "idle_robot_steps", "stuck_robot_steps", "waiting_robot_steps", "robots_fruitless",
+    "fruitless_robot_steps", "explorable_cells",
     "connected_cells",
     "final_explored_connected", "final_known_at_base_connected",
     *(f"steps_to_{what}_connected_{level}" for what in ("explored", "known_at_base")
@@ -163,6 +164,8 @@ def test_damaged_tables(sweep: Path, tmp_path: Path, capsys: pytest.CaptureFixtu
         "idle_robot_steps",
         "stuck_robot_steps",
         "waiting_robot_steps",
+        "robots_fruitless",
+        "fruitless_robot_steps",
     ]
     runs.drop(columns=metrics).to_parquet(folder / "runs.parquet")
     assert_clear(*compare(folder, capsys), "runs.parquet", "none of the default metrics")

@@ -16,12 +16,14 @@ COLUMNS = [
     "idle_robot_steps",
     "stuck_robot_steps",
     "waiting_robot_steps",
+    "robots_fruitless",
+    "fruitless_robot_steps",
 ]
 
 
 def test_the_health_totals_are_flat_columns_and_the_rest_of_the_record_is_not() -> None:
     health = {"robots_idle_with_frontier": 1, "idle_robot_steps": 40, "stuck_robot_steps": 2}
-    health |= {"waiting_robot_steps": 7}
+    health |= {"waiting_robot_steps": 7, "robots_fruitless": 1, "fruitless_robot_steps": 120}
     summary = {"steps": 50, "health": {**health, "robots": {"A": {}}, "warnings": ["x"]}}
     assert flatten_summary(summary) == {"steps": 50, **health}
 

@@ -20,9 +20,19 @@ a snapshot holds of it: state, odometer, path, drive, pose, map) and keeps, per 
   :data:`CHECK_EVERY` steps of it (a robot that works is never checked): an idle step whose
   latest check found reachable frontier cells counts in ``idle_with_frontier``.
 
+* ``fruitless_steps``: steps it was ``working`` or ``stuck`` while ``active`` although the
+  team had made no progress (neither explored nor known at base gained
+  :data:`PROGRESS_GAIN` since :data:`FRUITLESS_AFTER` steps before: the stall rule's
+  measure, ``tracking.StallWatch``), fed by :meth:`HealthWatch.note_progress` once the
+  step's metrics are known; a working robot's activity then reads ``fruitless``. This is
+  a robot that never idles and yet does nothing: it chases frontier cells its scans do
+  not resolve or its body cannot reach, or shuttles with a teammate (a run that ends
+  ``stalled`` with every robot working). A robot going home ``done`` is not counted.
+
 :meth:`HealthWatch.report` adds a last check of every robot's map at the end and a warning
 for every robot that idled at least :data:`WARN_AFTER` steps with reachable frontier cells
-in its map. Everything here is read from what a snapshot (and so the run log) holds, so a
+in its map, and one for every robot with at least :data:`WARN_FRUITLESS` fruitless steps.
+Everything here is read from what a snapshot (and so the run log) holds, so a
 replay rebuilds the same record (``output.runlog.Replay``); nothing here changes the run.
 """
 
@@ -38,13 +48,19 @@ from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray
 MOVE_EPS = 0.05  # cells: a robot that moved less in a step did not move
 CHECK_EVERY = 20  # steps between frontier checks of a robot that stays idle or done
 WARN_AFTER = 20  # idle steps with reachable frontier cells that make a warning (in a run)
+PROGRESS_GAIN = 0.001  # the smallest gain of explored or known at base that is progress
+FRUITLESS_AFTER = 100  # steps without progress after which a working robot's steps are fruitless
+WARN_FRUITLESS = 100  # fruitless steps that make a warning (in a run)
 NOT_LOGGED = "not logged"  # a change without a reason (a log written before reasons were)
 WORKING, IDLE, STUCK, WAITING = "working", "idle", "stuck", "waiting"
+FRUITLESS = "fruitless"  # a working step counted fruitless: the activity pictures show
 TOTALS = (  # sweep columns
     "robots_idle_with_frontier",
     "idle_robot_steps",
     "stuck_robot_steps",
     "waiting_robot_steps",
+    "robots_fruitless",
+    "fruitless_robot_steps",
 )
 
 
@@ -167,6 +183,8 @@ class RobotHealth:
     waiting: int = 0
     idle_with_frontier: int = 0
     first_idle_with_frontier: int | None = None
+    fruitless: int = 0  # working or stuck while active, the team without progress
+    first_fruitless: int | None = None
     longest_idle: int = 0
     streak: int = 0  # idle steps in a row up to now
     done_at: list[int] = field(default_factory=list)
@@ -187,6 +205,8 @@ class RobotHealth:
             "longest_idle": self.longest_idle,
             "idle_with_frontier": self.idle_with_frontier,
             "first_idle_with_frontier": self.first_idle_with_frontier,
+            "fruitless_steps": self.fruitless,
+            "first_fruitless": self.first_fruitless,
             "done_at": list(self.done_at),
         }
 
@@ -199,6 +219,7 @@ class HealthWatch:
         self.changes: list[StateChange] = []
         self.check_every = check_every
         self.step: int | None = None  # the latest step seen
+        self.progress = Progress()
 
     def state_of(self, name: str) -> str:
         """The state ``name`` reported at the latest step (``active`` before any)."""
@@ -231,6 +252,19 @@ class HealthWatch:
             health.activity = activity if assessed else ""
             health.distance = robot.distance
             self.count(step, robot, health)
+
+    def note_progress(self, step: int, explored: float, known_at_base: float) -> None:
+        """The team's fractions at the end of ``step`` (after :meth:`update` of that
+        step): count the fruitless steps of the robots that worked (module docstring)."""
+        self.progress.update(step, explored, known_at_base)
+        if step - self.progress.step < FRUITLESS_AFTER:
+            return
+        for health in self.robots.values():
+            if health.state == "active" and health.activity in (WORKING, STUCK):
+                health.activity = FRUITLESS if health.activity == WORKING else STUCK
+                health.fruitless += 1
+                if health.first_fruitless is None:
+                    health.first_fruitless = step
 
     def note_state(self, step: int, robot: RobotStep, health: RobotHealth) -> None:
         """Record a change of the robot's reported state."""
@@ -274,6 +308,22 @@ class HealthWatch:
         return HealthReport(robots_now, ends, list(self.changes))
 
 
+@dataclass
+class Progress:
+    """When the team last made progress: a gain of :data:`PROGRESS_GAIN` in explored or
+    known at base over their values at the progress before (as ``tracking.StallWatch``)."""
+
+    explored: float = 0.0
+    known_at_base: float = 0.0
+    step: int = 0
+
+    def update(self, step: int, explored: float, known_at_base: float) -> None:
+        """Note the fractions at the end of ``step``."""
+        gained = max(explored - self.explored, known_at_base - self.known_at_base)
+        if gained >= PROGRESS_GAIN:
+            self.explored, self.known_at_base, self.step = explored, known_at_base, step
+
+
 @dataclass(frozen=True)
 class HealthReport:
     """The run-health record of a whole run: summary.json's ``health``."""
@@ -284,29 +334,45 @@ class HealthReport:
 
     @property
     def warnings(self) -> list[str]:
-        """One line per robot that idled with reachable frontier cells in its map."""
+        """One line per robot that idled with reachable frontier cells in its map, and
+        one per robot that worked fruitlessly (module docstring)."""
         out = []
         for name, health in self.robots.items():
-            if health.idle_with_frontier < WARN_AFTER:
-                continue
-            end = self.ends[name]
-            rest = end.frontier - end.reachable
-            out.append(
-                f"robot {name} idled {health.idle_with_frontier} steps (from step"
-                f" {health.first_idle_with_frontier}) while its map held frontier cells it"
-                f" could reach; at the end its map holds {end.frontier} frontier cells,"
-                f" {end.reachable} of them reachable"
-                + (f"; {rest} unreachable: {end.reason}" if rest else "")
-            )
+            if health.idle_with_frontier >= WARN_AFTER:
+                out.append(
+                    f"robot {name} idled {health.idle_with_frontier} steps (from step"
+                    f" {health.first_idle_with_frontier}) while its map held frontier cells"
+                    f" it could reach; {self.at_end(name)}"
+                )
+            if health.fruitless >= WARN_FRUITLESS:
+                out.append(
+                    f"robot {name} worked {health.fruitless} steps (from step"
+                    f" {health.first_fruitless}) while the team had gained less than"
+                    f" {PROGRESS_GAIN:.1%} explored or known at base in {FRUITLESS_AFTER}"
+                    f" steps (chasing frontier cells it cannot resolve or reach, or"
+                    f" shuttling); {self.at_end(name)}"
+                )
         return out
+
+    def at_end(self, name: str) -> str:
+        """What robot ``name``'s map holds at the end, for a warning."""
+        end = self.ends[name]
+        rest = end.frontier - end.reachable
+        return (
+            f"at the end its map holds {end.frontier} frontier cells, {end.reachable} of"
+            " them reachable" + (f"; {rest} unreachable: {end.reason}" if rest else "")
+        )
 
     def totals(self) -> dict[str, int]:
         """The sweep tables' columns: robots that idled with reachable frontier cells,
-        idle, stuck and waiting robot-steps."""
+        idle, stuck and waiting robot-steps, robots that worked fruitlessly and their
+        fruitless robot-steps."""
         robots = list(self.robots.values())
         warned = sum(h.idle_with_frontier >= WARN_AFTER for h in robots)
         steps = (sum(h.idle for h in robots), sum(h.stuck for h in robots))
-        values = (warned, *steps, sum(h.waiting for h in robots))
+        worked = [h.fruitless for h in robots]
+        fruitless = (sum(n >= WARN_FRUITLESS for n in worked), sum(worked))
+        values = (warned, *steps, sum(h.waiting for h in robots), *fruitless)
         return dict(zip(TOTALS, values, strict=True))
 
     def summary(self) -> dict[str, Any]:

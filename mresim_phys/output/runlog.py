@@ -236,6 +236,7 @@ class Replay:
                 free.append(self.newly_free(i, belief_changed))
         record = self.measure(fields["step"], free, fields["links"], agents, fields["comm"])
         self.health.update(fields["step"], [step_of(a) for a in agents[1:]])
+        self.health.note_progress(fields["step"], record.explored, record.known_at_base)
         agents[1:] = [replace(a, activity=self.health.view(a.name)[0]) for a in agents[1:]]
         snap = Snapshot(
             **fields,

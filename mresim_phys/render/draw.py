@@ -260,7 +260,8 @@ def draw_robot(
     style: Style,
 ) -> None:
     """A triangle: filled (working), hollow (done), grey outlined in its colour (idle), red
-    outline (error), dark grey + red X (failed); a red ring around a stuck robot."""
+    outline (error), dark grey + red X (failed); a red ring around a stuck robot, a grey
+    one around a fruitless one (working while the team gains nothing)."""
     state, activity = robot.state, robot.activity
     if state == "done":
         cv2.polylines(image, [pts], True, colour, 2, AA, SHIFT)
@@ -273,9 +274,10 @@ def draw_robot(
         cv2.polylines(image, [pts], True, outline, width, AA, SHIFT)
     if state == "failed":
         draw_cross(image, at, max(round(size * 0.8), 3), style.error)
-    elif activity == "stuck":
+    elif activity in ("stuck", "fruitless"):
         centre = (int(at[0]), int(at[1]))
-        cv2.circle(image, centre, round((size * 1.5 + 1) * ONE), style.stuck, 2, AA, SHIFT)
+        ring = style.stuck if activity == "stuck" else style.idle
+        cv2.circle(image, centre, round((size * 1.5 + 1) * ONE), ring, 2, AA, SHIFT)
 
 
 def draw_ring(image: np.ndarray, at: np.ndarray, size: float, colour: BGR) -> None:
@@ -287,8 +289,8 @@ def draw_ring(image: np.ndarray, at: np.ndarray, size: float, colour: BGR) -> No
 def robot_label(robot: AgentSnapshot, lost: bool = False) -> str:
     """A robot's name, with its failed parts if any, its features' labels (its battery
     level if it has one: ``features.py``), what
-    it is doing when that is not work (``done``, ``idle``, ``stuck``: ``B [radio] 73%
-    idle``) and, with ``lost``, the teammates it presumes lost (``A lost?B,C``: the
+    it is doing when that is not work (``done``, ``idle``, ``stuck``, ``fruitless``:
+    ``B [radio] 73% idle``) and, with ``lost``, the teammates it presumes lost (``A lost?B,C``: the
     ``presumed_lost`` layer)."""
     text = f"{robot.name} [{','.join(robot.broken)}]" if robot.broken else robot.name
     text += "".join(
@@ -300,11 +302,12 @@ def robot_label(robot: AgentSnapshot, lost: bool = False) -> str:
 
 
 def state_tag(robot: AgentSnapshot) -> str:
-    """``done``, ``idle`` or ``stuck`` (knowledge.health's activity), or ``""`` for a robot
-    at work, a failed one (its grey X says it) and the base."""
+    """``done``, ``idle``, ``stuck`` or ``fruitless`` (knowledge.health's activity), or
+    ``""`` for a robot at work, a failed one (its grey X says it) and the base."""
     if robot.state == "done":
         return "done"
-    return robot.activity if robot.activity in ("idle", "stuck") and robot.state != "failed" else ""
+    shown = robot.activity in ("idle", "stuck", "fruitless")
+    return robot.activity if shown and robot.state != "failed" else ""
 
 
 def draw_label(

@@ -2,7 +2,7 @@
 
 Colour swatches for the map classes shown, the changing world's parts a frame holds
 (:func:`world_legend`: obstacles, doors, rubble, hazard zones) and every robot; then, when
-robots are drawn, the glyphs of a robot that is done, idle or stuck (the run-health
+robots are drawn, the glyphs of a robot that is done, idle, stuck or fruitless (the run-health
 record's activity, ``knowledge/health.py``), as ``render.draw`` draws them on the map.
 
 Typical use: ``legend_band(width, names, layers, style, world_legend(snap, on))``.
@@ -24,7 +24,7 @@ if TYPE_CHECKING:
 
 LEGEND = {"walls": "wall", "unexplored": "unexplored", "team_known": "team_known"}
 LEGEND["known_at_base"] = "known_at_base"  # global layer -> Style colour, in legend order
-STATE_GLYPHS = ("done", "idle", "stuck")  # legend entries of robots not at work
+STATE_GLYPHS = ("done", "idle", "stuck", "fruitless")  # legend entries of robots not at work
 GLYPH_COLOUR: BGR = (90, 90, 90)  # the legend's robot glyphs (a robot's own colour on frames)
 
 
@@ -45,7 +45,7 @@ def legend_band(
 ) -> np.ndarray:
     """A band image with colour swatches for the map classes shown, the changing world's
     ``extras`` (Style colour names) and every robot, then (when robots are drawn) the
-    glyphs of a robot that is done, idle or stuck (:data:`STATE_GLYPHS`)."""
+    glyphs of a robot that is done, idle, stuck or fruitless (:data:`STATE_GLYPHS`)."""
     on = layers.global_layers
     robot_layers = set(layers.robot_layers).union(*layers.per_robot.values())
     items = [
@@ -79,7 +79,8 @@ def legend_glyph(
     band: np.ndarray, kind: str, corner: tuple[int, int], side: int, style: Style
 ) -> None:
     """A small robot glyph in the ``side``-pixel square at ``corner``, drawn as a robot
-    that is ``kind`` (done, idle or stuck) is drawn on a frame, in :data:`GLYPH_COLOUR`."""
+    that is ``kind`` (done, idle, stuck or fruitless) is drawn on a frame, in
+    :data:`GLYPH_COLOUR`."""
     x, y = corner
     tip, back = (x + side) * ONE, x * ONE + ONE
     pts = np.array([[tip, (y + side // 2) * ONE], [back, y * ONE], [back, (y + side) * ONE]])
@@ -92,4 +93,5 @@ def legend_glyph(
     else:
         cv2.fillPoly(band, [pts], GLYPH_COLOUR, AA, SHIFT)
         centre = ((2 * x + side) * ONE // 2, (2 * y + side) * ONE // 2)
-        cv2.circle(band, centre, (side * ONE) // 2 + ONE, style.stuck, 1, AA, SHIFT)
+        ring = style.stuck if kind == "stuck" else style.idle
+        cv2.circle(band, centre, (side * ONE) // 2 + ONE, ring, 1, AA, SHIFT)

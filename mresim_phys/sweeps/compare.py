@@ -41,6 +41,8 @@ DEFAULT_METRICS = (
     "idle_robot_steps",
     "stuck_robot_steps",
     "waiting_robot_steps",
+    "robots_fruitless",
+    "fruitless_robot_steps",
 )
 HEADLINE = "auc_known_at_base"  # the robustness contrast opening the report, when chosen
 

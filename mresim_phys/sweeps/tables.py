@@ -8,7 +8,8 @@ a lost or failed attempt), then the run's summary figures (``summary.json`` flat
 ``steps_to_explored_90`` for ``steps_to_explored["0.9"]``, the ``communication`` block's
 fields, ``failed_robots`` (the summary's ``failures``, counted), the robustness figures,
 the run-health totals ``robots_idle_with_frontier``, ``idle_robot_steps``,
-``stuck_robot_steps`` and ``waiting_robot_steps``) and, for paired runs,
+``stuck_robot_steps``, ``waiting_robot_steps``, ``robots_fruitless`` and
+``fruitless_robot_steps``) and, for paired runs,
 ``robustness.json``'s differences (``diff_<name>``). Wall-clock columns are
 :data:`WALL_COLUMNS`; everything else is the same on any machine and any backend.
 
