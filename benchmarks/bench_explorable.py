@@ -27,8 +27,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from mresim_phys.scenario.readers import load_map  # noqa: E402
-from mresim_phys.types import BoolGrid  # noqa: E402
-from mresim_phys.world.explorable import Explorable, RobotSight  # noqa: E402
+from mresim_phys.types import BoolGrid, RobotSight  # noqa: E402
+from mresim_phys.world.explorable import Explorable  # noqa: E402
 from mresim_phys.world.maps import free_components_mask  # noqa: E402
 
 ROBOTS = [(0.5, 200.0), (1.0, 50.0), (2.0, 100.0)]  # (radius, laser range)

@@ -45,13 +45,13 @@ from mresim_phys.scenario.readers import LoadedMap
 from mresim_phys.scenario.run_specs import StartJitterSpec
 from mresim_phys.scenario.schema import BaseStationSpec, RobotSpec, Scenario, SensorSpec
 from mresim_phys.strategies import STRATEGIES
-from mresim_phys.types import BeliefGrid, FloatArray
+from mresim_phys.types import BeliefGrid, FloatArray, RobotSight
 from mresim_phys.world.debris import RandomDebris
 from mresim_phys.world.doors import Door
 from mresim_phys.world.elements import build_elements
 from mresim_phys.world.event_api import Event
 from mresim_phys.world.events import make_event
-from mresim_phys.world.explorable import Explorable, RobotSight
+from mresim_phys.world.explorable import Explorable
 from mresim_phys.world.obstacles import MovingObstacle
 from mresim_phys.world.reach import Reachable
 from mresim_phys.world.sensing import Laser

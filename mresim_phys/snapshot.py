@@ -18,8 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray
-from mresim_phys.world.explorable import RobotSight
+from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray, RobotSight
 
 
 def read_only(array: np.ndarray) -> np.ndarray:

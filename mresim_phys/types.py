@@ -12,6 +12,7 @@ seen free cell, and anything known beats unknown).
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import Final
 
 import numpy as np
@@ -25,3 +26,17 @@ BoolGrid = NDArray[np.bool_]
 BeliefGrid = NDArray[np.uint8]
 FloatArray = NDArray[np.float64]
 IntArray = NDArray[np.intp]
+Cell = tuple[int, int]  # row, col
+
+
+@dataclass(frozen=True)
+class RobotSight:
+    """What the explorable area (``world/explorable.py``) needs of one robot: start (x, y),
+    body radius, laser range, and the positions its start seeds from (None: found on the
+    map, ``world.explorable.start_seeds``; a replay gives those of the live run, whose
+    truth at the start may have been another). Here, below the snapshot that carries it."""
+
+    start: tuple[float, float]
+    radius: float
+    sensor_range: float
+    seeds: tuple[Cell, ...] | None = None

@@ -19,8 +19,9 @@ from mresim_phys.columns import Layout
 from mresim_phys.metrics import RobotRecord, StepRecord
 from mresim_phys.output.runlog import Replay, RunLog, recompute_metrics
 from mresim_phys.tracking import Milestones
+from mresim_phys.types import RobotSight
 from mresim_phys.viewer.replaysource import freeze, thaw
-from mresim_phys.world.explorable import RobotSight, explorable_mask
+from mresim_phys.world.explorable import explorable_mask
 
 FIXED = ["step", "explored", "known_at_base", "distance", "alive", "links", "comm_bytes"]
 FIXED += ["control_links", "control_bytes", "latency_max", "latency_mean"]

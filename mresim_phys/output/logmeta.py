@@ -20,7 +20,7 @@ from mresim_phys.errors import MresimError
 from mresim_phys.output.logformat import FORMAT, READABLE, STATIC_AGENT, decode_line
 from mresim_phys.output.logworld import read_movable_meta
 from mresim_phys.snapshot import AgentSnapshot
-from mresim_phys.world.explorable import RobotSight
+from mresim_phys.types import RobotSight
 
 META = "meta.json"
 

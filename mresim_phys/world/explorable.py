@@ -48,7 +48,7 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy import ndimage
 
-from mresim_phys.types import BoolGrid, IntArray
+from mresim_phys.types import BoolGrid, Cell, IntArray, RobotSight
 from mresim_phys.world.changes import Change, union_box
 from mresim_phys.world.maps import FOUR_CONNECTED, connected_to
 from mresim_phys.world.reach import (
@@ -67,21 +67,6 @@ from mresim_phys.world.sight import NONE, clear_line, see_again, see_cells, word
 from mresim_phys.world.wallset import Box
 
 Kernel = NDArray[np.uint8]
-
-
-Cell = tuple[int, int]  # row, col
-
-
-@dataclass(frozen=True)
-class RobotSight:
-    """What the explorable area needs of one robot: start (x, y), body radius, laser range,
-    and the positions its start seeds from (None: found on the map, :func:`start_seeds`;
-    a replay gives those of the live run, whose truth at the start may have been another)."""
-
-    start: tuple[float, float]
-    radius: float
-    sensor_range: float
-    seeds: tuple[Cell, ...] | None = None
 
 
 @dataclass
