@@ -17,7 +17,17 @@ from typing import Any, Literal
 import numpy as np
 from numpy.typing import NDArray
 
-from mresim_phys.knowledge.teammates import Payload, TeammateInfo
+from mresim_phys.broken_parts import (
+    Factors,
+    FailingPart,
+    broken_in,
+    ever_failed,
+    fail_part,
+    range_factor,
+    repair_part,
+    speed_factor,
+)
+from mresim_phys.knowledge.teammates import PAYLOAD, TeammateInfo, keep_payload
 from mresim_phys.planning import Planner
 from mresim_phys.strategies.base import Decision, Strategy
 from mresim_phys.types import UNKNOWN, BeliefGrid, BoolGrid, FloatArray
@@ -25,9 +35,6 @@ from mresim_phys.world.sensing import Laser
 
 RobotState = Literal["active", "error", "done", "failed"]
 Part = Literal["drive", "sensor", "radio"]
-FailingPart = Literal["robot", "drive", "sensor", "radio", "degraded"]
-Factors = tuple[float, float]  # (speed factor, sensor range factor) of a degraded robot
-NOTHING_BROKEN: frozenset[str] = frozenset()  # the broken parts of a robot nothing has failed
 
 
 @dataclass(frozen=True)
@@ -95,11 +102,8 @@ class Robot(Agent):
     body: Body = field(kw_only=True)  # required: every robot has its hardware
     strategy: Strategy | None = None
     planner: Planner | None = None
-    holds: dict[str, int] = field(default_factory=dict)  # failures in force per part
-    degradations: tuple[Factors, ...] = ()  # (speed, range) factors of degradations in force
     features: dict[str, Any] = field(default_factory=dict)  # each feature's state (features.py)
     scans: int = 0  # scans taken so far (a battery drains per scan)
-    payload: Payload | None = None  # what its strategy sends with its record
     heading: float = 0.0
     path: FloatArray = field(default_factory=lambda: np.zeros((0, 2)))
     goal: tuple[float, float] | None = None
@@ -134,33 +138,22 @@ class Robot(Agent):
 
     @property
     def broken(self) -> frozenset[str]:
-        """The parts that do not work now (``degraded`` while a degradation is in force)."""
-        if not self.holds and not self.degradations:  # nothing ever failed: asked per scan
-            return NOTHING_BROKEN
-        parts = {p for p, n in self.holds.items() if n > 0 and p != "robot"}
-        return frozenset(parts | ({"degraded"} if self.degradations else set()))
+        """The parts that do not work now (``degraded`` while a degradation is in force;
+        ``broken_parts.py``)."""
+        return broken_in(self.features)
 
     def fail(self, part: FailingPart, factors: Factors = (1.0, 1.0)) -> None:
         """Lose ``part`` until a matching :meth:`repair` (``robot``: everything, the robot is
         ``failed``; ``degraded``: speed and sensor range scaled by ``factors``). Failures
         of one part add up: it works again once each has been repaired."""
-        if part == "degraded":
-            self.degradations = (*self.degradations, factors)
-            return
-        self.holds = {**self.holds, part: self.holds.get(part, 0) + 1}
+        fail_part(self.features, part, factors)
         if part == "robot":
             self.status, self.path = "failed", self.path[:0]
 
     def repair(self, part: FailingPart, factors: Factors = (1.0, 1.0)) -> None:
         """Undo one failure of ``part`` (a reboot); the part works again once no failure of
         it is in force. A robot back from a whole failure replans at once."""
-        if part == "degraded":
-            if factors in self.degradations:
-                k = self.degradations.index(factors)
-                self.degradations = self.degradations[:k] + self.degradations[k + 1 :]
-            return
-        left = max(self.holds.get(part, 0) - 1, 0)
-        self.holds = {**self.holds, part: left}
+        left = repair_part(self.features, part, factors)
         if part == "robot" and left == 0 and self.status == "failed":
             self.status = "active"
             self.stop_for_replan()
@@ -168,12 +161,12 @@ class Robot(Agent):
     @property
     def speed_factor(self) -> float:
         """The product of the speed factors of the degradations in force (1: none)."""
-        return math.prod(f[0] for f in self.degradations)
+        return speed_factor(self.features)
 
     @property
     def range_factor(self) -> float:
         """The product of the sensor range factors of the degradations in force (1: none)."""
-        return math.prod(f[1] for f in self.degradations)
+        return range_factor(self.features)
 
     @property
     def laser(self) -> Laser:
@@ -191,7 +184,7 @@ class Robot(Agent):
 
     def own_record(self, step: int) -> TeammateInfo:
         """Position, goal, state, role, payload and failed parts, stamped with ``step``."""
-        broken = tuple(sorted(self.broken)) if self.holds or self.degradations else ()
+        broken = tuple(sorted(self.broken)) if ever_failed(self.features) else ()
         return TeammateInfo(
             self.name,
             self.position,
@@ -199,7 +192,7 @@ class Robot(Agent):
             self.state,
             self.role,
             step,
-            payload=self.payload,
+            payload=PAYLOAD.state_of(self.features),
             broken=broken,
         )
 
@@ -219,7 +212,7 @@ class Robot(Agent):
         self.decision = decision
         if decision.role is not None:
             self.role = decision.role
-        self.payload = decision.payload
+        keep_payload(self.features, decision.payload)
 
     @property
     def speed(self) -> float:

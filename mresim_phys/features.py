@@ -132,5 +132,7 @@ FEATURES = FeatureList(
         "battery": "mresim_phys.faults.battery:BATTERY",
         "terrain": "mresim_phys.knowledge.terrain:TERRAIN",
         "prior": "mresim_phys.knowledge.prior:PRIOR",
+        "payload": "mresim_phys.knowledge.teammates:PAYLOAD",
+        "parts": "mresim_phys.broken_parts:PARTS",
     }
 )

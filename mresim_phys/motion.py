@@ -31,6 +31,7 @@ from numba import njit
 
 from mresim_phys.agents import Robot
 from mresim_phys.knowledge.mapping import mark_bump
+from mresim_phys.knowledge.teammates import PAYLOAD
 from mresim_phys.planning.fields import clearance_kernel
 from mresim_phys.strategies.base import ReplansOnContact, ReplansWhen
 from mresim_phys.types import OCCUPIED, FloatArray, IntArray
@@ -118,7 +119,7 @@ def take_step(
     moved = False
     # a strategy that talks through its payload (rendezvous, role swaps) runs a protocol of
     # one decision per exchange: it is not asked again within the step
-    once = given or robot.payload is not None or one_decision_per_step(robot)
+    once = given or PAYLOAD.key in robot.features or one_decision_per_step(robot)
     replans = 0 if once else MID_STEP_REPLANS
     while budget > EPS:
         if len(robot.path) == 0:

@@ -13,6 +13,7 @@ import pytest
 
 from mresim_phys.cli import main
 from mresim_phys.errors import ScenarioError
+from mresim_phys.knowledge.teammates import PAYLOAD
 from mresim_phys.output.runlog import RunLog
 from mresim_phys.planning.grid import bbox
 from mresim_phys.sim import Simulation
@@ -76,7 +77,7 @@ def test_a_multi_point_pair_agrees_two_points_and_a_backup(scenario_file: MakeSc
     agreements, relay_states = [], set()
     while not sim.finished():
         sim.step()
-        payload = sim.robot("E").payload
+        payload = PAYLOAD.state_of(sim.robot("E").features)
         if isinstance(payload, Rendezvous) and payload.backup is not None:
             agreements.append(payload)
         relay_states.add(sim.robot("R").strategy.state)  # type: ignore[attr-defined]

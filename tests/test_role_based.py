@@ -14,6 +14,7 @@ import pytest
 import yaml
 
 from mresim_phys.errors import ScenarioError
+from mresim_phys.knowledge.teammates import PAYLOAD
 from mresim_phys.sim import Simulation
 from mresim_phys.strategies import RobotView
 from mresim_phys.strategies.meetings import Rendezvous, improved_point
@@ -82,7 +83,9 @@ def test_a_pair_never_parts_holding_different_meetings(
     linked = "R" in explorer.links
     while not sim.finished():
         sim.step()
-        proposals += isinstance(explorer.payload, Rendezvous)  # it travels with the record
+        proposals += isinstance(
+            PAYLOAD.state_of(explorer.features), Rendezvous
+        )  # it travels with the record
         if linked and "R" not in explorer.links:  # their last exchange failed: they part
             partings += 1
             mine, theirs = explorer.strategy.meeting, relay.strategy.meeting  # type: ignore[attr-defined]

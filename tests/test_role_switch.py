@@ -13,6 +13,7 @@ import pytest
 
 from mresim_phys.build import load_scenario
 from mresim_phys.errors import ScenarioError
+from mresim_phys.knowledge.teammates import PAYLOAD
 from mresim_phys.output.bench import PRESETS, team_scenario
 from mresim_phys.scenario.load import validate_scenario
 from mresim_phys.sim import Simulation
@@ -65,7 +66,7 @@ def offers_seen(sim: Simulation, name: str) -> dict[str, str]:
     """The offers a robot hears over its links: offerer -> the teammate it offers to."""
     seen = {}
     for other in sim.robot(name).links:
-        payload = sim.robot(other).payload if other != "base" else None
+        payload = PAYLOAD.state_of(sim.robot(other).features) if other != "base" else None
         if isinstance(payload, SwitchPayload) and payload.offer is not None:
             seen[other] = payload.offer[0]
     return seen
@@ -82,8 +83,9 @@ def test_swaps_are_agreed_one_at_a_time_among_robots_that_hear_each_other() -> N
         swaps = []
         for robot in sim.robots:
             strategy = robot.strategy
-            assert isinstance(strategy, RoleSwitch) and isinstance(robot.payload, SwitchPayload)
-            offers += robot.payload.offer is not None
+            sent = PAYLOAD.state_of(robot.features)
+            assert isinstance(strategy, RoleSwitch) and isinstance(sent, SwitchPayload)
+            offers += sent.offer is not None
             if strategy.accepted != accepted[robot.name]:
                 assert strategy.accepted is not None
                 offerer = strategy.accepted[0]

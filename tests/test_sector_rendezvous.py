@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 from PIL import Image
 
+from mresim_phys.knowledge.teammates import PAYLOAD
 from mresim_phys.sim import Simulation
 from mresim_phys.strategies.sector import SectorPayload, SectorRendezvous, in_wedge, wedge
 
@@ -63,8 +64,9 @@ def run(path: Path) -> tuple[Simulation, dict[str, list[bool]]]:
         for robot in sim.robots:
             strategy, decision = robot.strategy, robot.decision
             assert isinstance(strategy, SectorRendezvous)
-            if isinstance(robot.payload, SectorPayload):
-                for meeting in robot.payload.meetings:  # on a boundary of its wedge
+            sent = PAYLOAD.state_of(robot.features)
+            if isinstance(sent, SectorPayload):
+                for meeting in sent.meetings:  # on a boundary of its wedge
                     x, y = meeting.point
                     if math.dist(meeting.point, BASE) > 15:
                         bearing = math.atan2(y - BASE[1], x - BASE[0]) % (2 * math.pi)
@@ -91,7 +93,7 @@ def test_each_robot_explores_its_wedge_and_neighbours_meet(
         assert flags and sum(flags) >= 0.9 * len(flags), name  # its wedge's frontiers first
     met = {r.name: r.strategy.met for r in sim.robots}  # type: ignore[attr-defined]
     assert sum(met.values()) >= 2  # neighbours kept meetings
-    payloads = [r.payload for r in sim.robots]
+    payloads = [PAYLOAD.state_of(r.features) for r in sim.robots]
     assert all(isinstance(p, SectorPayload) for p in payloads)
 
 

@@ -6,6 +6,11 @@ what, state, role, when) it carries an optional :class:`Payload`: typed data a
 strategy fills through its ``Decision`` (a rendezvous agreement, a relay
 request, a role offer) that travels only along links, hop by hop with the
 record, and is counted in bytes like everything else that is sent.
+
+The payload a robot sends is a per-robot feature (``features.py``): :data:`PAYLOAD`, its
+state in ``Robot.features["payload"]`` from the decision that gave it until the next one
+(no entry: it sends none). Its strategy sees it in its view; snapshots and logs do not
+record it (a teammate's copy travels in the records, counted in comm bytes).
 """
 
 from __future__ import annotations
@@ -15,6 +20,8 @@ from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
+
+from mresim_phys.features import RobotFeature
 
 BASE_NAME = "base"
 RECORD_BYTES = 40  # name, position, goal, state, role and step of one record
@@ -113,3 +120,25 @@ def presumed_lost(teammates: dict[str, TeammateInfo], step: int, silence: int) -
         for name, record in teammates.items()
         if name != BASE_NAME and step - record.step > silence
     )
+
+
+class SentPayload(RobotFeature[Payload, Payload]):
+    """The payload a robot's strategy sends with its record (module docstring)."""
+
+    key = "payload"
+    recorded = False
+
+    def value(self, state: Payload) -> Payload:
+        """The payload itself (frozen)."""
+        return state
+
+
+PAYLOAD = SentPayload()
+
+
+def keep_payload(states: dict[str, Any], payload: Payload | None) -> None:
+    """Make ``payload`` the one a robot with feature ``states`` sends (None: none)."""
+    if payload is None:
+        states.pop(PAYLOAD.key, None)
+    else:
+        states[PAYLOAD.key] = payload
