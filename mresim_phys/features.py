@@ -85,6 +85,15 @@ class RobotFeature(Generic[S, V]):
         return self.value(states[self.key]) if self.key in states else None
 
 
+class PlainFeature(RobotFeature[S, S]):
+    """A feature whose value is its state itself (state a strategy may hold: frozen or
+    read-only)."""
+
+    def value(self, state: S) -> S:
+        """The state itself."""
+        return state
+
+
 class FeatureList:
     """The run's features in a fixed order: built-ins entered by reference (imported when
     the list is first read), then features registered in code."""

@@ -27,21 +27,18 @@ from __future__ import annotations
 import cv2
 import numpy as np
 
-from mresim_phys.features import RobotFeature
+from mresim_phys.features import PlainFeature
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN, BeliefGrid, BoolGrid
 
 STREAM = "prior"  # the named random stream the degradation draws from
 
 
-class PriorMap(RobotFeature[BeliefGrid, BeliefGrid]):
-    """The map a robot knew before the mission (read-only, shared by the robots given it)."""
+class PriorMap(PlainFeature[BeliefGrid]):
+    """The map a robot knew before the mission (read-only, shared by the robots given it);
+    its value is the grid itself."""
 
     key = "prior"
     recorded = False
-
-    def value(self, state: BeliefGrid) -> BeliefGrid:
-        """The grid itself (read-only already)."""
-        return state
 
 
 PRIOR = PriorMap()

@@ -21,7 +21,7 @@ from typing import Any
 
 import numpy as np
 
-from mresim_phys.features import RobotFeature
+from mresim_phys.features import PlainFeature
 
 BASE_NAME = "base"
 RECORD_BYTES = 40  # name, position, goal, state, role and step of one record
@@ -122,15 +122,12 @@ def presumed_lost(teammates: dict[str, TeammateInfo], step: int, silence: int) -
     )
 
 
-class SentPayload(RobotFeature[Payload, Payload]):
-    """The payload a robot's strategy sends with its record (module docstring)."""
+class SentPayload(PlainFeature[Payload]):
+    """The payload a robot's strategy sends with its record (module docstring); its value
+    is the (frozen) payload itself."""
 
     key = "payload"
     recorded = False
-
-    def value(self, state: Payload) -> Payload:
-        """The payload itself (frozen)."""
-        return state
 
 
 PAYLOAD = SentPayload()
