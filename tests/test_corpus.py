@@ -113,6 +113,7 @@ def fake_summary(explored: float, reached: int | None) -> dict[str, Any]:
         "steps_to_known_at_base": {"0.5": None, "0.9": None, "0.95": None},
         "robots": {"A": {"state": "active"}, "B": {"state": "error"}},
         "alive": 2,
+        "health": {"robots_fruitless": 1, "fruitless_robot_steps": 100 + reached if reached else 0},
     }
 
 
@@ -132,7 +133,7 @@ def test_rows_and_report_give_medians_and_robot_states(tmp_path: Path) -> None:
     line = next(t for t in table.splitlines() if t.startswith("| frontier | 2 |"))
     cells = [c.strip() for c in line.strip("|").split("|")]
     assert cells[2:6] == ["3", "0.7", "0.35", "25 (2/3)"]
-    assert cells[-1] == "active 3, error 3"
+    assert cells[-2:] == ["active 3, error 3", "120"]  # fruitless robot-steps: 120, 0, 130
 
 
 def test_every_robot_counts_relays_too() -> None:

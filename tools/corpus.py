@@ -6,8 +6,9 @@ strategy, team size, seed) from ``maps/corpus/corpus.yaml`` (``DIR/scenarios/*.y
 each runs alone with ``mresim run``), runs them in-process as ``mresim run`` does (a
 process pool of ``--jobs``), and writes ``DIR/corpus.csv`` (one row per run: milestones,
 final explored and known at base, stop reason, steps, robot states at the end, run
-health, how the run breaks the invariant) and ``DIR/corpus.md`` (per map, the medians over
-seeds of each strategy and size; the runs that break the invariant).
+health with the robots that worked fruitlessly, how the run breaks the invariant) and
+``DIR/corpus.md`` (per map, the medians over seeds of each strategy and size; the runs
+that break the invariant).
 
 The invariant (``corpus_report.violations``, asserted by ``tests/test_corpus.py``'s slow
 test): a run explores at least 95 % of the explorable area, and no explorer idles more than
@@ -271,6 +272,8 @@ def summary_fields(summary: dict[str, Any]) -> dict[str, Any]:
     row["robots_idle_with_frontier"] = health.get("robots_idle_with_frontier")
     row["idle_robot_steps"] = health.get("idle_robot_steps")
     row["stuck_robot_steps"] = health.get("stuck_robot_steps")
+    row["robots_fruitless"] = health.get("robots_fruitless")
+    row["fruitless_robot_steps"] = health.get("fruitless_robot_steps")
     row["final_explored_connected"] = summary.get("final_explored_connected")
     return row
 

@@ -25,7 +25,8 @@ COLUMNS = (
     "final_explored", "final_known_at_base",
     *(f"{what}_{level}_at" for level in MILESTONES for what in ("explored", "base")),
     "robots_active", "robots_done", "robots_error", "robots_failed", "robot_states", "alive",
-    "robots_idle_with_frontier", "idle_robot_steps", "stuck_robot_steps",
+    "robots_idle_with_frontier", "idle_robot_steps", "stuck_robot_steps", "robots_fruitless",
+    "fruitless_robot_steps",
     "final_explored_connected", "robot_idle_with_frontier", "idlest_robot", "invariant",
     "cpu_s",
 )  # fmt: skip
@@ -72,8 +73,8 @@ def tally(values: Iterable[Any]) -> str:
 
 TABLE_HEAD = (
     "| strategy | size | runs | explored | known at base | explored 50% at | 90% at"
-    " | base 90% at | steps | stop | robots at the end |\n"
-    "|---|---|---|---|---|---|---|---|---|---|---|"
+    " | base 90% at | steps | stop | robots at the end | fruitless robot-steps |\n"
+    "|---|---|---|---|---|---|---|---|---|---|---|---|"
 )
 
 
@@ -93,6 +94,7 @@ def group_cells(strategy: str, size: int, group: Sequence[dict[str, Any]]) -> li
         *(median([r[c] for r in ok]) for c in (*columns, "base_0.9_at", "steps")),
         tally(r["stop_reason"] for r in ok),
         ", ".join(f"{s} {n}" for s, n in states.items() if n),
+        median([r.get("fruitless_robot_steps") for r in ok]),
     ]
 
 
