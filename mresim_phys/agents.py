@@ -15,7 +15,6 @@ from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
 import numpy as np
-from numpy.typing import NDArray
 
 from mresim_phys.broken_parts import (
     Factors,
@@ -72,8 +71,7 @@ class Agent:
     parent: str | None = None  # its parent in the team's hierarchy ('base', a robot, or none)
     children: tuple[str, ...] = ()  # the robots whose parent it is
     hops: int = 0  # robots from the base down to it along its parents (0: not under the base)
-    # step of each cell's latest observation (-1: never), kept when beliefs are 'latest'
-    observed: NDArray[np.int32] | None = None
+    features: dict[str, Any] = field(default_factory=dict)  # each feature's state (features.py)
 
     @property
     def alive(self) -> bool:
@@ -102,7 +100,6 @@ class Robot(Agent):
     body: Body = field(kw_only=True)  # required: every robot has its hardware
     strategy: Strategy | None = None
     planner: Planner | None = None
-    features: dict[str, Any] = field(default_factory=dict)  # each feature's state (features.py)
     scans: int = 0  # scans taken so far (a battery drains per scan)
     heading: float = 0.0
     path: FloatArray = field(default_factory=lambda: np.zeros((0, 2)))

@@ -27,7 +27,7 @@ from mresim_phys.comms.network import Channel, Network
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.faults.runtime import Faults, build_faults
 from mresim_phys.knowledge.coverage import Coverage
-from mresim_phys.knowledge.latest import LatestCoverage
+from mresim_phys.knowledge.latest import LatestCoverage, give_stamps
 from mresim_phys.knowledge.teammates import BASE_NAME
 from mresim_phys.planning import PLANNERS
 from mresim_phys.rng import Streams
@@ -310,7 +310,7 @@ def build_setup(scenario: Scenario) -> Setup:
     base = make_base(scenario.base_station, world.shape)
     if rules.latest:
         for agent in [base, *robots]:
-            agent.observed = np.full(world.shape, -1, dtype=np.int32)
+            give_stamps(agent.features, world.shape)
     terrain = build_terrain(scenario.terrain, robots, world)
     prior = build_prior(scenario.prior, robots, world.shape, streams)
     return Setup(

@@ -3,7 +3,8 @@
 A feature (a battery, and the ones to come) is a :class:`RobotFeature` declared in its own
 module with everything about it:
 
-* its per-robot *state*, kept in ``Robot.features[key]`` by the code that runs it (the
+* its per-robot *state*, kept in ``Robot.features[key]`` (``Agent.features``: the base
+  station holds the latest observations too) by the code that runs it (the
   battery: ``faults/runtime.py``); a robot without the feature has no entry;
 * its *value*: what a strategy sees (``RobotView.features[key]``) and, unless the feature
   is not ``recorded`` (known terrain and the prior map: grids the run's ``truth.npz`` or
@@ -143,5 +144,6 @@ FEATURES = FeatureList(
         "prior": "mresim_phys.knowledge.prior:PRIOR",
         "payload": "mresim_phys.knowledge.teammates:PAYLOAD",
         "parts": "mresim_phys.broken_parts:PARTS",
+        "observed": "mresim_phys.knowledge.latest:LATEST",
     }
 )

@@ -18,6 +18,7 @@ from time import perf_counter
 import numpy as np
 
 from mresim_phys.agents import Robot
+from mresim_phys.knowledge.latest import LATEST
 from mresim_phys.knowledge.mapping import integrate_scan
 from mresim_phys.knowledge.prior import PRIOR
 from mresim_phys.knowledge.scanfold import ScanQueue, folds_in_one_call, scan_into_map
@@ -54,9 +55,9 @@ class Senses:
         for the team coverage and the ledger in ``effects``."""
         if not self.takes_scan(robot):
             return
-        laser = robot.laser
+        laser, observed = robot.laser, LATEST.state_of(robot.features)
         started = perf_counter()
-        if folds_in_one_call(laser, robot.observed):  # the fold is timed as sensing
+        if folds_in_one_call(laser, observed):  # the fold is timed as sensing
             update = scan_into_map(
                 self.world, robot.position, robot.heading, laser, self.filter_of(robot),
                 robot.belief, robot.safe,
@@ -69,7 +70,7 @@ class Senses:
             )  # fmt: skip
             scanned = perf_counter()
             update = integrate_scan(
-                robot.belief, robot.safe, result, laser.safe_fraction, robot.observed, step
+                robot.belief, robot.safe, result, laser.safe_fraction, observed, step
             )
         known = TERRAIN.state_of(robot.features)
         if update is not None and known is not None and self.terrain is not None:
@@ -77,7 +78,7 @@ class Senses:
         effects.spend("sensing", scanned - started)
         effects.spend("mapping", perf_counter() - scanned)
         lookahead = LOOKAHEAD_STEPS * robot.speed
-        checks_path = robot.observed is not None or PRIOR.key in robot.features
+        checks_path = observed is not None or PRIOR.key in robot.features
         if checks_path and path_blocked(robot.belief, robot.path, robot.radius, lookahead):
             robot.stop_for_replan()
         if update is not None:
@@ -87,7 +88,8 @@ class Senses:
         """A queue for the robot's scans of this turn (:class:`ScanQueue`), or None when
         each scan must fold at once: range noise or latest observations (see
         ``folds_in_one_call``), a path to check against every scan, terrain to learn."""
-        if not folds_in_one_call(robot.laser, robot.observed) or PRIOR.key in robot.features:
+        observed = LATEST.state_of(robot.features)
+        if not folds_in_one_call(robot.laser, observed) or PRIOR.key in robot.features:
             return None
         if TERRAIN.key in robot.features and self.terrain is not None:
             return None

@@ -34,6 +34,7 @@ import numpy as np
 from mresim_phys.agents import Agent
 from mresim_phys.comms.deltas import Cells, select_cells
 from mresim_phys.comms.ledger import Ledger, received_tick, sensed_tick
+from mresim_phys.knowledge.latest import LATEST
 from mresim_phys.knowledge.teammates import TeammateInfo
 
 CELL_BYTES = 5
@@ -359,12 +360,14 @@ class Exchange:
         """Merge a transmission's cells into ``receiver``'s grids."""
         if cells is not None and len(cells[0]):
             grids = (receiver.belief, receiver.safe)
-            self.ledger.merge(receiver.index, cells, grids, step, sender, receiver.observed)
+            observed = LATEST.state_of(receiver.features)
+            self.ledger.merge(receiver.index, cells, grids, step, sender, observed)
 
 
 def seen_of(sender: Agent, index: np.ndarray) -> np.ndarray | None:
     """When the sender's values of cells ``index`` were observed ('latest' beliefs only)."""
-    return None if sender.observed is None else sender.observed.reshape(-1)[index]
+    observed = LATEST.state_of(sender.features)
+    return None if observed is None else observed.reshape(-1)[index]
 
 
 def stamp_base_contacts(

@@ -16,18 +16,48 @@ counted sets changed (:meth:`LatestCoverage.retarget`); only those windows are
 recounted. A per-robot copy of which cells it held FREE / OCCUPIED turns a window of
 its map into changes of the per-cell holder counts. One compiled pass per window
 (:func:`fold_window`) folds a map's window and recounts it.
+
+Each agent's observation steps are the feature :data:`LATEST` (``features.py``; the base
+station has it too): with 'latest' beliefs, ``Agent.features["observed"]`` is the step of
+each cell's latest observation (-1: never), which its scans stamp and the comm exchange's
+merge reads (the newer observation wins). Its strategy sees it read-only; snapshots and
+logs do not carry it.
 """
 
 from __future__ import annotations
 
 import numpy as np
 from numba import njit
+from numpy.typing import NDArray
 
+from mresim_phys.features import RobotFeature
 from mresim_phys.knowledge.coverage import Coverage
 from mresim_phys.knowledge.mapping import Update
 from mresim_phys.types import FREE, OCCUPIED, BeliefGrid, BoolGrid
 
 Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)
+Stamps = NDArray[np.int32]  # per cell, the step of its latest observation (-1: never)
+
+
+class LatestObservations(RobotFeature[Stamps, Stamps]):
+    """When an agent last observed each cell ('latest' beliefs; module docstring)."""
+
+    key = "observed"
+    recorded = False
+
+    def value(self, state: Stamps) -> Stamps:
+        """A read-only view of the agent's stamps."""
+        view: Stamps = state.view()
+        view.flags.writeable = False
+        return view
+
+
+LATEST = LatestObservations()
+
+
+def give_stamps(states: dict[str, object], shape: tuple[int, int]) -> None:
+    """Keep the latest observation of every cell of a map of ``shape`` (none yet)."""
+    states[LATEST.key] = np.full(shape, -1, dtype=np.int32)
 
 
 class LatestCoverage(Coverage):
