@@ -26,10 +26,13 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any, ClassVar, Generic, Protocol, TypeVar
 
+from numpy.typing import NDArray
+
 from mresim_phys.plugin import named_object
 
 S = TypeVar("S")  # a feature's per-robot state
 V = TypeVar("V")  # the value a strategy sees and a snapshot records
+G = TypeVar("G", bound=NDArray[Any])  # a grid a robot keeps and its strategy only reads
 
 
 class HasFeatures(Protocol):
@@ -93,6 +96,17 @@ class PlainFeature(RobotFeature[S, S]):
     def value(self, state: S) -> S:
         """The state itself."""
         return state
+
+
+class ReadOnlyGrid(RobotFeature[G, G]):
+    """A feature whose state is a grid the robot's code writes; its value is a read-only
+    view of it (no copy)."""
+
+    def value(self, state: G) -> G:
+        """A read-only view of the grid."""
+        view: G = state.view()
+        view.flags.writeable = False
+        return view
 
 
 class FeatureList:

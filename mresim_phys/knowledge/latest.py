@@ -30,7 +30,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from mresim_phys.features import RobotFeature
+from mresim_phys.features import ReadOnlyGrid
 from mresim_phys.knowledge.coverage import Coverage
 from mresim_phys.knowledge.mapping import Update
 from mresim_phys.types import FREE, OCCUPIED, BeliefGrid, BoolGrid
@@ -39,17 +39,12 @@ Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)
 Stamps = NDArray[np.int32]  # per cell, the step of its latest observation (-1: never)
 
 
-class LatestObservations(RobotFeature[Stamps, Stamps]):
-    """When an agent last observed each cell ('latest' beliefs; module docstring)."""
+class LatestObservations(ReadOnlyGrid[Stamps]):
+    """When an agent last observed each cell ('latest' beliefs; module docstring); its
+    strategy sees them read-only."""
 
     key = "observed"
     recorded = False
-
-    def value(self, state: Stamps) -> Stamps:
-        """A read-only view of the agent's stamps."""
-        view: Stamps = state.view()
-        view.flags.writeable = False
-        return view
 
 
 LATEST = LatestObservations()

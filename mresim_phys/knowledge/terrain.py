@@ -16,22 +16,16 @@ from __future__ import annotations
 
 import numpy as np
 
-from mresim_phys.features import RobotFeature
+from mresim_phys.features import ReadOnlyGrid
 from mresim_phys.knowledge.mapping import Update
 from mresim_phys.world.terrain import TerrainGrid
 
 
-class KnownTerrain(RobotFeature[TerrainGrid, TerrainGrid]):
+class KnownTerrain(ReadOnlyGrid[TerrainGrid]):
     """The terrain factors a robot knows; its strategy sees them read-only."""
 
     key = "terrain"
     recorded = False
-
-    def value(self, state: TerrainGrid) -> TerrainGrid:
-        """A read-only view of the robot's grid."""
-        view: TerrainGrid = state.view()
-        view.flags.writeable = False
-        return view
 
 
 TERRAIN = KnownTerrain()
