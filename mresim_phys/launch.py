@@ -40,7 +40,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except Terminated:
         _leave("terminated (SIGTERM)", 128 + signal.SIGTERM)
     try:
-        return cli_main(argv)  # which answers KeyboardInterrupt itself
+        return cli_main(argv)  # which answers KeyboardInterrupt itself once parsing is done
+    except KeyboardInterrupt:  # while the command line was parsed: nothing is written yet
+        _leave("interrupted", 128 + signal.SIGINT)
     except Terminated:
         print("mresim: terminated (SIGTERM)", file=sys.stderr)
         return 128 + signal.SIGTERM

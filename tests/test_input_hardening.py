@@ -204,6 +204,23 @@ def test_a_signal_while_mresim_starts_exits_with_a_line(
     assert not (tmp_path / "o" / "summary.json").exists()
 
 
+def test_ctrl_c_while_the_command_line_is_parsed_exits_with_a_line() -> None:
+    """The light command line is parsed in a blink, so a Ctrl-C can land there, before
+    the command's own handling: one line and status 130, never a traceback."""
+    code = (
+        "import sys\n"
+        "import mresim_phys.cli as cli\n"
+        "from mresim_phys import launch\n"
+        "def interrupted(*args, **kwargs):\n"
+        "    raise KeyboardInterrupt\n"
+        "cli.make_parser = interrupted\n"
+        "sys.exit(launch.main(['run', 'x.yaml']))\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert done.returncode == 130, done.stderr
+    assert done.stderr == "mresim: interrupted while starting\n"
+
+
 def test_a_video_path_in_a_missing_folder_is_refused_and_no_folder_made(
     tmp_path: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:
