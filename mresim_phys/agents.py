@@ -20,7 +20,6 @@ from mresim_phys.broken_parts import (
     Factors,
     FailingPart,
     broken_in,
-    ever_failed,
     fail_part,
     range_factor,
     repair_part,
@@ -181,7 +180,6 @@ class Robot(Agent):
 
     def own_record(self, step: int) -> TeammateInfo:
         """Position, goal, state, role, payload and failed parts, stamped with ``step``."""
-        broken = tuple(sorted(self.broken)) if ever_failed(self.features) else ()
         return TeammateInfo(
             self.name,
             self.position,
@@ -190,7 +188,7 @@ class Robot(Agent):
             self.role,
             step,
             payload=PAYLOAD.state_of(self.features),
-            broken=broken,
+            broken=tuple(sorted(self.broken)),
         )
 
     def stop_for_replan(self) -> None:

@@ -62,11 +62,6 @@ def broken_in(states: Mapping[str, Any]) -> frozenset[str]:
     return NOTHING_BROKEN if parts is None else parts.broken
 
 
-def ever_failed(states: Mapping[str, Any]) -> bool:
-    """Whether a failure or degradation was ever put in force (repaired or not)."""
-    return PARTS.key in states
-
-
 def fail_part(states: dict[str, Any], part: FailingPart, factors: Factors = (1.0, 1.0)) -> None:
     """Put one failure of ``part`` in force (``degraded``: with ``factors``)."""
     parts: Parts = states.get(PARTS.key) or Parts()
@@ -95,11 +90,15 @@ def repair_part(states: dict[str, Any], part: FailingPart, factors: Factors = (1
 
 def speed_factor(states: Mapping[str, Any]) -> float:
     """The product of the speed factors of the degradations in force (1: none)."""
-    parts: Parts | None = states.get(PARTS.key)
-    return 1.0 if parts is None else math.prod(f[0] for f in parts.degradations)
+    return _factor(states, 0)
 
 
 def range_factor(states: Mapping[str, Any]) -> float:
     """The product of the sensor range factors of the degradations in force (1: none)."""
+    return _factor(states, 1)
+
+
+def _factor(states: Mapping[str, Any], which: int) -> float:
+    """The product of factor ``which`` (0: speed, 1: range) of the degradations in force."""
     parts: Parts | None = states.get(PARTS.key)
-    return 1.0 if parts is None else math.prod(f[1] for f in parts.degradations)
+    return 1.0 if parts is None else math.prod(f[which] for f in parts.degradations)

@@ -64,9 +64,8 @@ class AgentSnapshot:
     broken: tuple[str, ...] = ()  # parts that do not work now (drive, radio, sensor, degraded)
     presumed_lost: tuple[str, ...] = ()  # teammates it has not heard of for too long
     features: Mapping[str, Any] = field(default_factory=dict)  # each feature's value (features.py)
-    activity: str = (
-        ""  # working / fruitless / waiting / idle / stuck ("": not assessed; knowledge.health)
-    )
+    # working / fruitless / waiting / idle / stuck ("": not assessed; knowledge.health)
+    activity: str = ""
     state_reason: str | None = None  # why ``state`` changed this step (None: it did not)
     given_up: BoolGrid | None = None  # frontier cells its strategy tried in vain, gave up
 

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 
 from mresim_phys.columns import value_of
 from mresim_phys.knowledge.coverage import Coverage
+from mresim_phys.knowledge.health import Progress
 from mresim_phys.metrics import THRESHOLDS, StepRecord
 
 MILESTONE_COLUMNS = ("explored", "known_at_base", "explored_connected", "known_at_base_connected")
@@ -93,17 +94,20 @@ class StallWatch:
 
     window: int | None
     gain: float
-    explored: float = 0.0
-    known_at_base: float = 0.0
-    last_progress: int = 0
+    progress: Progress = field(init=False)  # the measure run health shares
+
+    def __post_init__(self) -> None:
+        self.progress = Progress(self.gain)
+
+    @property
+    def last_progress(self) -> int:
+        """The last step at which the run made progress."""
+        return self.progress.step
 
     def update(self, record: StepRecord) -> None:
         """Note progress made by ``record``."""
         explored, known = fraction("explored", record), fraction("known_at_base", record)
-        gained = max(explored - self.explored, known - self.known_at_base)
-        if record.step == 0 or gained >= self.gain:
-            self.explored, self.known_at_base = explored, known
-            self.last_progress = record.step
+        self.progress.update(record.step, explored, known)
 
     def stalled(self, step: int) -> bool:
         """No progress in the last ``window`` steps."""

@@ -23,7 +23,7 @@ a snapshot holds of it: state, odometer, path, drive, pose, map) and keeps, per 
 * ``fruitless_steps``: steps it was ``working`` or ``stuck`` while ``active`` although the
   team had made no progress (neither explored nor known at base gained
   :data:`PROGRESS_GAIN` since :data:`FRUITLESS_AFTER` steps before: the stall rule's
-  measure, ``tracking.StallWatch``), fed by :meth:`HealthWatch.note_progress` once the
+  measure, :class:`Progress`), fed by :meth:`HealthWatch.note_progress` once the
   step's metrics are known; a working robot's activity then reads ``fruitless``. This is
   a robot that never idles and yet does nothing: it chases frontier cells its scans do
   not resolve or its body cannot reach, or shuttles with a teammate (a run that ends
@@ -310,9 +310,12 @@ class HealthWatch:
 
 @dataclass
 class Progress:
-    """When the team last made progress: a gain of :data:`PROGRESS_GAIN` in explored or
-    known at base over their values at the progress before (as ``tracking.StallWatch``)."""
+    """When the team last made progress: the last step at which explored or known at base
+    rose by at least ``gain`` over its value at the progress before (step 0 always counts).
+    Slow, steady gains add up. The stall rule (``tracking.StallWatch``) and the fruitless
+    count share it."""
 
+    gain: float = PROGRESS_GAIN
     explored: float = 0.0
     known_at_base: float = 0.0
     step: int = 0
@@ -320,7 +323,7 @@ class Progress:
     def update(self, step: int, explored: float, known_at_base: float) -> None:
         """Note the fractions at the end of ``step``."""
         gained = max(explored - self.explored, known_at_base - self.known_at_base)
-        if gained >= PROGRESS_GAIN:
+        if step == 0 or gained >= self.gain:
             self.explored, self.known_at_base, self.step = explored, known_at_base, step
 
 
