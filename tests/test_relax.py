@@ -150,3 +150,58 @@ def test_a_diagonal_past_a_wall_corner_goes_round_it_at_half_a_cell() -> None:
     assert uncut.tolist() == [[2.5, 2.5], [2.5, 1.5], [3.5, 1.5], [4.5, 0.5]]
     belief[2, 3] = FREE
     assert relax.uncut_corners(path, belief).tolist() == path.tolist()
+
+
+def slit_view(position: tuple[float, float]) -> RobotView:
+    """:func:`doorway_view`'s room with a 1-cell slit through its east wall, for a robot of
+    radius 0.5 and margin 0.5: the slit opens only at the body's own clearance (0.5); a
+    strip beyond is known free, its far edge a frontier."""
+    view = doorway_view(1, position)
+    belief = view.belief.copy()
+    belief[2:38, 50:56] = FREE
+    return replace(view, belief=belief, radius=0.5, clearance=1.0, speed=10.0)
+
+
+def test_a_path_at_the_relaxed_half_cell_clearance_never_cuts_a_wall_corner() -> None:
+    """Relaxed to its radius 0.5, a robot's plan runs beside walls, and a diagonal move
+    between two cells there passes a wall corner at no distance (RAS2014-3: 39 of 83
+    collisions in 700 steps). Every leg of the relaxed path keeps the body clear of every
+    wall its map knows."""
+    view = slit_view((30.5, 12.5))
+    decision = relax.decide(strategy(), view)
+    assert not decision.done and decision.info["clearance_reason"] == relax.RELAXED
+    assert decision.goal is not None and decision.goal[0] > 40
+    legs = zip(decision.path[:-1], decision.path[1:], strict=True)
+    assert all(relax.body_clear(view.belief, tuple(a), tuple(b), 0.5) for a, b in legs)
+
+
+def test_a_body_touching_a_wall_may_slide_along_it_or_leave_it_not_press_into_it() -> None:
+    belief = np.full((20, 20), FREE, dtype=np.uint8)
+    belief[9, :] = OCCUPIED  # a wall whose face is the line y = 10
+    at = (5.5, 10.5)  # radius 0.5: touching it
+    assert relax.body_clear(belief, at, (12.5, 10.5), 0.5)  # along
+    assert relax.body_clear(belief, at, (8.5, 14.5), 0.5)  # away
+    assert not relax.body_clear(belief, at, (8.5, 10.4), 0.5)  # into it, a little
+    assert not relax.body_clear(belief, (5.5, 12.0), (5.5, 10.2), 0.5)
+
+
+def test_the_random_step_after_a_bump_never_presses_into_the_wall_it_touches() -> None:
+    """After a bump the robot's heading points into the wall it touches; the original's
+    random step turns at most 45 degrees from it, and at the body's clearance a line that
+    grazes on into the wall was taken, failed, and was drawn again (RAS2014-3: one robot
+    bumped 22 steps running). The escape step keeps the body clear, on every draw."""
+    belief = np.full((40, 40), FREE, dtype=np.uint8)
+    belief[19, :] = OCCUPIED  # the wall above the robot
+    belief[0, :] = belief[-1, :] = belief[:, 0] = belief[:, -1] = OCCUPIED
+    for seed in range(20):
+        view = replace(
+            slit_view((20.5, 20.5)),
+            belief=belief,
+            heading=-3 * np.pi / 4,  # up and left, into the wall
+            escaping=True,
+            rng=np.random.default_rng(seed),
+        )
+        step = relax.decide(FrontierExploration(FrontierParams(init_cycles=0)), view)
+        assert len(step.path) == 2, seed
+        start, end = tuple(step.path[0]), tuple(step.path[1])
+        assert relax.body_clear(belief, start, end, 0.5), (seed, end)

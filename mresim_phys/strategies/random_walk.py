@@ -10,6 +10,7 @@ disturb each other's draws.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import ClassVar
 
 import numpy as np
@@ -19,6 +20,8 @@ from mresim_phys.strategies.base import Decision, PlanContext, RobotView, plan_c
 from mresim_phys.strategies.catalog import STRATEGIES
 from mresim_phys.strategies.params import RandomWalkParams, StrategyParams
 
+Point = tuple[float, float]
+
 # The original's RandomWalk: heading changes and their odds (out of 26).
 TURNS_DEG = np.array([-45.0, -22.5, 0.0, 22.5, 45.0])
 TURN_ODDS = np.array([1, 2, 20, 2, 1]) / 26
@@ -26,22 +29,28 @@ STEP_TRIES = 50  # tries at one step length before giving up
 MIN_STEP = 3.0  # cells: a failed try shortens the step by one cell down to this
 
 
-def random_step(view: RobotView, context: PlanContext) -> Decision | None:
+def random_step(
+    view: RobotView,
+    context: PlanContext,
+    fits: Callable[[Point, Point], bool] | None = None,
+    heading: float | None = None,
+) -> Decision | None:
     """One random-walk step from the robot's own stream, or None if no try fits.
 
-    The heading changes by -45, -22.5, 0, +22.5 or +45 degrees (odds 1:2:20:2:1);
-    the step is the robot's speed, one cell shorter after each failed try (at least
-    3 cells). A try fits if every cell on the straight line is passable: known
-    free and the robot's clearance away from known walls.
+    The heading (the robot's own, unless ``heading`` is given) changes by -45, -22.5,
+    0, +22.5 or +45 degrees (odds 1:2:20:2:1); the step is the robot's speed, one cell
+    shorter after each failed try (at least 3 cells). A try fits if every cell on the
+    straight line is passable (known free and the robot's clearance away from known
+    walls) and ``fits(start, end)``, if given.
     """
     passable = context.passable
     x, y = view.position
     length = view.speed
+    ahead = view.heading if heading is None else heading
     for _ in range(STEP_TRIES):
         turn = float(np.radians(view.rng.choice(TURNS_DEG, p=TURN_ODDS)))
-        heading = view.heading + turn
-        end = (x + length * np.cos(heading), y + length * np.sin(heading))
-        if segment_passable(passable, (x, y), end):
+        end = (x + length * np.cos(ahead + turn), y + length * np.sin(ahead + turn))
+        if segment_passable(passable, (x, y), end) and (fits is None or fits((x, y), end)):
             path = np.array([[x, y], end])
             return Decision(path=path, goal=(float(end[0]), float(end[1])))
         length = max(length - 1.0, min(MIN_STEP, view.speed))

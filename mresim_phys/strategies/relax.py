@@ -31,8 +31,10 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from functools import partial
 
 import numpy as np
+import shapely
 
 from mresim_phys.knowledge.frontiers import frontiers_in
 from mresim_phys.knowledge.targets import TargetFinder, target_reach
@@ -55,6 +57,7 @@ DEFAULT_MIN_SIZE = 3  # frontier cells of the smallest cluster, if the strategy 
 RELAXED = "relaxed clearance"  # Decision.info["clearance_reason"] of a relaxed answer
 BOXED = "boxed in: looking around"  # Decision.info["reason"] of a turn in place
 HALF_CELL = 0.5  # cells: at this clearance or less a planned diagonal may touch a corner
+TOUCH = 1e-6  # cells: a body this close to a wall touches it (``world.space.GRAZE``)
 POCKET = 2.0  # cells beyond its radius: a reachable area under pi (r + 2)^2 is a pocket
 
 
@@ -69,9 +72,16 @@ def decide(strategy: Strategy, view: RobotView) -> Decision:
         return look_around(view)
     if decision.done and len(decision.path) <= 1:
         decision = _home_relaxed(view, decision)
-    if view.clearance <= HALF_CELL and len(decision.path) > 1:
-        return replace(decision, path=uncut_corners(decision.path, view.belief))
-    return decision
+    return _body_path(decision, view.belief, view.clearance)
+
+
+def _body_path(decision: Decision, belief: BeliefGrid, clearance: float) -> Decision:
+    """``decision`` with its path's corners uncut (:func:`uncut_corners`) when it was
+    planned at half a cell's clearance or less."""
+    if clearance > HALF_CELL or len(decision.path) <= 1:
+        return decision
+    uncut = uncut_corners(decision.path, belief)
+    return decision if len(uncut) == len(decision.path) else replace(decision, path=uncut)
 
 
 def uncut_corners(path: FloatArray, belief: BeliefGrid) -> FloatArray:
@@ -102,9 +112,11 @@ def _relaxed(strategy: Strategy, view: RobotView, decision: Decision) -> Decisio
     if margin <= 1e-9 or not frontier_reachable(view, view.radius, min_size(strategy)):
         return decision
     for share in LEVELS:
-        relaxed = strategy.decide(replace(view, clearance=view.clearance - share * margin))
+        clearance = view.clearance - share * margin
+        relaxed = strategy.decide(replace(view, clearance=clearance))
         if not relaxed.done:
-            return replace(relaxed, info={**relaxed.info, "clearance_reason": RELAXED})
+            relaxed = replace(relaxed, info={**relaxed.info, "clearance_reason": RELAXED})
+            return _body_path(relaxed, view.belief, clearance)
     return decision
 
 
@@ -118,17 +130,42 @@ def _home_relaxed(view: RobotView, decision: Decision) -> Decision:
     margin = view.clearance - view.radius
     info = {**decision.info, "clearance_reason": RELAXED}
     for share in LEVELS if margin > 1e-9 else ():
-        context = plan_context(replace(view, clearance=view.clearance - share * margin))
+        clearance = view.clearance - share * margin
+        context = plan_context(replace(view, clearance=clearance))
         home = heading_for(context, view.base_position, done=True, info=info)
         if len(home.path) > 1:
-            return home
+            return _body_path(home, view.belief, clearance)
     return decision
 
 
 def _random_escape(view: RobotView) -> Decision | None:
-    """The original's random step after a collision, at the robot's body clearance."""
+    """The original's random step after a collision, at the robot's body clearance, on a
+    line its body follows clear of every wall its map knows (:func:`body_clear`: the
+    heading after a bump points into the wall, and a step that grazes on into it fails
+    again, step after step); else one that backs off the way it came."""
     body = replace(view, clearance=view.radius)
-    return random_step(body, plan_context(body))
+    context = plan_context(body)
+    fits = partial(body_clear, view.belief, radius=view.radius)
+    ahead = random_step(body, context, fits)
+    return ahead or random_step(body, context, fits, heading=view.heading + math.pi)
+
+
+def body_clear(
+    belief: BeliefGrid, start: tuple[float, float], end: tuple[float, float], radius: float
+) -> bool:
+    """Whether a disc of ``radius`` moving straight from ``start`` to ``end`` keeps at
+    least its radius from every wall square the map holds (touching one is clear: the
+    motion lets a body slide along a wall or leave it, not press into it)."""
+    reach = radius + 1.0
+    rows, cols = belief.shape
+    r0, r1 = max(int(min(start[1], end[1]) - reach), 0), int(max(start[1], end[1]) + reach) + 1
+    c0, c1 = max(int(min(start[0], end[0]) - reach), 0), int(max(start[0], end[0]) + reach) + 1
+    wall_r, wall_c = np.nonzero(belief[r0 : min(r1, rows), c0 : min(c1, cols)] == OCCUPIED)
+    if len(wall_r) == 0:
+        return True
+    squares = shapely.box(wall_c + c0, wall_r + r0, wall_c + c0 + 1, wall_r + r0 + 1)
+    gaps = shapely.distance(shapely.LineString([start, end]), squares)
+    return bool(gaps.min() >= radius - TOUCH)
 
 
 def stands_clear(belief: BeliefGrid, position: tuple[float, float], clearance: float) -> bool:
