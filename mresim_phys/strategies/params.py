@@ -73,6 +73,16 @@ class FrontierParams(StrategyParams):
             " left, then tried from another spot, given up after two tries (giveup.py)."
         ),
     )
+    candidates: Literal["utility", "size_per_distance"] = Field(
+        "utility",
+        description=(
+            "Which frontiers enter the auction: 'utility', the max_frontiers best by the"
+            " auction's own size / d^4; 'size_per_distance', the best by size / d, as the"
+            " original orders its frontiers (area / distance), so far large frontiers enter"
+            " too and robots spread over a building's wings (d: path length;"
+            " docs/strategies.md)."
+        ),
+    )
     frontier_size: Literal["region", "cells"] = Field(
         "region",
         description=(

@@ -107,18 +107,31 @@ class AllFrontiers:
         return found
 
 
+CANDIDATE_POWER = {"utility": 4, "size_per_distance": 1}  # FrontierParams.candidates
+
+
 @dataclass
 class UtilityRanking:
-    """The original's utility ``size * 1e8 / d**4``; the best ``max_frontiers`` compete."""
+    """The best ``max_frontiers`` by ``size / d**power`` compete: the original's utility
+    ``size * 1e8 / d**4`` (power 4), or its frontier order, area / distance (power 1)."""
 
     max_frontiers: int
+    power: int = 4
 
     def candidates(self, frontiers: Frontiers, costs: FloatArray) -> IntArray:
         """Indices of the best reachable frontiers, best first."""
-        u = utility(frontiers.sizes.astype(float), costs)
+        u = self.score(frontiers.sizes.astype(float), costs)
         order = np.argsort(-u, kind="stable")
         keep = order[np.isfinite(u[order])]
         return keep[: self.max_frontiers]
+
+    def score(self, sizes: FloatArray, costs: FloatArray) -> FloatArray:
+        """What the candidates are ordered by (-inf: unreachable)."""
+        if self.power == 4:
+            return utility(sizes, costs)
+        with np.errstate(divide="ignore", over="ignore"):
+            u = sizes / np.maximum(costs, 1.0) ** self.power
+        return np.where(np.isfinite(costs), u, -np.inf)
 
     def settled(
         self, frontiers: Frontiers, costs: FloatArray, candidates: IntArray, limit: float
@@ -132,8 +145,8 @@ class UtilityRanking:
         if len(candidates) < self.max_frontiers:
             return False
         sizes = frontiers.sizes.astype(float)
-        best_beyond = utility(sizes[beyond].max(keepdims=True), np.array([limit]))[0]
-        return bool(utility(sizes[candidates[-1:]], costs[candidates[-1:]])[0] > best_beyond)
+        best_beyond = self.score(sizes[beyond].max(keepdims=True), np.array([limit]))[0]
+        return bool(self.score(sizes[candidates[-1:]], costs[candidates[-1:]])[0] > best_beyond)
 
 
 def auction_team(view: RobotView, memory: int) -> list[TeammateInfo]:

@@ -35,12 +35,11 @@ import numpy as np
 
 from mresim_phys.knowledge.frontiers import Frontiers
 from mresim_phys.knowledge.teammates import Payload
-from mresim_phys.strategies.auction import utility
 from mresim_phys.strategies.base import Decision, PlanContext, RobotView, heading_for, plan_context
 from mresim_phys.strategies.catalog import STRATEGIES
 from mresim_phys.strategies.frontier import FrontierExploration, default_parts
 from mresim_phys.strategies.params import SectorParams, StrategyParams
-from mresim_phys.strategies.parts import Allocation, Offer, UtilityRanking
+from mresim_phys.strategies.parts import CANDIDATE_POWER, Allocation, Offer, UtilityRanking
 from mresim_phys.types import FloatArray, IntArray
 
 
@@ -108,7 +107,7 @@ class WedgeRanking:
         mine = self.wedge.inside & np.isfinite(costs)
         if not mine.any():
             return self.inner.candidates(frontiers, costs)
-        u = np.where(mine, utility(frontiers.sizes.astype(float), costs), -np.inf)
+        u = np.where(mine, self.inner.score(frontiers.sizes.astype(float), costs), -np.inf)
         order = np.argsort(-u, kind="stable")
         return order[np.isfinite(u[order])][: self.inner.max_frontiers]
 
@@ -150,7 +149,8 @@ class SectorRendezvous(FrontierExploration):
     def __init__(self, params: SectorParams) -> None:
         self.wedge = Wedge()  # its wedge, as its ranking and allocation parts see it
         parts = default_parts(params)
-        ranking = WedgeRanking(self.wedge, UtilityRanking(params.max_frontiers))
+        inner = UtilityRanking(params.max_frontiers, CANDIDATE_POWER[params.candidates])
+        ranking = WedgeRanking(self.wedge, inner)
         allocation = WedgeFirst(self.wedge, parts.allocation)
         super().__init__(params, replace(parts, ranking=ranking, allocation=allocation))
         self.meetings: dict[str, SectorMeeting] = {}  # partner -> next meeting with it
