@@ -52,6 +52,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from mresim_phys import Simulation  # noqa: E402
+from mresim_phys.arg_types import scenario_setting  # noqa: E402
 from mresim_phys.build import load_scenario  # noqa: E402
 
 
@@ -235,14 +236,6 @@ def original(team: Team, spec: str) -> str:
     return " / ".join(figures[k] for k in ("e50", "e90", "e95", "b95", "final"))
 
 
-def setting(text: str) -> tuple[str, Any]:
-    """argparse type: ``PATH=VALUE`` with the value read as YAML."""
-    path, sep, value = text.partition("=")
-    if not sep or not path:
-        raise argparse.ArgumentTypeError(f"expected PATH=VALUE, got {text!r}")
-    return path.strip(), yaml.safe_load(value)
-
-
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, default=20, help="seeds 1..N (default 20)")
@@ -261,7 +254,7 @@ def main() -> None:
         "--set",
         action="append",
         default=[],
-        type=setting,
+        type=scenario_setting,
         metavar="PATH=VALUE",
         help="change a scenario field of every run, e.g. team.radius=2 (repeatable)",
     )

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Callable
-from typing import TypeVar
+from typing import Any, TypeVar
 
 T = TypeVar("T")
 
@@ -53,3 +53,18 @@ def comma_separated(text: str, parse: Callable[[str], T], expected: str) -> list
     if not values:
         raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
     return values
+
+
+def scenario_setting(text: str) -> tuple[str, Any]:
+    """argparse type: ``PATH=VALUE``, a scenario field by its dotted path and its value
+    read as YAML (``team.radius=2``, ``team.strategy.params.candidates=size_per_distance``),
+    for ``scenario.overrides.apply_overrides``."""
+    import yaml  # a base dependency, imported only when a setting is given
+
+    path, sep, value = text.partition("=")
+    if not sep or not path.strip():
+        raise argparse.ArgumentTypeError(f"expected PATH=VALUE, got {text!r}")
+    try:
+        return path.strip(), yaml.safe_load(value)
+    except yaml.YAMLError as exc:
+        raise argparse.ArgumentTypeError(f"{text!r}: the value is no YAML ({exc})") from None

@@ -196,3 +196,29 @@ def test_a_wrong_original_tree_or_case_is_a_message_and_exit_2(
     assert "give MAP=TEAM" in capsys.readouterr().err
     assert compare.main(["--original", str(tree), "--case", "environments/tiny.png=nope"]) == 2
     assert "team file 'nope'" in capsys.readouterr().err
+
+
+def test_set_changes_our_scenarios_and_keeps_those_runs_apart(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """``--set`` runs ours with a changed field into a folder named by the change: a run
+    with other settings is never read as this one's; a wrong value is a message, exit 2."""
+    tree = original_tree(tmp_path)
+    common = ["--original", str(tree), "--case", "environments/tiny.png=config/team",
+              "--seeds", "1", "--original-seeds", "1", "--steps", "15",
+              "--original-results", str(tmp_path / "original-results"),
+              "--ours-results", str(tmp_path / "ours")]  # fmt: skip
+    change = "team.strategy={name: frontier, params: {candidates: size_per_distance}}"
+    assert compare.main([*common, "--set", change]) == 0
+    folder = "set team.strategy={name: frontier, params: {candidates: size_per_distance}}"
+    run = tmp_path / "ours" / folder / "tiny" / "seed-1"
+    scenario = (run / "scenario.yaml").read_text()
+    assert "size_per_distance" in scenario
+    assert not (tmp_path / "ours" / "tiny").exists()
+    wrong = "team.strategy={name: frontier, params: {candidates: nearest}}"
+    assert compare.main([*common, "--set", wrong]) == 2
+    assert "candidates" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as stop:
+        compare.main([*common, "--set", "no-equals-sign"])
+    assert stop.value.code == 2
+    assert "expected PATH=VALUE" in capsys.readouterr().err

@@ -18,6 +18,12 @@ say (the original's runs found there are read, not rerun)::
     python tools/compare_original.py --original /work/orig --original-results /work/orig-results
     python tools/compare_original.py --original /work/orig --case \\
         environments/hotel2.png=tools/original_teams/hotel2_8robots --seeds 1,2 --steps 800
+    python tools/compare_original.py --original /work/orig --no-run-original \\
+        --set 'team.strategy={name: frontier, params: {candidates: size_per_distance}}'
+
+``--set PATH=VALUE`` changes a field of our scenarios (a dotted path, the value read as
+YAML; repeatable); those runs go to a sub-folder of ``--ours-results`` named by the
+changes, so they are never read as the default runs, and the original's runs are shared.
 
 Denominator: every fraction is one of the original's ``totalArea`` T, all pixels of the
 800x600 map that are not obstacles (first image band != 0; a smaller image is centred and
@@ -53,6 +59,8 @@ from typing import Any
 
 import numpy as np
 
+from mresim_phys.arg_types import scenario_setting
+
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
 sys.path.insert(0, str(HERE))
@@ -73,6 +81,7 @@ from original_metrics import (  # noqa: E402  (a sibling script's module)
     run_result,
 )
 
+Setting = tuple[str, Any]  # a --set PATH=VALUE
 DRIVER = Path("/work/shared/original")
 ORIGINAL_THRESHOLD = 1e-6  # our map threshold: only pure black is wall
 STALL = 300  # our runs stop when neither fraction gained 0.1 % in this many steps
@@ -137,15 +146,19 @@ def run_original(case: Case, seed: int, out: Path, args: argparse.Namespace) -> 
         handle.write(f"# wall_s={time.perf_counter() - started:.1f}\n")
 
 
-def run_ours(case: Case, seed: int, steps: int, folder: Path) -> Path:
-    """Run our scenario of ``case`` (import-team's, read with the original's wall rule)
-    unless ``folder`` has this run; store the two denominators next to its metrics."""
+def run_ours(
+    case: Case, seed: int, steps: int, folder: Path, changes: Sequence[Setting] = ()
+) -> Path:
+    """Run our scenario of ``case`` (import-team's, read with the original's wall rule, with
+    the ``--set`` ``changes``) unless ``folder`` has this run; store the two denominators
+    next to its metrics."""
     from mresim_phys.output.session import run_session
     from mresim_phys.scenario.load import resolve_map_path, validate_scenario
+    from mresim_phys.scenario.overrides import apply_overrides
     from mresim_phys.scenario.team_file import read_team_file
     from mresim_phys.sim import Simulation
 
-    run_dir = folder / case.key / f"seed-{seed}"
+    run_dir = folder / changed_folder(changes) / case.key / f"seed-{seed}"
     if (run_dir / "denominators.json").is_file():
         return run_dir
     data = read_team_file(case.team_path, str(case.map_path))
@@ -158,6 +171,7 @@ def run_ours(case: Case, seed: int, steps: int, folder: Path) -> Path:
         "render": {"video": False, "final_png": True, "log": True, "plots": False},
     }
     source = str(case.team_path)
+    data = apply_overrides(data, dict(changes), source)
     sim = Simulation(resolve_map_path(validate_scenario(data, source), ROOT, source))
     counts = {
         "ours_explorable_cells": sim.coverage.total,
@@ -167,6 +181,19 @@ def run_ours(case: Case, seed: int, steps: int, folder: Path) -> Path:
     run_session(sim, run_dir, overwrite=True)
     (run_dir / "denominators.json").write_text(json.dumps(counts, indent=2) + "\n")
     return run_dir
+
+
+def changed_folder(changes: Sequence[Setting]) -> str:
+    """The sub-folder of ``--ours-results`` for runs with these ``--set`` changes ('' for
+    none), so a run with other settings is never read as this one's.
+
+    >>> changed_folder([("team.radius", 1), ("team.strategy", {"name": "frontier"})])
+    'set team.radius=1 team.strategy={name: frontier}'
+    """
+    if not changes:
+        return ""
+    text = " ".join(f"{path}={json.dumps(value, sort_keys=True)}" for path, value in changes)
+    return "set " + text.replace('"', "").replace("/", "_")
 
 
 def rule_mismatch(occupied: np.ndarray[Any, Any], image: Path) -> int:
@@ -277,6 +304,16 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         action="store_false",
         help="only read the original's whole runs found in --original-results",
     )
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        type=scenario_setting,
+        metavar="PATH=VALUE",
+        help="change a field of our scenarios, e.g. 'team.strategy={name: frontier, params:"
+        " {candidates: size_per_distance}}' (repeatable; those runs go to a folder of their"
+        " own)",
+    )
     parser.add_argument("--out", type=Path, help="also write the tables to this file")
     parser.add_argument(
         "--denominator",
@@ -292,7 +329,7 @@ def compare_case(
 ) -> tuple[list[RunResult], list[RunResult], str]:
     """The original's runs and ours of one case (run where missing), and the table note."""
     home = base_pixel(case.team_path)
-    runs = [run_ours(case, seed, args.steps, args.ours_results) for seed in args.seeds]
+    runs = [run_ours(case, seed, args.steps, args.ours_results, args.set) for seed in args.seeds]
     counts = read_json(runs[0] / "denominators.json")
     explorable = args.denominator == "explorable"
     original = []
