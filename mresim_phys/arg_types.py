@@ -1,6 +1,7 @@
 """Argument types of the ``mresim`` command line (output edge): numbers and lists, checked.
 
-Standard library only: every command's parser is built without importing the simulator.
+Standard library only (PyYAML, a base dependency, is imported when a ``--set`` value is
+read): every command's parser is built without importing the simulator.
 Each raises :class:`argparse.ArgumentTypeError` saying what was expected, which argparse
 turns into a usage line and exit status 2.
 """
@@ -57,7 +58,7 @@ def comma_separated(text: str, parse: Callable[[str], T], expected: str) -> list
 
 def scenario_setting(text: str) -> tuple[str, Any]:
     """argparse type: ``PATH=VALUE``, a scenario field by its dotted path and its value
-    read as YAML (``team.radius=2``, ``team.strategy.params.candidates=size_per_distance``),
+    read as YAML (``team.radius=2``, ``team.strategy={name: frontier, params: {...}}``),
     for ``scenario.overrides.apply_overrides``."""
     import yaml  # a base dependency, imported only when a setting is given
 

@@ -19,7 +19,10 @@ it has moved a cell away, it plans with at least :data:`CORNER` clearance beyond
 radius, which no cell-to-cell move can cut (half a cell's diagonal), unless its own cell
 is not passable at that (:func:`escape_clearance`: a start snapped to a cell nearby would
 cut a corner on the way); if that boxes it in, it takes the original's random step after
-a collision. A collision never freezes it.
+a collision, on a line its body follows clear of every wall its map knows
+(:func:`body_clear`), or backs off the way it came. A collision never freezes it. A path
+planned at half a cell's clearance or less, the robot's own or a relaxed one, gets a stop
+at the corner of every wall its diagonals pass (:func:`uncut_corners`).
 
 A robot left with no way out on its own map (:func:`boxed_in`: the cells its body reaches
 are a pocket hardly larger than itself, while frontiers remain elsewhere) is not done: it
