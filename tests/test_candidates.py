@@ -1,9 +1,9 @@
-"""Phase 4 (decide): which frontiers enter the auction (``FrontierParams.candidates``).
+"""Phase 4 (decide): which frontiers enter the auction (``FrontierParams.candidate_power``).
 
-``utility`` takes the best ``max_frontiers`` by the auction's own ``size / d^4``;
-``size_per_distance`` orders them as the original does (area / distance), so a far large
-frontier enters the auction beside the near small ones. A search bounded by a horizon
-must settle on the candidates a whole-map search would give, in either order.
+The best ``max_frontiers`` by ``size / d^power``: 4 by the auction's own utility (the
+default), 1 as the original orders them (area / distance), so a far large frontier enters
+the auction beside the near small ones, 2 between. A search bounded by a horizon must
+settle on the candidates a whole-map search would give, for every power.
 """
 
 from __future__ import annotations
@@ -37,26 +37,29 @@ def clusters(sizes: list[int]) -> Frontiers:
     )
 
 
-def ranking(order: str) -> UtilityRanking:
-    strategy = FrontierExploration(FrontierParams(candidates=order))  # type: ignore[arg-type]
+def ranking(power: int) -> UtilityRanking:
+    strategy = FrontierExploration(FrontierParams(candidate_power=power))
     assert isinstance(strategy.parts.ranking, UtilityRanking)
     return strategy.parts.ranking
 
 
 def test_the_original_order_lets_a_far_wing_into_the_auction() -> None:
     """Six 3-cell doorways 10 cells away and an unvisited wing of 5,000 cells 100 cells
-    away: by size / d^4 the wing is not among the six best, by size / d it is first."""
+    away: by size / d^4 (the default) the wing is not among the six best, by size / d^2
+    or size / d it is first."""
     frontiers = clusters([3] * 6 + [5000])
     costs = np.array([10.0] * 6 + [100.0])
-    assert 6 not in ranking("utility").candidates(frontiers, costs)
-    assert ranking("size_per_distance").candidates(frontiers, costs)[0] == 6
+    assert 6 not in ranking(4).candidates(frontiers, costs)
+    assert ranking(2).candidates(frontiers, costs)[0] == 6
+    assert ranking(1).candidates(frontiers, costs)[0] == 6
+    assert FrontierParams().candidate_power == 4
 
 
 def test_an_unreachable_frontier_is_never_a_candidate() -> None:
     frontiers = clusters([9000, 3, 4])
     costs = np.array([np.inf, 10.0, 20.0])
-    for order in ("utility", "size_per_distance"):
-        assert 0 not in ranking(order).candidates(frontiers, costs)
+    for power in (1, 2, 3, 4):
+        assert 0 not in ranking(power).candidates(frontiers, costs)
 
 
 @settings(max_examples=200, deadline=None)
@@ -64,10 +67,10 @@ def test_an_unreachable_frontier_is_never_a_candidate() -> None:
     sizes=st.lists(st.integers(1, 5000), min_size=1, max_size=30),
     seed=st.integers(0, 2**32 - 1),
     limit=st.floats(2.0, 400.0),
-    order=st.sampled_from(["utility", "size_per_distance"]),
+    power=st.integers(1, 4),
 )
 def test_a_settled_horizon_gives_the_whole_map_s_candidates(
-    sizes: list[int], seed: int, limit: float, order: str
+    sizes: list[int], seed: int, limit: float, power: int
 ) -> None:
     """A search out to ``limit`` knows the costs up to it (those beyond are at least
     ``limit``): once the ranking calls it settled, its candidates are the whole map's."""
@@ -75,17 +78,18 @@ def test_a_settled_horizon_gives_the_whole_map_s_candidates(
     costs = rng.uniform(1.0, 500.0, len(sizes))
     frontiers = clusters(sizes)
     seen = np.where(costs <= limit, costs, np.inf)
-    rank = ranking(order)
+    rank = ranking(power)
     found = rank.candidates(frontiers, seen)
     if len(found) and rank.settled(frontiers, seen, found, limit):
         assert found.tolist() == rank.candidates(frontiers, costs).tolist()
 
 
-def test_a_scenario_names_the_order_and_a_wrong_name_is_refused() -> None:
+def test_a_scenario_sets_the_power_and_one_out_of_range_is_refused() -> None:
     path = SCENARIOS / "13_rooms_4_robots.yaml"
     data = yaml.safe_load(path.read_text())
-    data["team"]["strategy"] = {"name": "frontier", "params": {"candidates": "size_per_distance"}}
+    data["team"]["strategy"] = {"name": "frontier", "params": {"candidate_power": 2}}
     validate_scenario(data, str(path))
-    data["team"]["strategy"]["params"]["candidates"] = "nearest"
-    with pytest.raises(ScenarioError, match="candidates"):
-        validate_scenario(data, str(path))
+    for wrong in (0, 5, "two"):
+        data["team"]["strategy"]["params"]["candidate_power"] = wrong
+        with pytest.raises(ScenarioError, match="candidate_power"):
+            validate_scenario(data, str(path))

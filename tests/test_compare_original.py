@@ -208,16 +208,16 @@ def test_set_changes_our_scenarios_and_keeps_those_runs_apart(
               "--seeds", "1", "--original-seeds", "1", "--steps", "15",
               "--original-results", str(tmp_path / "original-results"),
               "--ours-results", str(tmp_path / "ours")]  # fmt: skip
-    change = "team.strategy={name: frontier, params: {candidates: size_per_distance}}"
+    change = "team.strategy={name: frontier, params: {candidate_power: 2}}"
     assert compare.main([*common, "--set", change]) == 0
-    folder = "set team.strategy={name: frontier, params: {candidates: size_per_distance}}"
+    folder = "set team.strategy={name: frontier, params: {candidate_power: 2}}"
     run = tmp_path / "ours" / folder / "tiny" / "seed-1"
     scenario = (run / "scenario.yaml").read_text()
-    assert "size_per_distance" in scenario
+    assert "candidate_power: 2" in scenario
     assert not (tmp_path / "ours" / "tiny").exists()
-    wrong = "team.strategy={name: frontier, params: {candidates: nearest}}"
+    wrong = "team.strategy={name: frontier, params: {candidate_power: 9}}"
     assert compare.main([*common, "--set", wrong]) == 2
-    assert "candidates" in capsys.readouterr().err
+    assert "candidate_power" in capsys.readouterr().err
     with pytest.raises(SystemExit) as stop:
         compare.main([*common, "--set", "no-equals-sign"])
     assert stop.value.code == 2

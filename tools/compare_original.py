@@ -19,7 +19,7 @@ say (the original's runs found there are read, not rerun)::
     python tools/compare_original.py --original /work/orig --case \\
         environments/hotel2.png=tools/original_teams/hotel2_8robots --seeds 1,2 --steps 800
     python tools/compare_original.py --original /work/orig --no-run-original \\
-        --set 'team.strategy={name: frontier, params: {candidates: size_per_distance}}'
+        --set 'team.strategy={name: frontier, params: {candidate_power: 2}}'
 
 ``--set PATH=VALUE`` changes a field of our scenarios (a dotted path, the value read as
 YAML; repeatable); those runs go to a sub-folder of ``--ours-results`` named by the
@@ -311,8 +311,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         type=scenario_setting,
         metavar="PATH=VALUE",
         help="change a field of our scenarios, e.g. 'team.strategy={name: frontier, params:"
-        " {candidates: size_per_distance}}' (repeatable; those runs go to a folder of their"
-        " own)",
+        " {candidate_power: 2}}' (repeatable; those runs go to a folder of their own)",
     )
     parser.add_argument("--out", type=Path, help="also write the tables to this file")
     parser.add_argument(

@@ -50,7 +50,6 @@ from mresim_phys.strategies.catalog import STRATEGIES
 from mresim_phys.strategies.giveup import Tried
 from mresim_phys.strategies.params import FrontierParams, StrategyParams
 from mresim_phys.strategies.parts import (
-    CANDIDATE_POWER,
     AllFrontiers,
     FrontierParts,
     GreedyAuction,
@@ -189,7 +188,7 @@ def default_parts(params: FrontierParams) -> FrontierParts:
     auction, the original's mission-complete rule (``strategies/parts.py``)."""
     return FrontierParts(
         filter=AllFrontiers(),
-        ranking=UtilityRanking(params.max_frontiers, CANDIDATE_POWER[params.candidates]),
+        ranking=UtilityRanking(params.max_frontiers, params.candidate_power),
         allocation=GreedyAuction(params.teammate_memory),
         done=MissionComplete(params.done_fraction, params.done_after),
     )

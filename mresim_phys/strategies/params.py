@@ -73,14 +73,16 @@ class FrontierParams(StrategyParams):
             " left, then tried from another spot, given up after two tries (giveup.py)."
         ),
     )
-    candidates: Literal["utility", "size_per_distance"] = Field(
-        "utility",
+    candidate_power: int = Field(
+        4,
+        ge=1,
+        le=4,
         description=(
-            "Which frontiers enter the auction: 'utility', the max_frontiers best by the"
-            " auction's own size / d^4; 'size_per_distance', the best by size / d, as the"
-            " original orders its frontiers (area / distance), so far large frontiers enter"
-            " too and robots spread over a building's wings (d: path length;"
-            " docs/strategies.md)."
+            "Which frontiers enter the auction: the max_frontiers best by size / d^power"
+            " (d: path length). 4: by the auction's own utility; 1: as the original orders"
+            " its frontiers (area / distance); 2 between. The smaller, the more far large"
+            " frontiers enter and the more robots spread over a building's wings"
+            " (docs/strategies.md)."
         ),
     )
     frontier_size: Literal["region", "cells"] = Field(

@@ -107,13 +107,11 @@ class AllFrontiers:
         return found
 
 
-CANDIDATE_POWER = {"utility": 4, "size_per_distance": 1}  # FrontierParams.candidates
-
-
 @dataclass
 class UtilityRanking:
     """The best ``max_frontiers`` by ``size / d**power`` compete: the original's utility
-    ``size * 1e8 / d**4`` (power 4), or its frontier order, area / distance (power 1)."""
+    ``size * 1e8 / d**4`` (power 4), its frontier order, area / distance (power 1), or
+    between (``FrontierParams.candidate_power``)."""
 
     max_frontiers: int
     power: int = 4

@@ -39,7 +39,7 @@ from mresim_phys.strategies.base import Decision, PlanContext, RobotView, headin
 from mresim_phys.strategies.catalog import STRATEGIES
 from mresim_phys.strategies.frontier import FrontierExploration, default_parts
 from mresim_phys.strategies.params import SectorParams, StrategyParams
-from mresim_phys.strategies.parts import CANDIDATE_POWER, Allocation, Offer, UtilityRanking
+from mresim_phys.strategies.parts import Allocation, Offer, UtilityRanking
 from mresim_phys.types import FloatArray, IntArray
 
 
@@ -149,7 +149,7 @@ class SectorRendezvous(FrontierExploration):
     def __init__(self, params: SectorParams) -> None:
         self.wedge = Wedge()  # its wedge, as its ranking and allocation parts see it
         parts = default_parts(params)
-        inner = UtilityRanking(params.max_frontiers, CANDIDATE_POWER[params.candidates])
+        inner = UtilityRanking(params.max_frontiers, params.candidate_power)
         ranking = WedgeRanking(self.wedge, inner)
         allocation = WedgeFirst(self.wedge, parts.allocation)
         super().__init__(params, replace(parts, ranking=ranking, allocation=allocation))
