@@ -52,7 +52,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from mresim_phys import Simulation  # noqa: E402
-from mresim_phys.arg_types import scenario_setting  # noqa: E402
+from mresim_phys.arg_types import add_settings  # noqa: E402
 from mresim_phys.build import load_scenario  # noqa: E402
 
 
@@ -250,14 +250,7 @@ def main() -> None:
     )
     parser.add_argument("-j", "--jobs", type=int, default=os.cpu_count() or 1, help="processes")
     parser.add_argument("--csv", type=Path, help="write one row per run to this file")
-    parser.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        type=scenario_setting,
-        metavar="PATH=VALUE",
-        help="change a scenario field of every run, e.g. team.radius=2 (repeatable)",
-    )
+    add_settings(parser, "change a scenario field of every run, e.g. team.radius=2 (repeatable)")
     args = parser.parse_args()
     unknown = [t for t in args.teams.split(",") if t not in TEAMS]
     if unknown:

@@ -69,3 +69,16 @@ def scenario_setting(text: str) -> tuple[str, Any]:
         return path.strip(), yaml.safe_load(value)
     except yaml.YAMLError as exc:
         raise argparse.ArgumentTypeError(f"{text!r}: the value is no YAML ({exc})") from None
+
+
+def add_settings(parser: argparse.ArgumentParser, help_text: str) -> None:
+    """Give ``parser`` the repeatable ``--set PATH=VALUE`` (:func:`scenario_setting`),
+    read as ``args.set``: a list of (path, value)."""
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        type=scenario_setting,
+        metavar="PATH=VALUE",
+        help=help_text,
+    )

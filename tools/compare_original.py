@@ -59,7 +59,7 @@ from typing import Any
 
 import numpy as np
 
-from mresim_phys.arg_types import scenario_setting
+from mresim_phys.arg_types import add_settings
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
@@ -304,13 +304,9 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         action="store_false",
         help="only read the original's whole runs found in --original-results",
     )
-    parser.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        type=scenario_setting,
-        metavar="PATH=VALUE",
-        help="change a field of our scenarios, e.g. 'team.strategy={name: frontier, params:"
+    add_settings(
+        parser,
+        "change a field of our scenarios, e.g. 'team.strategy={name: frontier, params:"
         " {candidate_power: 2}}' (repeatable; those runs go to a folder of their own)",
     )
     parser.add_argument("--out", type=Path, help="also write the tables to this file")
