@@ -68,10 +68,11 @@ class Bidder:
         self.exact = self.exact | known
 
 
-def utility(sizes: FloatArray, costs: FloatArray) -> FloatArray:
-    """The original's frontier utility; unreachable frontiers get -inf."""
+def utility(sizes: FloatArray, costs: FloatArray, power: int = 4) -> FloatArray:
+    """The original's frontier utility ``size * 1e8 / d**4`` (``power``: another exponent
+    of the distance, as a candidate order may use); unreachable frontiers get -inf."""
     with np.errstate(divide="ignore", over="ignore"):
-        u = sizes * UTILITY_SCALE / np.maximum(costs, 1.0) ** 4
+        u = sizes * UTILITY_SCALE / np.maximum(costs, 1.0) ** power
     return np.where(np.isfinite(costs), u, -np.inf)
 
 

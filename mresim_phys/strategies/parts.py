@@ -125,11 +125,7 @@ class UtilityRanking:
 
     def score(self, sizes: FloatArray, costs: FloatArray) -> FloatArray:
         """What the candidates are ordered by (-inf: unreachable)."""
-        if self.power == 4:
-            return utility(sizes, costs)
-        with np.errstate(divide="ignore", over="ignore"):
-            u = sizes / np.maximum(costs, 1.0) ** self.power
-        return np.where(np.isfinite(costs), u, -np.inf)
+        return utility(sizes, costs, self.power)
 
     def settled(
         self, frontiers: Frontiers, costs: FloatArray, candidates: IntArray, limit: float
