@@ -21,6 +21,11 @@ say (the original's runs found there are read, not rerun)::
     python tools/compare_original.py --original /work/orig --no-run-original \\
         --set 'team.strategy={name: frontier, params: {candidate_power: 2}}'
 
+A map of our corpus (``maps/corpus``) runs once ``tools/original_png.py NAME --original
+TREE`` has written it into the original's tree as ``environments/corpus/NAME.png`` with its
+team file ``tools/original_teams/NAME_8robots`` (the Willow Garage map, kept aside, is one
+of the default cases).
+
 ``--set PATH=VALUE`` changes a field of our scenarios (a dotted path, the value read as
 YAML; repeatable); those runs go to a sub-folder of ``--ours-results`` named by the
 changes, so they are never read as the default runs, and the original's runs are shared.
@@ -94,6 +99,8 @@ DEFAULT_CASES = (
     "environments/SSRR2014/1.png=config/SSRR2014/M1_L1_R2",
     "environments/hotel3.png=tools/original_teams/hotel3_8robots",  # kept aside: check only
     "environments/intel-map.png=tools/original_teams/intel-map_8robots",  # kept aside
+    # kept aside; the image is written into the original's tree by tools/original_png.py
+    "environments/corpus/willow_garage.png=tools/original_teams/willow_garage_8robots",
 )
 
 
@@ -113,7 +120,8 @@ def case_of(spec: str, original: Path) -> Case:
         raise CompareError(f"--case {spec!r}: give MAP=TEAM, e.g. {DEFAULT_CASES[0]}")
     map_path = original / map_text
     if not map_path.is_file():
-        raise CompareError(f"--case {spec!r}: no map {map_path} in the original's tree")
+        hint = " (a corpus map: write it with tools/original_png.py)" * ("corpus/" in map_text)
+        raise CompareError(f"--case {spec!r}: no map {map_path} in the original's tree{hint}")
     key = str(Path(map_text).relative_to("environments").with_suffix("")).replace("/", "-")
     return Case(key, map_path, find_team(team_text, original))
 
@@ -290,7 +298,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     """The command line."""
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--original", type=Path, required=True, help="the original's tree")
-    parser.add_argument("--case", action="append", help="MAP=TEAM (default: the 8 cases)")
+    parser.add_argument("--case", action="append", help="MAP=TEAM (default: the 9 cases)")
     parser.add_argument("--seeds", type=seeds, default=[1, 2, 3, 4, 5], help="ours")
     parser.add_argument("--original-seeds", type=seeds, default=[1, 2, 3])
     parser.add_argument("--steps", type=int, default=1500, help="step cap, ours and original")

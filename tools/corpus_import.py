@@ -154,6 +154,14 @@ SOURCES = (
         "cob_default_env_config/envs/ipa-apartment/map.yaml", "Apache-2.0 (LICENSE, package.xml)",
         (150, 400),
     ),
+    Source(
+        "willow_garage", "office",
+        "Willow Garage office (real SLAM map, 2010-02-18): corridors round two blocks of "
+        "offices, labs, an open hall; kept aside for checking (issue 28), never tuned on",
+        "turtlebot/turtlebot_apps", "4bbafc7bfdfc5888ba03b52611bdb56d86b22967",
+        "turtlebot_navigation/maps/willow-2010-02-18-0.10.yaml",
+        "BSD (turtlebot_navigation package.xml)", (190, 390),
+    ),
 )  # fmt: skip
 
 
