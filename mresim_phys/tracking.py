@@ -84,17 +84,21 @@ def explorable_summary(
 
 @dataclass
 class StallWatch:
-    """When the run last made progress: a gain of ``gain`` in explored or known at base.
+    """When the run last made progress: a gain of ``gain`` in explored or known at base,
+    or a robot done for the first time (it sets out to bring its map home).
 
     The run is stalled once ``window`` steps have passed since the last step at which
-    either fraction rose by at least ``gain`` above its value at the progress before
-    (``stop.stalled_for`` / ``stop.stalled_gain``). Slow, steady gains add up: 0.01 %
-    a step for ten steps is a gain of 0.1 %.
+    either fraction rose by at least ``gain`` above its value at the progress before, or
+    a robot was first ``done`` (``stop.stalled_for`` / ``stop.stalled_gain``). Slow, steady
+    gains add up: 0.01 % a step for ten steps is a gain of 0.1 %. A robot done counts once,
+    so the rule ends a run at most one window per robot later than the gains alone would.
     """
 
     window: int | None
     gain: float
     progress: Progress = field(init=False)  # the measure run health shares
+    set_out: set[str] = field(init=False, default_factory=set)  # robots done at least once
+    last_set_out: int = field(init=False, default=0)  # the step a robot was first done
 
     def __post_init__(self) -> None:
         self.progress = Progress(self.gain)
@@ -102,12 +106,16 @@ class StallWatch:
     @property
     def last_progress(self) -> int:
         """The last step at which the run made progress."""
-        return self.progress.step
+        return max(self.progress.step, self.last_set_out)
 
     def update(self, record: StepRecord) -> None:
         """Note progress made by ``record``."""
         explored, known = fraction("explored", record), fraction("known_at_base", record)
         self.progress.update(record.step, explored, known)
+        done = {robot.name for robot in record.robots if robot.state == "done"}
+        if done - self.set_out:
+            self.set_out |= done
+            self.last_set_out = record.step
 
     def stalled(self, step: int) -> bool:
         """No progress in the last ``window`` steps."""

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -186,8 +187,32 @@ def test_slow_steady_gains_count_as_progress() -> None:
     assert watch.stalled(45) and watch.last_progress <= 39
 
 
+def test_a_robot_first_done_restarts_the_stall_clock_once() -> None:
+    """A robot that sets out home with its map is progress the fractions do not show yet
+    (RAS2014-2: the run stopped stalled while the robots drove home, the base at 6 %)."""
+    from mresim_phys.tracking import StallWatch
+
+    watch = StallWatch(window=5, gain=0.001)
+    watch.update(_Fractions(0, 0.5, 0.1))
+    for step in range(1, 4):
+        watch.update(_Fractions(step, 0.5, 0.1))
+    watch.update(_Fractions(4, 0.5, 0.1, done=("A",)))
+    assert watch.last_progress == 4 and not watch.stalled(8)
+    for step in range(5, 10):  # A stays done: no news
+        watch.update(_Fractions(step, 0.5, 0.1, done=("A",)))
+    assert watch.stalled(9)
+    watch.update(_Fractions(10, 0.5, 0.1, done=("A", "B")))
+    assert watch.last_progress == 10
+    watch.update(_Fractions(11, 0.5, 0.1))  # both back at work
+    watch.update(_Fractions(12, 0.5, 0.1, done=("A", "B")))  # done again: counted once
+    assert watch.last_progress == 10 and watch.stalled(15)
+
+
 class _Fractions:
     """The part of a step record that StallWatch reads."""
 
-    def __init__(self, step: int, explored: float, known_at_base: float) -> None:
+    def __init__(
+        self, step: int, explored: float, known_at_base: float, done: tuple[str, ...] = ()
+    ) -> None:
         self.step, self.explored, self.known_at_base = step, explored, known_at_base
+        self.robots = tuple(SimpleNamespace(name=name, state="done") for name in done)

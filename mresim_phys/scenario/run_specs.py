@@ -27,7 +27,8 @@ class StopSpec(Strict):
         le=1_000_000,
         description=(
             "Stop when neither explored nor known at base has gained stalled_gain in this"
-            " many steps (stop reason 'stalled'); null = never."
+            " many steps and no robot was done for the first time in them (it sets out to"
+            " bring its map home; stop reason 'stalled'); null = never."
         ),
     )
     stalled_gain: float = Field(
