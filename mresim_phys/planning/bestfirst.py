@@ -33,11 +33,10 @@ from mresim_phys.planning.grid import (
     STRAIGHT,
     UNSEEN,
     diagonal_ok,
-    heap_grow,
-    heap_new,
-    heap_pop,
-    heap_push,
+    heap_add,
+    heap_start,
     octile,
+    pop_open,
 )
 from mresim_phys.types import FloatArray
 
@@ -65,15 +64,13 @@ def astar_kernel(
     """
     restricted = labels.size > 0
     tr, tc = target // wp, target % wp
-    fs, gs, nodes = heap_new(1024)
     g[source], pred[source], state[source] = 0.0, NO_PRED, OPEN
-    size = heap_push(fs, gs, nodes, 0, octile(source // wp, source % wp, tr, tc), 0.0, source)
+    fs, gs, nodes, size = heap_start(1024, source, octile(source // wp, source % wp, tr, tc))
     expanded = 0
-    while size > 0:
-        u, size = heap_pop(fs, gs, nodes, size)
-        if state[u] == CLOSED:
-            continue
-        state[u] = CLOSED
+    while True:
+        u, size = pop_open(fs, gs, nodes, size, state)
+        if u < 0:
+            break
         expanded += 1
         if u == target:
             break
@@ -94,7 +91,5 @@ def astar_kernel(
             if state[v] == UNSEEN or cost < g[v]:
                 g[v], pred[v], state[v] = cost, u, OPEN
                 f = cost + octile(ur + dr, uc + dc, tr, tc)
-                if size == len(fs):
-                    fs, gs, nodes = heap_grow(fs, gs, nodes)
-                size = heap_push(fs, gs, nodes, size, f, cost, v)
+                fs, gs, nodes, size = heap_add(fs, gs, nodes, size, f, cost, v)
     return (g[target] if state[target] != UNSEEN else np.inf), expanded

@@ -33,14 +33,14 @@ from numba import njit
 from numpy.typing import NDArray
 
 from mresim_phys.planning.grid import (
+    CLOSED,
     DIAGONAL,
     STRAIGHT,
     flat_moves,
-    heap_grow,
-    heap_new,
-    heap_pop,
-    heap_push,
+    heap_add,
+    heap_start,
     passes_corner,
+    pop_open,
 )
 from mresim_phys.types import FloatArray
 
@@ -70,20 +70,18 @@ def dijkstra_weighted(
     (float64 costs, flat int32 predecessors, -9999 = none), on a binary heap."""
     dist = np.full(pad.size, np.inf)
     pred = np.full(pad.size, NO_FIELD_PRED, dtype=np.int32)
-    done = np.zeros(pad.size, dtype=np.bool_)
-    fs, gs, nodes = heap_new(1024)
+    state = np.zeros(pad.size, dtype=np.uint8)
     dist[source] = 0.0
-    size = heap_push(fs, gs, nodes, 0, 0.0, 0.0, source)
+    fs, gs, nodes, size = heap_start(1024, source, 0.0)
     step, beside_row, beside_col = flat_moves(wp)
-    while size > 0:
-        u, size = heap_pop(fs, gs, nodes, size)
-        if done[u]:
-            continue
-        done[u] = True
+    while True:
+        u, size = pop_open(fs, gs, nodes, size, state)
+        if u < 0:
+            break
         here = dist[u]
         for k in range(len(step)):
             v = u + step[k]
-            if not pad[v] or done[v]:
+            if not pad[v] or state[v] == CLOSED:
                 continue
             if beside_row[k] != 0:
                 if not passes_corner(pad[u + beside_row[k]], pad[u + beside_col[k]]):
@@ -93,7 +91,5 @@ def dijkstra_weighted(
                 cost = here + move_cost(STRAIGHT, slow, u, v)
             if cost <= limit and cost < dist[v]:
                 dist[v], pred[v] = cost, u
-                if size == len(fs):
-                    fs, gs, nodes = heap_grow(fs, gs, nodes)
-                size = heap_push(fs, gs, nodes, size, cost, cost, v)
+                fs, gs, nodes, size = heap_add(fs, gs, nodes, size, cost, cost, v)
     return dist, pred

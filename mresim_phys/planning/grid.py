@@ -256,6 +256,40 @@ def heap_push(
     return size + 1
 
 
+@njit(cache=True, nogil=True, inline="always")
+def heap_add(
+    fs: FloatArray, gs: FloatArray, nodes: NDArray[np.int64], size: int, f: float, g: float, n: int
+) -> tuple[FloatArray, FloatArray, NDArray[np.int64], int]:
+    """Push ``(f, g, n)``, doubling the storage first when it is full; the storage and the
+    new size."""
+    if size == len(fs):
+        fs, gs, nodes = heap_grow(fs, gs, nodes)
+    return fs, gs, nodes, heap_push(fs, gs, nodes, size, f, g, n)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def heap_start(
+    capacity: int, source: int, f: float
+) -> tuple[FloatArray, FloatArray, NDArray[np.int64], int]:
+    """Heap storage holding only ``source`` at key ``f`` and depth 0; the storage, size 1."""
+    fs, gs, nodes = heap_new(capacity)
+    return fs, gs, nodes, heap_push(fs, gs, nodes, 0, f, 0.0, source)
+
+
+@njit(cache=True, nogil=True, inline="always")
+def pop_open(
+    fs: FloatArray, gs: FloatArray, nodes: NDArray[np.int64], size: int, state: NDArray[np.uint8]
+) -> tuple[int, int]:
+    """Pop entries until one whose node is not CLOSED, and close it: (the node, the new
+    size); the node is -1 once the heap is empty (entries of closed nodes are stale)."""
+    while size > 0:
+        u, size = heap_pop(fs, gs, nodes, size)
+        if state[u] != CLOSED:
+            state[u] = CLOSED
+            return u, size
+    return -1, 0
+
+
 @njit(cache=True, nogil=True)
 def heap_pop(
     fs: FloatArray, gs: FloatArray, nodes: NDArray[np.int64], size: int

@@ -40,11 +40,10 @@ from mresim_phys.planning.grid import (
     UNSEEN,
     Window,
     diagonal_ok,
-    heap_grow,
-    heap_new,
-    heap_pop,
-    heap_push,
+    heap_add,
+    heap_start,
     octile,
+    pop_open,
     search_arrays,
     search_window,
     walk_back,
@@ -145,17 +144,14 @@ def jps_kernel(
     Returns the cost (inf if unreachable) and the number of expanded jump points.
     """
     tr, tc = target // wp, target % wp
-    fs, gs, nodes = heap_new(256)
     g[source], pred[source], state[source] = 0.0, NO_PRED, OPEN
-    h0 = octile(source // wp, source % wp, tr, tc)
-    size = heap_push(fs, gs, nodes, 0, h0, 0.0, source)
+    fs, gs, nodes, size = heap_start(256, source, octile(source // wp, source % wp, tr, tc))
     directions = np.empty(8, dtype=np.int64)
     expanded = 0
-    while size > 0:
-        u, size = heap_pop(fs, gs, nodes, size)
-        if state[u] == CLOSED:
-            continue
-        state[u] = CLOSED
+    while True:
+        u, size = pop_open(fs, gs, nodes, size, state)
+        if u < 0:
+            break
         expanded += 1
         if u == target:
             break
@@ -173,9 +169,7 @@ def jps_kernel(
             if state[v] == UNSEEN or cost < g[v]:
                 g[v], pred[v], state[v] = cost, u, OPEN
                 f = cost + octile(vr, vc, tr, tc)
-                if size == len(fs):
-                    fs, gs, nodes = heap_grow(fs, gs, nodes)
-                size = heap_push(fs, gs, nodes, size, f, cost, v)
+                fs, gs, nodes, size = heap_add(fs, gs, nodes, size, f, cost, v)
     return (g[target] if state[target] != UNSEEN else np.inf), expanded
 
 
