@@ -109,7 +109,6 @@ def agent_snapshot(
         rv_candidates=points_or_none(info.get("rv_candidates")),
         rv_through_walls=points_or_none(info.get("rv_through_walls")),
         base_contact=agent.last_base_contact,
-        broken=tuple(sorted(robot.broken)) if robot else (),
         presumed_lost=tuple(sorted(lost)) if agent.alive else (),
         features=FEATURES.recorded_values(robot.features) if robot else {},
         parent=info.get("parent", agent.parent),  # a strategy that changes the hierarchy

@@ -9,9 +9,11 @@ part (failures of one part add up: it works again once each has been repaired) a
 entry, so the per-scan question "what is broken?" is one dict lookup.
 
 Its value, what the robot's strategy sees, is the set of parts that do not work
-(``degraded`` while a degradation is in force). Snapshots and logs keep carrying it as
-``AgentSnapshot.broken`` (the ``broken`` list in a robot's log line, unchanged), and
-teammates hear it in the robot's record, so the feature is not ``recorded`` a second time.
+(``degraded`` while a degradation is in force). Snapshots record it while it is not empty
+(``AgentSnapshot.features["parts"]``; the run log stores it as the sorted list ``parts``,
+logs of version 6 or older as ``broken``), frames label the robot with it (``B [radio]``,
+a ring around the robot), the viewer's hover row lists it, and teammates hear it in the
+robot's record (``TeammateInfo.broken``).
 """
 
 from __future__ import annotations
@@ -21,7 +23,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-from mresim_phys.features import RobotFeature
+from mresim_phys.features import HasFeatures, RobotFeature
 
 FailingPart = Literal["robot", "drive", "sensor", "radio", "degraded"]
 Factors = tuple[float, float]  # (speed factor, sensor range factor) of a degraded robot
@@ -46,11 +48,23 @@ class BrokenParts(RobotFeature[Parts, frozenset[str]]):
     """A robot's failures in force (module docstring)."""
 
     key = "parts"
-    recorded = False
+    omit_empty = True  # a robot whose parts were all repaired records nothing
 
     def value(self, state: Parts) -> frozenset[str]:
         """The parts that do not work."""
         return state.broken
+
+    def encode(self, value: frozenset[str]) -> Any:
+        """The parts, sorted."""
+        return sorted(value)
+
+    def decode(self, raw: Any) -> frozenset[str]:
+        """The logged list as a set."""
+        return frozenset(raw)
+
+    def label(self, value: frozenset[str]) -> str:
+        """`` [drive,radio]``."""
+        return f" [{','.join(sorted(value))}]"
 
 
 PARTS = BrokenParts()
@@ -60,6 +74,12 @@ def broken_in(states: Mapping[str, Any]) -> frozenset[str]:
     """The parts that do not work of a robot with feature ``states`` (``Robot.features``)."""
     parts: Parts | None = states.get(PARTS.key)
     return NOTHING_BROKEN if parts is None else parts.broken
+
+
+def broken_of(holder: HasFeatures) -> frozenset[str]:
+    """The parts that do not work of a robot's snapshot, record or view (the feature's
+    value; none recorded: nothing is broken)."""
+    return PARTS.of(holder) or NOTHING_BROKEN
 
 
 def fail_part(states: dict[str, Any], part: FailingPart, factors: Factors = (1.0, 1.0)) -> None:

@@ -51,6 +51,8 @@ class RobotFeature(Generic[S, V]):
 
     key: ClassVar[str]
     recorded: ClassVar[bool] = True  # False: a strategy sees it; snapshots and logs do not
+    omit_empty: ClassVar[bool] = False  # True: an empty value is recorded as no entry
+    layer: ClassVar[str | None] = None  # a render layer its label needs (None: always shown)
 
     def value(self, state: S) -> V:
         """What a strategy sees and a snapshot records of a robot's state."""
@@ -147,17 +149,18 @@ class FeatureList:
 
     def recorded_values(self, states: Mapping[str, Any]) -> dict[str, Any]:
         """The recorded features' values of a robot's ``states``: what its snapshot and
-        its metrics record hold."""
-        return {f.key: f.value(states[f.key]) for f in self.recorded() if f.key in states}
+        its metrics record hold (an empty value of an ``omit_empty`` feature: no entry)."""
+        values = ((f, f.value(states[f.key])) for f in self.recorded() if f.key in states)
+        return {f.key: v for f, v in values if not f.omit_empty or v}
 
 
 FEATURES = FeatureList(
     {
+        "parts": "mresim_phys.broken_parts:PARTS",  # first: labels read "B [radio] 73%"
         "battery": "mresim_phys.faults.battery:BATTERY",
         "terrain": "mresim_phys.knowledge.terrain:TERRAIN",
         "prior": "mresim_phys.knowledge.prior:PRIOR",
         "payload": "mresim_phys.knowledge.teammates:PAYLOAD",
-        "parts": "mresim_phys.broken_parts:PARTS",
         "observed": "mresim_phys.knowledge.latest:LATEST",
     }
 )

@@ -216,7 +216,7 @@ def test_the_log_stores_footprints_once_and_moves_only_when_they_change(
 ) -> None:
     assert main(["run", str(scenario), "--out", str(tmp_path), "--quiet", "--no-plots"]) == 0
     meta = json.loads((tmp_path / "log" / "meta.json").read_text())
-    assert meta["version"] == 6
+    assert meta["version"] == 7
     assert [(m["name"], m["kind"], m["shape"]) for m in meta["movables"]] == [
         ("cart", "obstacle", [4, 4]),
         ("gate", "door", [16, 2]),

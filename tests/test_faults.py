@@ -532,7 +532,7 @@ def test_batteries_hazards_and_partial_failures_replay_as_live(
     lines = (tmp_path / "run" / "log" / "steps.jsonl").read_text().splitlines()
     agents = json.loads(lines[8])["agents"]
     assert "battery" not in agents[0] and 0 < agents[1]["battery"] < 1
-    assert agents[1]["broken"] == ["radio"] and agents[2]["broken"] == ["degraded"]
+    assert agents[1]["parts"] == ["radio"] and agents[2]["parts"] == ["degraded"]
 
 
 def test_frames_show_hazard_zones_battery_levels_and_a_ring_for_partial_failures(

@@ -104,4 +104,4 @@ def test_a_feature_registered_in_code_rides_in_views_snapshots_logs_and_labels(
 def test_a_feature_key_is_taken_once() -> None:
     with pytest.raises(ValueError, match="already registered"):
         FeatureList({"battery": "mresim_phys.faults.battery:BATTERY"}).register(BATTERY)
-    assert [f.key for f in FEATURES.all()][:1] == ["battery"]
+    assert [f.key for f in FEATURES.all()][:2] == ["parts", "battery"]  # built-ins first

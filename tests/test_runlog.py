@@ -162,14 +162,46 @@ def test_part_failures_are_logged_replayed_and_drawn(
     snaps, _, _ = record_run(
         scenario_file(robots=THREE_ROBOTS, events=events), tmp_path / "log", 12
     )
-    assert [r.broken for r in snaps[-1].robots] == [(), ("radio",), ("drive",)]
-    assert snaps[4].robots[1].broken == ()
+    assert [r.features.get("parts") for r in snaps[-1].robots] == [None, {"radio"}, {"drive"}]
+    assert "parts" not in snaps[4].robots[1].features
     lines = (tmp_path / "log" / "steps.jsonl").read_text().splitlines()
-    assert "broken" not in json.loads(lines[4])["agents"][2]  # nothing broken: nothing stored
+    assert "parts" not in json.loads(lines[4])["agents"][2]  # nothing broken: nothing stored
+    assert json.loads(lines[-1])["agents"][2]["parts"] == ["radio"]
     for got, want in zip(RunLog.open(tmp_path / "log").snapshots(), snaps, strict=True):
         assert_same_snapshot(got, want)
     assert robot_label(snaps[-1].robots[1]) == "B [radio]"
     assert robot_label(snaps[-1].robots[0]) == "A"
+
+
+def downgrade_to_version_6(log_dir: Path) -> None:
+    """Rewrite a log's agent lines as version 6 wrote them: the broken parts under
+    ``broken``, after ``base_contact``."""
+    meta = json.loads((log_dir / "meta.json").read_text())
+    (log_dir / "meta.json").write_text(json.dumps(meta | {"version": 6}))
+    lines = [json.loads(line) for line in (log_dir / "steps.jsonl").read_text().splitlines()]
+    for line in lines:
+        line["agents"] = [old_agent_line(agent) for agent in line["agents"]]
+    (log_dir / "steps.jsonl").write_text("".join(json.dumps(line) + "\n" for line in lines))
+
+
+def old_agent_line(agent: dict[str, Any]) -> dict[str, Any]:
+    """An agent's line as version 6 wrote it."""
+    renamed = {"parts": "broken"}
+    return {renamed.get(key, key): value for key, value in agent.items()}
+
+
+def test_version_6_logs_still_replay_their_broken_parts(
+    scenario_file: ScenarioFile, tmp_path: Path
+) -> None:
+    events = [{"step": 3, "fail": "B", "part": "radio"}, {"step": 5, "fail": "C", "part": "drive"}]
+    path = scenario_file(robots=THREE_ROBOTS, events=events)
+    snaps, rows, _ = record_run(path, tmp_path / "log", 10, chunk_steps=4)
+    downgrade_to_version_6(tmp_path / "log")
+    assert '"broken": ["radio"]' in (tmp_path / "log" / "steps.jsonl").read_text()
+    log = RunLog.open(tmp_path / "log")
+    for got, want in zip(log.snapshots(), snaps, strict=True):
+        assert_same_snapshot(got, want)
+    assert [csv_row(record) for record in recompute_metrics(log)] == rows
 
 
 def test_an_unclosed_log_holds_its_flushed_chunks(

@@ -38,10 +38,11 @@ replay rebuilds the same record (``output.runlog.Replay``); nothing here changes
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
 from typing import Any, Protocol
 
+from mresim_phys.broken_parts import broken_of
 from mresim_phys.knowledge.frontier_reach import FrontierCheck, frontier_check
 from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray
 
@@ -101,7 +102,7 @@ class AgentLike(Protocol):
     @property
     def path(self) -> FloatArray: ...
     @property
-    def broken(self) -> tuple[str, ...]: ...
+    def features(self) -> Mapping[str, Any]: ...
     @property
     def position(self) -> tuple[float, float]: ...
     @property
@@ -125,7 +126,7 @@ def step_of(agent: AgentLike) -> RobotStep:
         agent.state,
         agent.distance,
         len(agent.path) > 0,
-        agent.state != "failed" and "drive" not in agent.broken,
+        agent.state != "failed" and "drive" not in broken_of(agent),
         agent.position,
         agent.radius,
         agent.belief,

@@ -31,6 +31,7 @@ from typing import Any
 
 import numpy as np
 
+from mresim_phys.broken_parts import broken_of
 from mresim_phys.types import FREE, BeliefGrid, BoolGrid, IntArray
 
 NO_CELLS = np.zeros(0, np.int64)
@@ -230,5 +231,10 @@ def still(reachable: BoolGrid, cells: IntArray) -> IntArray:
 
 
 def robot_states(robots: Sequence[Any]) -> list[FaultState]:
-    """Fault states of live robots (``agents.Robot``) or logged ones (``AgentSnapshot``)."""
+    """Fault states of live robots (``agents.Robot``: ``broken``, over its ``parts`` state)."""
     return [FaultState(r.name, r.belief, r.state == "failed", frozenset(r.broken)) for r in robots]
+
+
+def logged_states(robots: Sequence[Any]) -> list[FaultState]:
+    """Fault states of logged robots (``AgentSnapshot``: the ``parts`` feature's value)."""
+    return [FaultState(r.name, r.belief, r.state == "failed", broken_of(r)) for r in robots]

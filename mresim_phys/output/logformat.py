@@ -9,8 +9,9 @@ Each field of :class:`~mresim_phys.snapshot.Snapshot` and of its
 * ``steps.jsonl``, one JSON line per step (:class:`LineField`): ``step``, ``events``,
   ``links``, ``comm``, ``world_version`` (:data:`SNAPSHOT_LINE`) and per agent
   ``position``, ``heading``, ``state``, ``role``, ``goal``, ``distance``, ``parent``,
-  ``base_contact``, ``broken``, ``presumed_lost``, each per-robot feature's value under its
-  key (``battery``; :class:`SpreadField`), ``state_reason`` (:data:`AGENT_LINE`);
+  ``base_contact``, ``presumed_lost``, each recorded per-robot feature's value under its key
+  (``parts``, ``battery``; :class:`SpreadField`; logs of version 6 or older stored ``parts``
+  as ``broken``), ``state_reason`` (:data:`AGENT_LINE`);
 * delta chunks, as changes since the previous logged step: grids (:class:`GridField`:
   ``belief``, ``safe``, ``skeleton``, the ``truth`` when the world changed, ``rubble``
   and ``gave_way``) and point arrays (:class:`PointsField`: ``path``, ``rendezvous``,
@@ -40,8 +41,9 @@ from mresim_phys.features import FEATURES
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
 from mresim_phys.types import FloatArray, IntArray
 
-FORMAT, VERSION = "mresim-runlog", 6
-READABLE = (1, 2, 3, 4, 5, 6)  # versions the reader reads (how 1 differs: docs/run-log-format.md)
+FORMAT, VERSION = "mresim-runlog", 7
+READABLE = (1, 2, 3, 4, 5, 6, 7)  # versions the reader reads (how each differs: run-log-format.md)
+OLD_KEYS = {"parts": "broken"}  # a feature's key in agent lines of version 6 or older
 NEW, NONE = -1, -2  # PointsField codes: the points are stored; the field is None
 Parts = dict[str, list[np.ndarray]]
 Chunk = dict[str, np.ndarray]
@@ -120,8 +122,13 @@ class SpreadField:
                 out[feature.key] = feature.encode(values[feature.key])
 
     def decode_from(self, line: Mapping[str, Any]) -> dict[str, Any]:
-        """The features' values in ``line``."""
-        return {f.key: f.decode(line[f.key]) for f in FEATURES.recorded() if f.key in line}
+        """The features' values in ``line`` (under their :data:`OLD_KEYS` in older logs)."""
+        out = {}
+        for feature in FEATURES.recorded():
+            key = feature.key if feature.key in line else OLD_KEYS.get(feature.key, feature.key)
+            if key in line:
+                out[feature.key] = feature.decode(line[key])
+        return out
 
 
 SPREAD = SpreadField()
@@ -141,9 +148,8 @@ AGENT_LINE: dict[str, Codec] = {
     "distance": LineField(float, to_float),
     "parent": LineField(str, plain, omit_none=True),
     "base_contact": LineField(int, to_int),
-    "broken": LineField(list, to_events, omit_empty=True),
     "presumed_lost": LineField(list, to_events, omit_empty=True),
-    "features": SPREAD,  # each feature's value under its own key (features.py): battery
+    "features": SPREAD,  # each feature's value under its own key (features.py): parts, battery
     "state_reason": LineField(str, plain, omit_none=True),  # only at a change of state
 }
 SNAPSHOT_LINE = {

@@ -28,7 +28,7 @@ from mresim_phys.errors import MresimError
 from mresim_phys.knowledge.coverage import Coverage
 from mresim_phys.knowledge.health import HealthReport, HealthWatch, step_of
 from mresim_phys.knowledge.latest import LatestCoverage
-from mresim_phys.knowledge.robustness import FailureWatch, robot_states
+from mresim_phys.knowledge.robustness import FailureWatch, logged_states
 from mresim_phys.metrics import RobotRecord, StepRecord, measure_step, update_known_at_base
 from mresim_phys.output.logformat import (
     AGENT_LINE,
@@ -340,7 +340,7 @@ class Replay:
         self.first = False
         watch, coverage = self.failures, self.coverage
         base = agents[0].belief
-        watch.update(step, robot_states(agents[1:]), base, coverage.reachable, coverage.total)
+        watch.update(step, logged_states(agents[1:]), base, coverage.reachable, coverage.total)
         return measure_step(
             step,
             self.coverage,

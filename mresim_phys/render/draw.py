@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING
 import cv2
 import numpy as np
 
+from mresim_phys.broken_parts import PARTS
 from mresim_phys.features import FEATURES
 from mresim_phys.render.labels import Label, place_labels
 from mresim_phys.render.layers import LayerSpec
@@ -88,7 +89,7 @@ class Overlay:
             if "location" in layers[i]:
                 at, size = centres[i], sizes[i - 1]
                 draw_robot(image, robot, triangles[i - 1], at, size, colours[i], style)
-                if robot.broken and robot.state != "failed":
+                if PARTS.of(robot) and robot.state != "failed":
                     draw_ring(image, at, size, style.partial)
                 draw_text(image, *next(labels), colours[i], style)
         if "header" in on:
@@ -287,13 +288,12 @@ def draw_ring(image: np.ndarray, at: np.ndarray, size: float, colour: BGR) -> No
 
 
 def robot_label(robot: AgentSnapshot, lost: bool = False) -> str:
-    """A robot's name, with its failed parts if any, its features' labels (its battery
-    level if it has one: ``features.py``), what
+    """A robot's name, its features' labels (its failed parts if any, its battery level if
+    it has one: ``features.py``), what
     it is doing when that is not work (``done``, ``idle``, ``stuck``, ``fruitless``:
     ``B [radio] 73% idle``) and, with ``lost``, the teammates it presumes lost (``A lost?B,C``: the
     ``presumed_lost`` layer)."""
-    text = f"{robot.name} [{','.join(robot.broken)}]" if robot.broken else robot.name
-    text += "".join(
+    text = robot.name + "".join(
         f.label(robot.features[f.key]) for f in FEATURES.recorded() if f.key in robot.features
     )
     tag = state_tag(robot)

@@ -130,7 +130,6 @@ def agent_row(agent: AgentSnapshot, px: tuple[float, float], radius: float) -> d
         "path_left": round(path_length(np.concatenate([start, agent.path])), 2),
         **feature_entries(agent),
         "base_contact": agent.base_contact,
-        "broken": list(agent.broken),
         "position": [round(v, 2) for v in agent.position],
         "heading_deg": round(math.degrees(agent.heading), 1),
     }

@@ -259,7 +259,7 @@ function onHover(ev) {
   const battery = hit.battery === null ? "none" : `${(100 * hit.battery).toFixed(1)} %`;
   const contact = hit.base_contact < 0 ? "never" : `step ${hit.base_contact}`;
   tip.textContent = [
-    `${hit.name} (${hit.kind})`, `state      ${hit.state}${hit.broken.length ? " (" + hit.broken.join(", ") + " broken)" : ""}`,
+    `${hit.name} (${hit.kind})`, `state      ${hit.state}${hit.parts ? " (" + hit.parts.join(", ") + " broken)" : ""}`,
     `activity   ${hit.activity || "-"}`,
     `role       ${hit.role}`, `travelled  ${hit.distance} cells`, `path left  ${hit.path_left} cells`,
     `battery    ${battery}`, `base heard ${contact}`,
