@@ -12,7 +12,7 @@ import numpy as np
 
 from mresim_phys.agents import Agent, Robot
 from mresim_phys.features import FEATURES
-from mresim_phys.knowledge.teammates import presumed_lost
+from mresim_phys.knowledge.teammates import presumed_lost, with_lost
 from mresim_phys.snapshot import AgentSnapshot, bool_view, points_or_none, read_only
 from mresim_phys.strategies import RobotView
 from mresim_phys.strategies.base import given_up_of
@@ -51,11 +51,12 @@ def robot_view(
         comm_range=robot.comm_range,
         links=robot.links,
         base_contact=robot.last_base_contact,
-        lost=presumed_lost(robot.teammates, step, presume_lost_after),
         team_order=team_order,
         vary_with_seed=vary_with_seed,
         free_area=free_area,
-        features=FEATURES.values(robot.features),
+        features=FEATURES.values(
+            with_lost(robot.features, presumed_lost(robot.teammates, step, presume_lost_after))
+        ),
         parent=robot.parent,
         children=robot.children,
         hops=robot.hops,
@@ -109,8 +110,9 @@ def agent_snapshot(
         rv_candidates=points_or_none(info.get("rv_candidates")),
         rv_through_walls=points_or_none(info.get("rv_through_walls")),
         base_contact=agent.last_base_contact,
-        presumed_lost=tuple(sorted(lost)) if agent.alive else (),
-        features=FEATURES.recorded_values(robot.features) if robot else {},
+        features=FEATURES.recorded_values(
+            with_lost(robot.features if robot else {}, lost if agent.alive else frozenset())
+        ),
         parent=info.get("parent", agent.parent),  # a strategy that changes the hierarchy
         activity=health[0],
         state_reason=health[1],

@@ -8,11 +8,13 @@ module with everything about it:
   battery: ``faults/runtime.py``); a robot without the feature has no entry;
 * its *value*: what a strategy sees (``RobotView.features[key]``) and, unless the feature
   is not ``recorded`` (known terrain and the prior map: grids the run's ``truth.npz`` or
-  the robot's scans give back), what a snapshot records (``AgentSnapshot.features[key]``);
-  read by ``feature.of(view)``;
+  the robot's scans give back), what a snapshot records (``AgentSnapshot.features[key]``;
+  an ``omit_empty`` feature records an empty value as no entry); read by
+  ``feature.of(view)``;
 * the run log's *codec*: the value under ``key`` in each agent's line of ``steps.jsonl``
   (``encode``, ``decode``), so a replay has it back;
-* its *label* beside the robot's name in frames and its entry in the viewer's hover row;
+* its *label* beside the robot's name in frames (only where its render ``layer`` is on, if
+  it names one) and its entry in the viewer's hover row;
 * its *metric columns*: ``@column`` registrations in the same module, reading
   ``RobotRecord.features`` (``metrics.py``), which the live run and the replay fill alike.
 
@@ -162,5 +164,6 @@ FEATURES = FeatureList(
         "prior": "mresim_phys.knowledge.prior:PRIOR",
         "payload": "mresim_phys.knowledge.teammates:PAYLOAD",
         "observed": "mresim_phys.knowledge.latest:LATEST",
+        "lost": "mresim_phys.knowledge.teammates:LOST",
     }
 )

@@ -61,7 +61,6 @@ class AgentSnapshot:
     rv_candidates: FloatArray | None = None  # (k, 2) potential rendezvous points (info)
     rv_through_walls: FloatArray | None = None  # (k, 2) points linked through walls (info)
     base_contact: int = -1  # last step this agent's data reached the base (-1: never)
-    presumed_lost: tuple[str, ...] = ()  # teammates it has not heard of for too long
     features: Mapping[str, Any] = field(default_factory=dict)  # each feature's value (features.py)
     # working / fruitless / waiting / idle / stuck ("": not assessed; knowledge.health)
     activity: str = ""

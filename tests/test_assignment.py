@@ -71,7 +71,7 @@ def corridor_view(
         step=10, name="A", position=(45.5, 10.5), heading=0.0, belief=belief, radius=1.0,
         clearance=2.0, speed=2.0, sensor_range=30.0, role="explorer",
         base_position=(50.5, 10.5), teammates=teammates, rng=np.random.default_rng(0),
-        lost=lost, team_order=("A", "B"), vary_with_seed=False,
+        features={"lost": lost}, team_order=("A", "B"), vary_with_seed=False,
     )  # fmt: skip
 
 

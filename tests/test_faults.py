@@ -396,7 +396,8 @@ def test_the_frontier_auction_reauctions_a_presumed_lost_teammates_frontier() ->
     silent = TeammateInfo("B", (30.5, 10.5), (21.5, 10.5), "active", "explorer", step=9)
     view = corridor_view({"B": silent}, (45.5, 10.5))
     counted = FrontierExploration(FrontierParams()).decide(view)
-    lost = FrontierExploration(FrontierParams()).decide(replace(view, lost=frozenset({"B"})))
+    presumed = replace(view, features={"lost": frozenset({"B"})})
+    lost = FrontierExploration(FrontierParams()).decide(presumed)
     assert counted.goal is not None and counted.goal[0] > 50
     assert lost.goal is not None and lost.goal[0] < 50
 

@@ -253,8 +253,8 @@ def test_replayed_failure_views_equal_the_live_ones(
     assert last.failures == ((25, "B"),)
     assert last.lost_knowledge is not None and last.lost_knowledge.any()
     assert snaps[24].lost_knowledge is None  # step 24, before B fails
-    assert any(a.presumed_lost for a in last.agents)
-    assert last.robots[1].presumed_lost == ()  # a failed robot presumes nothing
+    assert any(a.features.get("lost") for a in last.agents)
+    assert "lost" not in last.robots[1].features  # a failed robot presumes nothing
 
 
 def test_failure_frames_replay_exactly(scenario_file: ScenarioFile, tmp_path: Path) -> None:

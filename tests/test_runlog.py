@@ -175,7 +175,7 @@ def test_part_failures_are_logged_replayed_and_drawn(
 
 def downgrade_to_version_6(log_dir: Path) -> None:
     """Rewrite a log's agent lines as version 6 wrote them: the broken parts under
-    ``broken``, after ``base_contact``."""
+    ``broken``, the teammates presumed lost under ``presumed_lost``."""
     meta = json.loads((log_dir / "meta.json").read_text())
     (log_dir / "meta.json").write_text(json.dumps(meta | {"version": 6}))
     lines = [json.loads(line) for line in (log_dir / "steps.jsonl").read_text().splitlines()]
@@ -186,18 +186,19 @@ def downgrade_to_version_6(log_dir: Path) -> None:
 
 def old_agent_line(agent: dict[str, Any]) -> dict[str, Any]:
     """An agent's line as version 6 wrote it."""
-    renamed = {"parts": "broken"}
+    renamed = {"parts": "broken", "lost": "presumed_lost"}
     return {renamed.get(key, key): value for key, value in agent.items()}
 
 
-def test_version_6_logs_still_replay_their_broken_parts(
+def test_version_6_logs_still_replay_their_broken_parts_and_lost_teammates(
     scenario_file: ScenarioFile, tmp_path: Path
 ) -> None:
     events = [{"step": 3, "fail": "B", "part": "radio"}, {"step": 5, "fail": "C", "part": "drive"}]
-    path = scenario_file(robots=THREE_ROBOTS, events=events)
-    snaps, rows, _ = record_run(path, tmp_path / "log", 10, chunk_steps=4)
+    path = scenario_file(robots=THREE_ROBOTS, events=events, simulation={"presume_lost_after": 4})
+    snaps, rows, _ = record_run(path, tmp_path / "log", 14, chunk_steps=4)
     downgrade_to_version_6(tmp_path / "log")
-    assert '"broken": ["radio"]' in (tmp_path / "log" / "steps.jsonl").read_text()
+    text = (tmp_path / "log" / "steps.jsonl").read_text()
+    assert '"broken": ["radio"]' in text and '"presumed_lost": ["B"]' in text
     log = RunLog.open(tmp_path / "log")
     for got, want in zip(log.snapshots(), snaps, strict=True):
         assert_same_snapshot(got, want)

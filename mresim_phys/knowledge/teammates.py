@@ -11,11 +11,20 @@ The payload a robot sends is a per-robot feature (``features.py``): :data:`PAYLO
 state in ``Robot.features["payload"]`` from the decision that gave it until the next one
 (no entry: it sends none). Its strategy sees it in its view; snapshots and logs do not
 record it (a teammate's copy travels in the records, counted in comm bytes).
+
+The teammates an agent presumes lost (:func:`presumed_lost`: no news of them for longer
+than the run's limit) are the feature :data:`LOST` (key ``lost``), a value the views
+compute from the agent's records when they are built (:func:`with_lost`; no state is kept):
+its strategy sees it (``RobotView.lost``), snapshots record it while it is not empty (a
+failed robot presumes nothing; the base its own), the run log stores it as a sorted list
+(``presumed_lost`` in logs of version 6 or older), and frames with the ``presumed_lost``
+layer label the agent with it (``A lost?B,C``).
 """
 
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
@@ -120,6 +129,34 @@ def presumed_lost(teammates: dict[str, TeammateInfo], step: int, silence: int) -
         for name, record in teammates.items()
         if name != BASE_NAME and step - record.step > silence
     )
+
+
+class PresumedLost(PlainFeature[frozenset[str]]):
+    """The teammates an agent presumes lost (module docstring)."""
+
+    key = "lost"
+    omit_empty = True
+    layer = "presumed_lost"
+
+    def encode(self, value: frozenset[str]) -> Any:
+        """The names, sorted."""
+        return sorted(value)
+
+    def decode(self, raw: Any) -> frozenset[str]:
+        """The logged list as a set."""
+        return frozenset(raw)
+
+    def label(self, value: frozenset[str]) -> str:
+        """`` lost?B,C``."""
+        return f" lost?{','.join(sorted(value))}"
+
+
+LOST = PresumedLost()
+
+
+def with_lost(states: Mapping[str, Any], lost: frozenset[str]) -> dict[str, Any]:
+    """An agent's feature ``states`` with the teammates it presumes lost now."""
+    return {**states, LOST.key: lost}
 
 
 class SentPayload(PlainFeature[Payload]):

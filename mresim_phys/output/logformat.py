@@ -9,9 +9,9 @@ Each field of :class:`~mresim_phys.snapshot.Snapshot` and of its
 * ``steps.jsonl``, one JSON line per step (:class:`LineField`): ``step``, ``events``,
   ``links``, ``comm``, ``world_version`` (:data:`SNAPSHOT_LINE`) and per agent
   ``position``, ``heading``, ``state``, ``role``, ``goal``, ``distance``, ``parent``,
-  ``base_contact``, ``presumed_lost``, each recorded per-robot feature's value under its key
-  (``parts``, ``battery``; :class:`SpreadField`; logs of version 6 or older stored ``parts``
-  as ``broken``), ``state_reason`` (:data:`AGENT_LINE`);
+  ``base_contact``, each recorded per-robot feature's value under its key (``parts``,
+  ``battery``, ``lost``; :class:`SpreadField`; logs of version 6 or older stored ``parts``
+  as ``broken`` and ``lost`` as ``presumed_lost``), ``state_reason`` (:data:`AGENT_LINE`);
 * delta chunks, as changes since the previous logged step: grids (:class:`GridField`:
   ``belief``, ``safe``, ``skeleton``, the ``truth`` when the world changed, ``rubble``
   and ``gave_way``) and point arrays (:class:`PointsField`: ``path``, ``rendezvous``,
@@ -43,7 +43,7 @@ from mresim_phys.types import FloatArray, IntArray
 
 FORMAT, VERSION = "mresim-runlog", 7
 READABLE = (1, 2, 3, 4, 5, 6, 7)  # versions the reader reads (how each differs: run-log-format.md)
-OLD_KEYS = {"parts": "broken"}  # a feature's key in agent lines of version 6 or older
+OLD_KEYS = {"parts": "broken", "lost": "presumed_lost"}  # keys in lines of version 6 or older
 NEW, NONE = -1, -2  # PointsField codes: the points are stored; the field is None
 Parts = dict[str, list[np.ndarray]]
 Chunk = dict[str, np.ndarray]
@@ -148,7 +148,6 @@ AGENT_LINE: dict[str, Codec] = {
     "distance": LineField(float, to_float),
     "parent": LineField(str, plain, omit_none=True),
     "base_contact": LineField(int, to_int),
-    "presumed_lost": LineField(list, to_events, omit_empty=True),
     "features": SPREAD,  # each feature's value under its own key (features.py): parts, battery
     "state_reason": LineField(str, plain, omit_none=True),  # only at a change of state
 }

@@ -14,7 +14,7 @@ Typical use: ``Overlay(layers, style, scale, to_px).draw(image, snapshot)``.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Collection, Sequence
 from typing import TYPE_CHECKING
 
 import cv2
@@ -117,7 +117,7 @@ class Overlay:
         offsets = [5.0, *sizes]
         for agent, mine, centre, offset in zip(snap.agents, layers, centres, offsets, strict=True):
             if "location" in mine:
-                text = robot_label(agent, "presumed_lost" in mine)
+                text = robot_label(agent, mine)
                 labels.append((text, (int(centre[0]) >> SHIFT, int(centre[1]) >> SHIFT), offset))
         origins = place_labels(labels, self.style)
         return [(label[0], org) for label, org in zip(labels, origins, strict=True)]
@@ -287,18 +287,19 @@ def draw_ring(image: np.ndarray, at: np.ndarray, size: float, colour: BGR) -> No
     cv2.circle(image, centre, round((size * 1.9 + 2) * ONE), colour, 2, AA, SHIFT)
 
 
-def robot_label(robot: AgentSnapshot, lost: bool = False) -> str:
-    """A robot's name, its features' labels (its failed parts if any, its battery level if
-    it has one: ``features.py``), what
-    it is doing when that is not work (``done``, ``idle``, ``stuck``, ``fruitless``:
-    ``B [radio] 73% idle``) and, with ``lost``, the teammates it presumes lost (``A lost?B,C``: the
-    ``presumed_lost`` layer)."""
+def robot_label(robot: AgentSnapshot, layers: Collection[str] = ()) -> str:
+    """A robot's name, its features' labels (``features.py``: its failed parts if any, its
+    battery level if it has one, and with the ``presumed_lost`` layer among ``layers`` the
+    teammates it presumes lost), then what it is doing when that is not work (``done``,
+    ``idle``, ``stuck``, ``fruitless``): ``B [radio] 73% lost?A idle``."""
+    values = robot.features
     text = robot.name + "".join(
-        f.label(robot.features[f.key]) for f in FEATURES.recorded() if f.key in robot.features
+        f.label(values[f.key])
+        for f in FEATURES.recorded()
+        if f.key in values and (f.layer is None or f.layer in layers)
     )
     tag = state_tag(robot)
-    text = f"{text} {tag}" if tag else text
-    return f"{text} lost?{','.join(robot.presumed_lost)}" if lost and robot.presumed_lost else text
+    return f"{text} {tag}" if tag else text
 
 
 def state_tag(robot: AgentSnapshot) -> str:

@@ -30,7 +30,7 @@ import numpy as np
 
 from mresim_phys.knowledge.prior import PRIOR
 from mresim_phys.knowledge.prior import planning_map as belief_with_prior
-from mresim_phys.knowledge.teammates import Payload, TeammateInfo
+from mresim_phys.knowledge.teammates import LOST, Payload, TeammateInfo
 from mresim_phys.knowledge.terrain import TERRAIN
 from mresim_phys.planning import Planner, TopologicalMap, shared_map
 from mresim_phys.planning.costs import slowness_of
@@ -71,7 +71,6 @@ class RobotView:
     comm_range: float = 0.0  # its main-channel range (cells)
     links: tuple[str, ...] = ()  # agents it was linked with at the last exchange ('base' too)
     base_contact: int = -1  # last step its data reached the base (-1: never)
-    lost: frozenset[str] = frozenset()  # teammates silent for longer than the run's limit
     team_order: tuple[str, ...] = ()  # the team's tie-break order (from the seed), the same for all
     vary_with_seed: bool = True  # the scenario lets the seed vary the run (initial random steps)
     free_area: int = 0  # the team's explorable cells, known before the mission (0: not known)
@@ -81,6 +80,12 @@ class RobotView:
     hops: int = 0  # robots from the base down to it along its parents (0: not under the base)
     escaping: bool = False  # a collision taught its map nothing: it plans wide of corners
     safe: BoolGrid | None = None  # cells it or a teammate it heard scanned from near by
+
+    @property
+    def lost(self) -> frozenset[str]:
+        """The teammates silent for longer than the run's limit (the feature ``lost``,
+        ``knowledge/teammates.py``)."""
+        return LOST.of(self) or frozenset()
 
     @property
     def planning_map(self) -> BeliefGrid:
