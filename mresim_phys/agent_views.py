@@ -12,6 +12,7 @@ import numpy as np
 
 from mresim_phys.agents import Agent, Robot
 from mresim_phys.features import FEATURES
+from mresim_phys.knowledge.activity import with_health
 from mresim_phys.knowledge.teammates import presumed_lost, with_lost
 from mresim_phys.snapshot import AgentSnapshot, bool_view, points_or_none, read_only
 from mresim_phys.strategies import RobotView
@@ -111,9 +112,10 @@ def agent_snapshot(
         rv_through_walls=points_or_none(info.get("rv_through_walls")),
         base_contact=agent.last_base_contact,
         features=FEATURES.recorded_values(
-            with_lost(robot.features if robot else {}, lost if agent.alive else frozenset())
+            with_health(
+                with_lost(robot.features if robot else {}, lost if agent.alive else frozenset()),
+                *health,
+            )
         ),
         parent=info.get("parent", agent.parent),  # a strategy that changes the hierarchy
-        activity=health[0],
-        state_reason=health[1],
     )

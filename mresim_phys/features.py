@@ -164,6 +164,7 @@ FEATURES = FeatureList(
         "prior": "mresim_phys.knowledge.prior:PRIOR",
         "payload": "mresim_phys.knowledge.teammates:PAYLOAD",
         "observed": "mresim_phys.knowledge.latest:LATEST",
+        "health": "mresim_phys.knowledge.activity:HEALTH",
         "lost": "mresim_phys.knowledge.teammates:LOST",
     }
 )

@@ -12,8 +12,8 @@ watch holds, :func:`change_reason` says why, from what the step left:
   ``"repaired"``);
 * out of ``error``: ``moved again`` (to ``done`` with a decision of this step: its reason).
 
-The reasons go into the snapshot (``AgentSnapshot.state_reason``) and so into the run log,
-from which a replay reads them back.
+The reasons go into the snapshot (the feature ``health``, ``knowledge/activity.py``) and
+so into the run log, from which a replay reads them back.
 """
 
 from __future__ import annotations

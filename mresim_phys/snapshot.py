@@ -62,9 +62,6 @@ class AgentSnapshot:
     rv_through_walls: FloatArray | None = None  # (k, 2) points linked through walls (info)
     base_contact: int = -1  # last step this agent's data reached the base (-1: never)
     features: Mapping[str, Any] = field(default_factory=dict)  # each feature's value (features.py)
-    # working / fruitless / waiting / idle / stuck ("": not assessed; knowledge.health)
-    activity: str = ""
-    state_reason: str | None = None  # why ``state`` changed this step (None: it did not)
     given_up: BoolGrid | None = None  # frontier cells its strategy tried in vain, gave up
 
 

@@ -15,6 +15,7 @@ import pytest
 from mresim_phys import Simulation
 from mresim_phys.cli import main
 from mresim_phys.knowledge import health
+from mresim_phys.knowledge.activity import Health, health_of
 from mresim_phys.knowledge.frontier_reach import frontier_check
 from mresim_phys.knowledge.health import (
     CHECK_EVERY,
@@ -233,9 +234,9 @@ def test_state_change_reasons_are_logged_and_replayed_identically(
     assert summary["health"]["robots"]["B"]["done_at"] == [5]
     assert changes["C"] == [{"step": 10, "from": "active", "to": "failed", "reason": "fail C"}]
     lines = [json.loads(line) for line in (out / "log" / "steps.jsonl").read_text().splitlines()]
-    assert lines[5]["agents"][2]["state_reason"] == "told to quit"
-    assert lines[10]["agents"][3]["state_reason"] == "fail C"
-    assert "state_reason" not in lines[6]["agents"][2]  # only where the state changed
+    assert lines[5]["agents"][2]["health"] == "told to quit"
+    assert lines[10]["agents"][3]["health"] == "fail C"
+    assert "health" not in lines[6]["agents"][2]  # only where the state changed
     assert replayed_health(RunLog.open(out / "log")) == summary["health"]
     capsys.readouterr()
     assert main(["replay", str(out), "--metrics"]) == 0
@@ -253,13 +254,10 @@ def test_replayed_activity_equals_the_live_one(scenario_file: ScenarioFile, tmp_
             actions = {"B": Decision()} if 8 <= n < 16 else None  # B parked for a while
             sim.step(actions)
             writer.write(sim.snapshot())
-            live.append([(r.activity, r.state_reason) for r in sim.snapshot().robots])
-    replayed = [
-        [(r.activity, r.state_reason) for r in s.robots]
-        for s in RunLog.open(tmp_path / "log").snapshots()
-    ]
+            live.append([health_of(r) for r in sim.snapshot().robots])
+    replayed = [[health_of(r) for r in s.robots] for s in RunLog.open(tmp_path / "log").snapshots()]
     assert replayed[1:] == live
-    assert ("idle", None) in [b for _, b in live]
+    assert Health("idle", None) in [b for _, b in live]
 
 
 def test_a_log_without_reasons_replays_them_as_not_logged(
@@ -272,7 +270,7 @@ def test_a_log_without_reasons_replays_them_as_not_logged(
     lines = [json.loads(line) for line in steps.read_text().splitlines()]
     for line in lines:
         for agent in line["agents"]:
-            agent.pop("state_reason", None)
+            agent.pop("health", None)
     steps.write_text("".join(json.dumps(line) + "\n" for line in lines))
     record = replayed_health(RunLog.open(out / "log"))
     assert record["robots"]["A"]["state_changes"][0]["reason"] == health.NOT_LOGGED
@@ -440,4 +438,4 @@ def test_a_shuttling_robot_is_flagged_live_and_in_the_replay(
     assert any(w.startswith("robot A worked") for w in record["warnings"])
     assert replayed_health(RunLog.open(out / "log")) == record
     last = list(RunLog.open(out / "log").snapshots())[-1]
-    assert last.robots[0].activity == "fruitless"  # drawn and labelled so on frames
+    assert health_of(last.robots[0]).activity == "fruitless"  # drawn and labelled so on frames

@@ -8,6 +8,7 @@ import itertools
 import numpy as np
 import pytest
 
+from mresim_phys.knowledge.activity import Health
 from mresim_phys.render import Renderer, Style, parse_layers
 from mresim_phys.render.draw import robot_label
 from mresim_phys.render.labels import overlaps, place_labels, text_box
@@ -22,6 +23,9 @@ LAYERS = "walls,unexplored,team_known,known_at_base,location"
 
 
 def robot(name: str, position: tuple[float, float], **kw: object) -> AgentSnapshot:
+    """A robot's snapshot; ``activity``: its run-health activity (the ``health`` feature)."""
+    activity = kw.pop("activity", "")
+    kw.setdefault("features", {"health": Health(str(activity))} if activity else {})
     belief = np.zeros((ROWS, COLS), np.uint8)
     belief[1:12, 1:20] = FREE
     fields: dict = {"kind": "robot", "heading": 0.0, "radius": 1.0, "state": "active"}

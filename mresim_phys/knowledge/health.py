@@ -43,6 +43,7 @@ from dataclasses import dataclass, field, replace
 from typing import Any, Protocol
 
 from mresim_phys.broken_parts import broken_of
+from mresim_phys.knowledge.activity import health_of
 from mresim_phys.knowledge.frontier_reach import FrontierCheck, frontier_check
 from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray
 
@@ -110,8 +111,6 @@ class AgentLike(Protocol):
     @property
     def belief(self) -> BeliefGrid: ...
     @property
-    def state_reason(self) -> str | None: ...
-    @property
     def safe(self) -> BoolGrid: ...
     @property
     def given_up(self) -> BoolGrid | None: ...
@@ -130,7 +129,7 @@ def step_of(agent: AgentLike) -> RobotStep:
         agent.position,
         agent.radius,
         agent.belief,
-        agent.state_reason,
+        health_of(agent).reason,
         agent.safe,
         agent.given_up,
         agent.goal,

@@ -10,8 +10,9 @@ Each field of :class:`~mresim_phys.snapshot.Snapshot` and of its
   ``links``, ``comm``, ``world_version`` (:data:`SNAPSHOT_LINE`) and per agent
   ``position``, ``heading``, ``state``, ``role``, ``goal``, ``distance``, ``parent``,
   ``base_contact``, each recorded per-robot feature's value under its key (``parts``,
-  ``battery``, ``lost``; :class:`SpreadField`; logs of version 6 or older stored ``parts``
-  as ``broken`` and ``lost`` as ``presumed_lost``), ``state_reason`` (:data:`AGENT_LINE`);
+  ``battery``, ``health``: the reason of a change of state, ``lost``; :class:`SpreadField`;
+  logs of version 6 or older stored ``parts`` as ``broken``, ``lost`` as ``presumed_lost``
+  and ``health`` as ``state_reason``) (:data:`AGENT_LINE`);
 * delta chunks, as changes since the previous logged step: grids (:class:`GridField`:
   ``belief``, ``safe``, ``skeleton``, the ``truth`` when the world changed, ``rubble``
   and ``gave_way``) and point arrays (:class:`PointsField`: ``path``, ``rendezvous``,
@@ -20,8 +21,8 @@ Each field of :class:`~mresim_phys.snapshot.Snapshot` and of its
   (``output.logworld``);
 * not at all, recomputed on replay: ``explored``, ``known_at_base``, ``alive``,
   ``lost_knowledge`` and ``failures`` (``knowledge.robustness``, from the replayed maps and
-  fault states), each robot's ``activity`` (``knowledge.health``, from its replayed odometer,
-  path, state and parts).
+  fault states), each robot's activity in its ``health`` feature (``knowledge.health``,
+  from its replayed odometer, path, state and parts).
 
 Importing this module fails if a dataclass field has no codec here (or a codec has no
 field), so a new snapshot field cannot be left out of the log by mistake.
@@ -43,7 +44,7 @@ from mresim_phys.types import FloatArray, IntArray
 
 FORMAT, VERSION = "mresim-runlog", 7
 READABLE = (1, 2, 3, 4, 5, 6, 7)  # versions the reader reads (how each differs: run-log-format.md)
-OLD_KEYS = {"parts": "broken", "lost": "presumed_lost"}  # keys in lines of version 6 or older
+OLD_KEYS = {"parts": "broken", "lost": "presumed_lost", "health": "state_reason"}  # version <= 6
 NEW, NONE = -1, -2  # PointsField codes: the points are stored; the field is None
 Parts = dict[str, list[np.ndarray]]
 Chunk = dict[str, np.ndarray]
@@ -116,10 +117,13 @@ class SpreadField:
     without a feature has no key for it."""
 
     def encode_into(self, out: dict[str, Any], values: Mapping[str, Any]) -> None:
-        """Add each feature's value in ``values`` to the line ``out``."""
+        """Add each feature's value in ``values`` to the line ``out`` (a value encoded as
+        None is left out: run health logs only a reason)."""
         for feature in FEATURES.recorded():
-            if values.get(feature.key) is not None:
-                out[feature.key] = feature.encode(values[feature.key])
+            value = values.get(feature.key)
+            raw = None if value is None else feature.encode(value)
+            if raw is not None:
+                out[feature.key] = raw
 
     def decode_from(self, line: Mapping[str, Any]) -> dict[str, Any]:
         """The features' values in ``line`` (under their :data:`OLD_KEYS` in older logs)."""
@@ -149,7 +153,6 @@ AGENT_LINE: dict[str, Codec] = {
     "parent": LineField(str, plain, omit_none=True),
     "base_contact": LineField(int, to_int),
     "features": SPREAD,  # each feature's value under its own key (features.py): parts, battery
-    "state_reason": LineField(str, plain, omit_none=True),  # only at a change of state
 }
 SNAPSHOT_LINE = {
     "step": LineField(int, to_int),
@@ -166,7 +169,6 @@ SNAPSHOT_ELSEWHERE += ("latest",)  # meta.json "beliefs"
 SNAPSHOT_ELSEWHERE += ("sights",)  # meta.json "sights" (output.logmeta)
 SNAPSHOT_ELSEWHERE += ("dt",)  # meta.json "dt", written when the scenario gives it
 RECOMPUTED = ("explored", "known_at_base", "alive", "lost_knowledge", "failures")  # replayed
-AGENT_RECOMPUTED = ("activity",)  # replayed by the run-health watch (knowledge.health)
 
 
 def encode_line(codecs: Mapping[str, Codec], obj: object) -> dict[str, Any]:
@@ -410,7 +412,6 @@ def chunk_arrays(parts: Parts) -> Chunk:
 def stored_fields() -> dict[type, list[str]]:
     """The fields of each snapshot class that the tables above store (or recompute)."""
     agent = [*STATIC_AGENT, *AGENT_LINE, *(f.name for f in (*AGENT_GRIDS, *AGENT_POINTS))]
-    agent += AGENT_RECOMPUTED
     snapshot = [*SNAPSHOT_LINE, *SNAPSHOT_ELSEWHERE, *RECOMPUTED]
     return {AgentSnapshot: agent, Snapshot: snapshot}
 

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from mresim_phys.errors import MresimError
+from mresim_phys.knowledge.activity import with_activity
 from mresim_phys.knowledge.coverage import Coverage
 from mresim_phys.knowledge.health import HealthReport, HealthWatch, step_of
 from mresim_phys.knowledge.latest import LatestCoverage
@@ -237,7 +238,9 @@ class Replay:
         record = self.measure(fields["step"], free, fields["links"], agents, fields["comm"])
         self.health.update(fields["step"], [step_of(a) for a in agents[1:]])
         self.health.note_progress(fields["step"], record.explored, record.known_at_base)
-        agents[1:] = [replace(a, activity=self.health.view(a.name)[0]) for a in agents[1:]]
+        agents[1:] = [
+            replace(a, features=with_activity(a, self.health.view(a.name)[0])) for a in agents[1:]
+        ]
         snap = Snapshot(
             **fields,
             **self.world_grids(chunk, j),  # rubble, gave_way

@@ -22,6 +22,7 @@ import numpy as np
 
 from mresim_phys.broken_parts import PARTS
 from mresim_phys.features import FEATURES
+from mresim_phys.knowledge.activity import health_of
 from mresim_phys.render.labels import Label, place_labels
 from mresim_phys.render.layers import LayerSpec
 from mresim_phys.render.legend import legend_band
@@ -263,7 +264,7 @@ def draw_robot(
     """A triangle: filled (working), hollow (done), grey outlined in its colour (idle), red
     outline (error), dark grey + red X (failed); a red ring around a stuck robot, a grey
     one around a fruitless one (working while the team gains nothing)."""
-    state, activity = robot.state, robot.activity
+    state, activity = robot.state, health_of(robot).activity
     if state == "done":
         cv2.polylines(image, [pts], True, colour, 2, AA, SHIFT)
     elif state != "failed" and activity == "idle":
@@ -307,8 +308,9 @@ def state_tag(robot: AgentSnapshot) -> str:
     ``""`` for a robot at work, a failed one (its grey X says it) and the base."""
     if robot.state == "done":
         return "done"
-    shown = robot.activity in ("idle", "stuck", "fruitless")
-    return robot.activity if shown and robot.state != "failed" else ""
+    activity = health_of(robot).activity
+    shown = activity in ("idle", "stuck", "fruitless")
+    return activity if shown and robot.state != "failed" else ""
 
 
 def draw_label(

@@ -124,7 +124,6 @@ def agent_row(agent: AgentSnapshot, px: tuple[float, float], radius: float) -> d
         "px": [round(px[0], 2), round(px[1], 2)],
         "r": round(max(radius, 3.0), 2),
         "state": agent.state,
-        "activity": agent.activity,
         "role": agent.role,
         "distance": round(agent.distance, 2),
         "path_left": round(path_length(np.concatenate([start, agent.path])), 2),

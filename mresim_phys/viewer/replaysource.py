@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import Any
 
 from mresim_phys.errors import MresimError
+from mresim_phys.knowledge.activity import health_of
 from mresim_phys.knowledge.latest import LatestCoverage
 from mresim_phys.output.logformat import Chunk
 from mresim_phys.output.logmeta import damaged
@@ -168,7 +169,7 @@ class ReplaySource:
             except DECODE_ERRORS as exc:
                 raise damaged(self.log.log_dir, f"logged step {n}: {exc!r}") from None
             robots = snap.robots
-            states, reasons = [a.state for a in robots], [a.state_reason for a in robots]
+            states, reasons = [a.state for a in robots], [health_of(a).reason for a in robots]
             index.timeline.add(record, snap.events, states, reasons)
         return index
 

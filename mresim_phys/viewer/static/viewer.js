@@ -260,7 +260,7 @@ function onHover(ev) {
   const contact = hit.base_contact < 0 ? "never" : `step ${hit.base_contact}`;
   tip.textContent = [
     `${hit.name} (${hit.kind})`, `state      ${hit.state}${hit.parts ? " (" + hit.parts.join(", ") + " broken)" : ""}`,
-    `activity   ${hit.activity || "-"}`,
+    `activity   ${hit.health || "-"}`,
     `role       ${hit.role}`, `travelled  ${hit.distance} cells`, `path left  ${hit.path_left} cells`,
     `battery    ${battery}`, `base heard ${contact}`,
   ].join("\n");
