@@ -23,7 +23,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-from mresim_phys.features import HasFeatures, RobotFeature
+from mresim_phys.features import HasFeatures, NameSetFeature
 
 FailingPart = Literal["robot", "drive", "sensor", "radio", "degraded"]
 Factors = tuple[float, float]  # (speed factor, sensor range factor) of a degraded robot
@@ -44,7 +44,7 @@ class Parts:
         return frozenset(parts | ({"degraded"} if self.degradations else set()))
 
 
-class BrokenParts(RobotFeature[Parts, frozenset[str]]):
+class BrokenParts(NameSetFeature[Parts]):
     """A robot's failures in force (module docstring)."""
 
     key = "parts"
@@ -53,14 +53,6 @@ class BrokenParts(RobotFeature[Parts, frozenset[str]]):
     def value(self, state: Parts) -> frozenset[str]:
         """The parts that do not work."""
         return state.broken
-
-    def encode(self, value: frozenset[str]) -> Any:
-        """The parts, sorted."""
-        return sorted(value)
-
-    def decode(self, raw: Any) -> frozenset[str]:
-        """The logged list as a set."""
-        return frozenset(raw)
 
     def label(self, value: frozenset[str]) -> str:
         """`` [drive,radio]``."""

@@ -102,6 +102,19 @@ class PlainFeature(RobotFeature[S, S]):
         return state
 
 
+class NameSetFeature(RobotFeature[S, frozenset[str]]):
+    """A feature whose value is a set of names (broken parts, teammates): logged as a
+    sorted list."""
+
+    def encode(self, value: frozenset[str]) -> Any:
+        """The names, sorted."""
+        return sorted(value)
+
+    def decode(self, raw: Any) -> frozenset[str]:
+        """The logged list as a set."""
+        return frozenset(raw)
+
+
 class ReadOnlyGrid(RobotFeature[G, G]):
     """A feature whose state is a grid the robot's code writes; its value is a read-only
     view of it (no copy)."""

@@ -30,7 +30,7 @@ from typing import Any
 
 import numpy as np
 
-from mresim_phys.features import PlainFeature
+from mresim_phys.features import NameSetFeature, PlainFeature
 
 BASE_NAME = "base"
 RECORD_BYTES = 40  # name, position, goal, state, role and step of one record
@@ -131,20 +131,16 @@ def presumed_lost(teammates: dict[str, TeammateInfo], step: int, silence: int) -
     )
 
 
-class PresumedLost(PlainFeature[frozenset[str]]):
+class PresumedLost(NameSetFeature[frozenset[str]]):
     """The teammates an agent presumes lost (module docstring)."""
 
     key = "lost"
     omit_empty = True
     layer = "presumed_lost"
 
-    def encode(self, value: frozenset[str]) -> Any:
-        """The names, sorted."""
-        return sorted(value)
-
-    def decode(self, raw: Any) -> frozenset[str]:
-        """The logged list as a set."""
-        return frozenset(raw)
+    def value(self, state: frozenset[str]) -> frozenset[str]:
+        """The names themselves."""
+        return state
 
     def label(self, value: frozenset[str]) -> str:
         """`` lost?B,C``."""
