@@ -50,3 +50,13 @@ def test_the_willow_map_is_exported_with_its_team(tmp_path: Path) -> None:
 def test_an_unknown_map_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
     assert original_png.main(["nowhere", "--original", str(tmp_path)]) == 2
     assert "unknown corpus maps ['nowhere']" in capsys.readouterr().err
+
+
+def test_an_unwritable_tree_is_refused(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+    blocker = tmp_path / "tree"
+    blocker.write_text("a file, not a folder", encoding="utf-8")
+    teams = tmp_path / "teams"
+    teams.mkdir()
+    code = original_png.main(["willow_garage", "--original", str(blocker), "--teams", str(teams)])
+    assert code == 2
+    assert "original_png:" in capsys.readouterr().err

@@ -108,11 +108,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--original", type=Path, required=True, help="the original's tree")
     parser.add_argument("--teams", type=Path, default=HERE / "original_teams")
     args = parser.parse_args(argv)
+    sys.path.insert(0, str(ROOT))
+    from mresim_phys.errors import MresimError
+
     try:
         for entry in select(load_index(), args.names):
             png, team, lost = export(entry, args.original, args.teams)
             print(f"{entry.name}: {png} ({lost} free cells cut), {team}")
-    except ValueError as exc:
+    except (ValueError, OSError, MresimError) as exc:  # a bad index or map, an unwritable tree
         print(f"original_png: {exc}", file=sys.stderr)
         return 2
     return 0

@@ -263,6 +263,7 @@ function onHover(ev) {
     `activity   ${hit.health || "-"}`,
     `role       ${hit.role}`, `travelled  ${hit.distance} cells`, `path left  ${hit.path_left} cells`,
     `battery    ${battery}`, `base heard ${contact}`,
+    `presumes lost ${hit.lost ? hit.lost.join(", ") : "-"}`,
   ].join("\n");
   tip.style.left = `${ev.clientX - rect.left + 12}px`;
   tip.style.top = `${ev.clientY - rect.top + 12}px`;
