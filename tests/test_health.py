@@ -281,14 +281,23 @@ def parked_team() -> dict[str, Any]:
     return {**team, "strategy": "health_plugins:Parked"}
 
 
-@pytest.mark.parametrize("seed", range(20))
-def test_a_frontier_health_calls_reachable_is_one_the_relaxed_strategy_finds(seed: int) -> None:
+# cluttered rooms where "within one cell of the body" (up to stop 49) called a frontier cell
+# reachable that no strategy could take a target for: (seed, patches)
+CLUTTERED = [(212, 160), (255, 160), (24, 250), (290, 250)]
+
+
+@pytest.mark.parametrize(
+    ("seed", "patches"), [(seed, 40) for seed in range(20)] + [*CLUTTERED, (7, 160), (8, 250)]
+)
+def test_a_frontier_health_calls_reachable_is_one_the_relaxed_strategy_finds(
+    seed: int, patches: int
+) -> None:
     """Health's 'idle with reachable frontier cells' accuses a robot only when its strategy,
     relaxed to its body radius, would find a frontier target, and every time it would: on
     random rooms of walls and unknown patches the two answers agree."""
     rng = np.random.default_rng(seed)
     belief = known_room(40, 50)
-    for _ in range(40):  # walls and unknown patches of random size and place
+    for _ in range(patches):  # walls and unknown patches of random size and place
         r, c = rng.integers(1, 38), rng.integers(1, 48)
         h, w = rng.integers(1, 4), rng.integers(1, 4)
         belief[r : r + h, c : c + w] = OCCUPIED if rng.random() < 0.5 else UNKNOWN

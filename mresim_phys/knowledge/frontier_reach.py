@@ -16,11 +16,14 @@ use, ``planning.fields.passable_cells``: known FREE, every known wall at least t
 4-connected (the same sets as the planner's 8-connected moves without corner cutting: a
 diagonal move is allowed only beside a passable orthogonal cell), from its position
 snapped onto them (``snap_to_passable``, at most ``MAX_SNAP`` cells). A frontier cell is
-*reachable* when its square lies within one cell of the body of the robot standing on one
-of those cells (closer than ``radius + 1`` to a reached cell's centre): the body can get
-next to it. The others are *closed by clearance* when the FREE cells alone (clearance 0)
-connect the robot to them (the gap is narrower than its body), else *behind walls* (its
-map holds no FREE way there at all: cells seen through a gap or over an obstacle).
+*reachable* when its centre lies within ``knowledge.targets.target_reach(radius)`` of a
+reached cell's centre: where every strategy may take a target to look at a frontier from
+(at its least clearance). It used to be "its square within one cell of the body", a
+little farther: a robot was then counted idle for 140 steps beside one frontier cell its
+strategy could not take a target for (ipa_office, role_based, candidate_power 2). The
+others are *closed by clearance* when the FREE cells alone (clearance 0) connect the
+robot to them (the gap is narrower than its body), else *behind walls* (its map holds no
+FREE way there at all: cells seen through a gap or over an obstacle).
 
 One check is a few OpenCV passes (a dilation for the clearance, a flood fill from the
 robot, a dilation for the reach) over the bounding box of the map's FREE cells: 2-4 ms on
@@ -36,7 +39,8 @@ import cv2
 import numpy as np
 
 from mresim_phys.knowledge.frontiers import frontiers_in
-from mresim_phys.planning.fields import MAX_SNAP, clearance_kernel, passable_cells, snap_to_passable
+from mresim_phys.knowledge.targets import reach_kernel, target_reach
+from mresim_phys.planning.fields import MAX_SNAP, passable_cells, snap_to_passable
 from mresim_phys.planning.grid import Box, bbox
 from mresim_phys.types import FREE, BeliefGrid, BoolGrid
 
@@ -150,9 +154,9 @@ def reached_near(
     position: tuple[float, float],
     clearance: float,
 ) -> BoolGrid | None:
-    """Within ``crop``: the cells closer than ``clearance + 1`` to a passable cell (at
-    ``clearance``) 4-connected to the robot's snapped position; None if it snaps onto
-    none."""
+    """Within ``crop``: the cells within ``target_reach(clearance)`` (centre to centre) of
+    a passable cell (at ``clearance``) 4-connected to the robot's snapped position; None if
+    it snaps onto none."""
     passable, _ = passable_cells(belief, clearance, free_box)
     start = snap_to_passable(passable, position, MAX_SNAP)
     if start is None:
@@ -161,7 +165,7 @@ def reached_near(
     cells = np.ascontiguousarray(passable[r0:r1, c0:c1]).astype(np.uint8)
     cv2.floodFill(cells, None, (start[1] - c0, start[0] - r0), 2, flags=4)  # its component
     component = (cells == 2).view(np.uint8)
-    kernel = clearance_kernel(float(clearance) + 1.0)
+    kernel = reach_kernel(target_reach(float(clearance)))
     near = cv2.dilate(component, kernel, borderType=cv2.BORDER_CONSTANT, borderValue=0)
     out: BoolGrid = near.view(bool)
     return out

@@ -15,6 +15,7 @@ from typing import Protocol
 
 import numpy as np
 from numba import njit
+from numpy.typing import NDArray
 
 from mresim_phys.planning.fields import DistanceField
 from mresim_phys.types import BoolGrid, FloatArray, IntArray
@@ -52,6 +53,23 @@ def target_reach(clearance: float) -> float:
     (2.12, 4.24, 1.25)
     """
     return max(clearance + 1.0, math.sqrt(2.0) * (clearance + 0.5))
+
+
+def reach_kernel(reach: float) -> NDArray[np.uint8]:
+    """The cells within ``reach`` (centre to centre) of a cell, as a dilation kernel: a
+    dilation of a robot's reachable cells by it gives the cells a frontier target among
+    them could look at (what ``knowledge.frontier_reach`` counts as reachable).
+
+    >>> reach_kernel(1.0)
+    array([[0, 1, 0],
+           [1, 1, 1],
+           [0, 1, 0]], dtype=uint8)
+    """
+    radius = int(np.floor(reach))
+    kernel = np.zeros((2 * radius + 1, 2 * radius + 1), dtype=np.uint8)
+    disc = _disc(reach)
+    kernel[disc[:, 0] + radius, disc[:, 1] + radius] = 1
+    return kernel
 
 
 def _disc(reach: float) -> IntArray:
