@@ -45,14 +45,14 @@ def ranking(power: int) -> UtilityRanking:
 
 def test_the_original_order_lets_a_far_wing_into_the_auction() -> None:
     """Six 3-cell doorways 10 cells away and an unvisited wing of 5,000 cells 100 cells
-    away: by size / d^4 (the default) the wing is not among the six best, by size / d^2
+    away: by size / d^4 the wing is not among the six best, by size / d^2 (the default)
     or size / d it is first."""
     frontiers = clusters([3] * 6 + [5000])
     costs = np.array([10.0] * 6 + [100.0])
     assert 6 not in ranking(4).candidates(frontiers, costs)
     assert ranking(2).candidates(frontiers, costs)[0] == 6
     assert ranking(1).candidates(frontiers, costs)[0] == 6
-    assert FrontierParams().candidate_power == 4
+    assert FrontierParams().candidate_power == 2
 
 
 def test_an_unreachable_frontier_is_never_a_candidate() -> None:

@@ -74,15 +74,15 @@ class FrontierParams(StrategyParams):
         ),
     )
     candidate_power: int = Field(
-        4,
+        2,
         ge=1,
         le=4,
         description=(
             "Which frontiers enter the auction: the max_frontiers best by size / d^power"
             " (d: path length). 4: by the auction's own utility; 1: as the original orders"
-            " its frontiers (area / distance); 2 between. The smaller, the more far large"
-            " frontiers enter and the more robots spread over a building's wings"
-            " (docs/strategies.md)."
+            " its frontiers (area / distance); 2 (the default) between. The smaller, the"
+            " more far large frontiers enter and the more robots spread over a building's"
+            " wings (docs/strategies.md)."
         ),
     )
     frontier_size: Literal["region", "cells"] = Field(
