@@ -8,6 +8,7 @@ import os
 import socket
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
 import pytest
@@ -15,6 +16,7 @@ from conftest import write_study
 
 from mresim_phys.cli import main
 from mresim_phys.sweeps import lock as lock_module
+from mresim_phys.sweeps.lifeline import Owner
 from mresim_phys.sweeps.lock import SweepLock, SweepLocked
 
 REPO = Path(__file__).resolve().parent.parent
@@ -101,3 +103,30 @@ def test_a_sweep_that_is_beginning_is_named_too(
         code = main(["sweep", str(study), "--out", str(out), "--workers", "1"])
     err = capsys.readouterr().err
     assert code == 2 and "is being written by another `mresim sweep`" in err
+
+
+def test_a_sweep_that_has_just_taken_the_lock_is_named_once_it_writes_its_record(
+    tmp_path: Path,
+) -> None:
+    """A sweep writes its record just after it flocks the file, and a flocked file keeps a
+    former owner's record: one refused in between waits for the record that names the live
+    holder instead of calling it unreadable (two sweeps started together, under load)."""
+    fcntl = pytest.importorskip("fcntl")
+    path = tmp_path / "sweep.lock"
+    path.write_text(json.dumps({"pid": dead_pid(), "host": socket.gethostname()}))
+    fd = os.open(path, os.O_RDWR)
+    fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+
+    def write_record() -> None:
+        data = json.dumps(Owner.me().to_json()).encode()
+        os.pwrite(fd, data, 0)
+        os.ftruncate(fd, len(data))
+
+    late = threading.Timer(0.2, write_record)
+    late.start()
+    try:
+        with pytest.raises(SweepLocked, match=f"pid {os.getpid()} on host"):
+            SweepLock(tmp_path).acquire()
+    finally:
+        late.join()
+        os.close(fd)

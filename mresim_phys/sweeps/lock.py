@@ -15,6 +15,7 @@ from __future__ import annotations
 import contextlib
 import json
 import os
+import time
 from pathlib import Path
 from types import TracebackType
 
@@ -22,6 +23,7 @@ from mresim_phys.errors import MresimError
 from mresim_phys.sweeps.lifeline import Owner, this_host
 
 LOCK_FILE = "sweep.lock"
+OWNER_WAIT = 1.0  # seconds a refused sweep waits for the holder's record to name it
 
 try:
     import fcntl
@@ -39,6 +41,20 @@ def read_owner(path: Path) -> Owner | None:
         return Owner.from_json(json.loads(path.read_text(encoding="utf-8")))
     except (OSError, ValueError):
         return None
+
+
+def holder(path: Path) -> Owner | None:
+    """The owner of a lock file another process has flocked. It writes its record just
+    after it takes the lock, so a record read at once may be missing or a former owner's
+    (a flocked file stays when its owner lets go): the record is read again for up to
+    :data:`OWNER_WAIT` seconds until it names a live owner (or one of another host)."""
+    deadline = time.monotonic() + OWNER_WAIT
+    while True:
+        owner = read_owner(path)
+        named = owner is not None and (owner.host != this_host() or owner.alive())
+        if named or time.monotonic() >= deadline:
+            return owner
+        time.sleep(0.02)
 
 
 def refusal(folder: Path, owner: Owner | None) -> SweepLocked:
@@ -94,7 +110,7 @@ class SweepLock:
         try:
             fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
         except BlockingIOError:
-            raise refusal(self.folder, read_owner(self.path)) from None
+            raise refusal(self.folder, holder(self.path)) from None
         except OSError:
             return False
         return True
