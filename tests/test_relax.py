@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from mresim_phys import Simulation
-from mresim_phys.strategies import RobotView, relax
+from mresim_phys.strategies import Decision, RobotView, relax
 from mresim_phys.strategies.base import GOAL_MET, NO_FRONTIER
 from mresim_phys.strategies.frontier import FrontierExploration
 from mresim_phys.strategies.params import FrontierParams
@@ -205,3 +205,40 @@ def test_the_random_step_after_a_bump_never_presses_into_the_wall_it_touches() -
         assert len(step.path) == 2, seed
         start, end = tuple(step.path[0]), tuple(step.path[1])
         assert relax.body_clear(belief, start, end, 0.5), (seed, end)
+
+
+class SnappedStart:
+    """A strategy whose path starts on a cell up-left of the robot, beyond the corner of
+    the wall face it touches: where a planner snaps a start whose own cell is not
+    passable at the robot's clearance."""
+
+    params = FrontierParams()
+
+    def decide(self, view: RobotView) -> Decision:
+        path = np.array([[14.5, 17.5], [14.5, 10.5]])
+        return Decision(path=path, goal=(14.5, 10.5))
+
+
+def touching_view() -> RobotView:
+    """A 30x30 room, a wall face at x = 15 (column 14, rows 19-28) that the robot at
+    (15.5, 19.5), radius 0.5, touches; clearance 1.0."""
+    belief = np.full((30, 30), FREE, dtype=np.uint8)
+    belief[0, :] = belief[-1, :] = belief[:, 0] = belief[:, -1] = OCCUPIED
+    belief[19:29, 14] = OCCUPIED
+    return replace(doorway_view(3), belief=belief, position=(15.5, 19.5), radius=0.5,
+                   clearance=1.0, base_position=(5.5, 5.5))  # fmt: skip
+
+
+def test_a_snapped_start_never_leads_the_body_into_the_wall_it_touches() -> None:
+    """The straight leg onto a snapped start pressed into the wall the robot touched: it
+    bumped, replanned the same leg and stood in error for 277 steps (ipa_office). The
+    leg is driven at the body's own clearance instead, and the path still ends where the
+    strategy sent it."""
+    view = touching_view()
+    start, first = view.position, (14.5, 17.5)
+    assert not relax.body_clear(view.belief, start, first, view.radius)
+    decision = relax.decide(SnappedStart(), view)  # type: ignore[arg-type]
+    path = decision.path
+    assert decision.goal == (14.5, 10.5) and tuple(path[-1]) == (14.5, 10.5)
+    legs = zip([start, *map(tuple, path[:-1])], map(tuple, path), strict=True)
+    assert all(relax.body_clear(view.belief, a, b, view.radius) for a, b in legs)

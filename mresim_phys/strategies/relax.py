@@ -22,7 +22,10 @@ cut a corner on the way); if that boxes it in, it takes the original's random st
 a collision, on a line its body follows clear of every wall its map knows
 (:func:`body_clear`), or backs off the way it came. A collision never freezes it. A path
 planned at half a cell's clearance or less, the robot's own or a relaxed one, gets a stop
-at the corner of every wall its diagonals pass (:func:`uncut_corners`).
+at the corner of every wall its diagonals pass (:func:`uncut_corners`). A path whose start
+was snapped onto a passable cell away from the robot begins with a straight leg there; one
+that would press the body into a wall its map knows is driven at the body's own clearance
+instead (:func:`_lead_in`).
 
 A robot left with no way out on its own map (:func:`boxed_in`: the cells its body reaches
 are a pocket hardly larger than itself, while frontiers remain elsewhere) is not done: it
@@ -62,6 +65,7 @@ BOXED = "boxed in: looking around"  # Decision.info["reason"] of a turn in place
 HALF_CELL = 0.5  # cells: at this clearance or less a planned diagonal may touch a corner
 TOUCH = 1e-6  # cells: a body this close to a wall touches it (``world.space.GRAZE``)
 POCKET = 2.0  # cells beyond its radius: a reachable area under pi (r + 2)^2 is a pocket
+SNAP_LEG = 1.5  # cells: a first leg longer than a diagonal move leads to a snapped start
 
 
 def decide(strategy: Strategy, view: RobotView) -> Decision:
@@ -75,7 +79,7 @@ def decide(strategy: Strategy, view: RobotView) -> Decision:
         return look_around(view)
     if decision.done and len(decision.path) <= 1:
         decision = _home_relaxed(view, decision)
-    return _body_path(decision, view.belief, view.clearance)
+    return _lead_in(view, _body_path(decision, view.belief, view.clearance))
 
 
 def _body_path(decision: Decision, belief: BeliefGrid, clearance: float) -> Decision:
@@ -105,6 +109,33 @@ def uncut_corners(path: FloatArray, belief: BeliefGrid) -> FloatArray:
                 points.append(np.array([end[0], start[1]]))
         points.append(end)
     return np.array(points)
+
+
+def _lead_in(view: RobotView, decision: Decision) -> Decision:
+    """``decision`` with a way onto its path's first point that the body can drive.
+
+    A robot whose own cell is not passable at the clearance it planned with gets its path
+    from the passable cell its start was snapped onto, up to ``planning.fields.MAX_SNAP``
+    cells away, and drives the straight leg there first; that leg may press into a wall its
+    map knows (ipa_office, role_based: a robot touching a wall face replanned the same leg
+    into it, bumped, and stood in ``error`` for 277 steps). A first leg longer than a
+    diagonal move (:data:`SNAP_LEG`) that is not :func:`body_clear` is replaced by a path
+    at the body's own clearance (its radius); with none, the robot takes the escape step
+    after a collision (:func:`_random_escape`)."""
+    path = decision.path
+    if len(path) == 0:
+        return decision
+    start, first = view.position, (float(path[0, 0]), float(path[0, 1]))
+    if math.dist(start, first) <= SNAP_LEG or body_clear(view.belief, start, first, view.radius):
+        return decision
+    body = plan_context(replace(view, clearance=view.radius))
+    lead = _body_path(
+        replace(decision, path=body.plan_to(int(first[1]), int(first[0]))),
+        view.belief, view.radius,
+    ).path  # fmt: skip
+    if len(lead) == 0 or not body_clear(view.belief, start, (lead[0, 0], lead[0, 1]), view.radius):
+        return _random_escape(view) or decision
+    return replace(decision, path=np.vstack((lead, path[1:])))
 
 
 def _relaxed(strategy: Strategy, view: RobotView, decision: Decision) -> Decision:
