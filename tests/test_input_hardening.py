@@ -184,6 +184,22 @@ def test_import_team_refuses_devices_pipes_and_bad_starts(
 # --- signals while the command starts ---------------------------------------------------
 
 
+def handling_sigterm(pid: int, timeout: float = 30.0) -> None:
+    """Wait until process ``pid`` catches SIGTERM (``SigCgt`` in ``/proc/PID/status``):
+    ``launch.py`` installs its handler before the heavy imports start. A fixed sleep of
+    0.5 s let a fast start reach the run itself, which stops cleanly with status 0."""
+    deadline = time.monotonic() + timeout
+    bit = 1 << (signal.SIGTERM - 1)
+    while time.monotonic() < deadline:
+        status = Path(f"/proc/{pid}/status").read_text(encoding="utf-8")
+        caught = next(line for line in status.splitlines() if line.startswith("SigCgt:"))
+        if int(caught.split()[1], 16) & bit:
+            return
+        time.sleep(0.002)
+    raise AssertionError(f"process {pid} never caught SIGTERM")
+
+
+@pytest.mark.skipif(not Path("/proc/self/status").exists(), reason="reads /proc")
 @pytest.mark.parametrize(("sig", "status"), [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
 def test_a_signal_while_mresim_starts_exits_with_a_line(
     tmp_path: Path, sig: signal.Signals, status: int
@@ -196,7 +212,7 @@ def test_a_signal_while_mresim_starts_exits_with_a_line(
         command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True, env=env,
         preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),
     )  # fmt: skip
-    time.sleep(0.5)  # the interpreter is up; numpy, numba, pymunk are still importing
+    handling_sigterm(process.pid)  # launch.py is up; numpy, numba, pymunk are importing
     process.send_signal(sig)
     _, err = process.communicate(timeout=60)
     assert process.returncode == status, err
