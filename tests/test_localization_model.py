@@ -99,3 +99,34 @@ def test_fixes_of_a_known_landmark_pull_the_error_down_to_their_noise() -> None:
 def test_a_noise_parameter_below_zero_or_not_finite_is_refused(bad: float) -> None:
     with pytest.raises(ValueError, match="odometry noise a2 must be a finite number >= 0"):
         OdometryNoise(0.0, bad, 0.0, 0.0)
+
+
+def seen_from(
+    pose: tuple[float, float, float], other: tuple[float, float], rng: np.random.Generator,
+    sigma_range: float, sigma_bearing: float,
+) -> tuple[float, float]:  # fmt: skip
+    """A noisy range and bearing from ``pose`` to the point ``other``."""
+    dx, dy = other[0] - pose[0], other[1] - pose[1]
+    bearing = wrap(math.atan2(dy, dx) - pose[2] + rng.normal(0, sigma_bearing))
+    return math.hypot(dx, dy) + rng.normal(0, sigma_range), bearing
+
+
+def test_a_teammate_seen_on_a_link_pulls_a_lost_robot_back() -> None:
+    """A robot whose belief is 4 cells and 0.2 rad off (and says so) sees a teammate that
+    knows where it is, from changing angles as it turns: the error falls under a cell,
+    the heading's under 0.05 rad. A teammate as unsure as the robot helps less."""
+    rng = np.random.default_rng(5)
+    truth = (50.0, 40.0, 0.3)
+    off = PoseEstimate((53.0, 37.5, 0.5), np.diag([9.0, 9.0, 0.05]))
+    sure = PoseEstimate.certain((62.0, 45.0, 0.0))
+    vague = PoseEstimate((62.0, 45.0, 0.0), np.diag([9.0, 9.0, 0.05]))
+    by_sure, by_vague = off, off
+    for k in range(10):
+        z = seen_from(truth, sure.mean[:2], rng, 0.3, math.radians(2))
+        by_sure = by_sure.ranged(sure, z, 0.3, math.radians(2))
+        by_vague = by_vague.ranged(vague, z, 0.3, math.radians(2))
+        sure = PoseEstimate.certain((62.0 - 2 * k, 45.0 + 3 * k, 0.0))  # it drives on
+        vague = PoseEstimate(sure.mean, vague.cov)
+    assert math.dist(by_sure.mean[:2], truth[:2]) < 1.0
+    assert abs(wrap(by_sure.mean[2] - truth[2])) < 0.05
+    assert by_sure.position_sigma() < by_vague.position_sigma() < off.position_sigma()

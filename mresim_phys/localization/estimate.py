@@ -16,7 +16,16 @@ covariance ``R`` (a known landmark: the base, a beacon) is fused by the Kalman u
     Sigma' = (I - K H) Sigma (I - K H)^T + K R K^T
 
 (``H`` picks the position out of the pose; the Joseph form keeps ``Sigma'`` symmetric
-and positive semi-definite in floating point).
+and positive semi-definite in floating point). A teammate seen on a link gives a range
+``rho`` and a bearing ``beta`` (from the robot's heading) to the teammate's believed
+position ``p_j``: the same update with
+
+    h(mu) = (|p_j - p|, atan2(p_j - p) - theta),
+    H = [[-dx / rho, -dy / rho, 0], [dy / rho^2, -dx / rho^2, -1]],
+    R = diag(sigma_range^2, sigma_bearing^2) + J Sigma_j J^T
+
+(``dx, dy = p_j - p``; ``J`` is ``h``'s Jacobian in ``p_j``: the teammate's own position
+uncertainty ``Sigma_j`` weakens the fix; the bearing's residual is wrapped to [-pi, pi)).
 """
 
 from __future__ import annotations
@@ -57,10 +66,31 @@ class PoseEstimate:
 
     def corrected(self, z: tuple[float, float], r: Matrix) -> PoseEstimate:
         """The estimate after a measurement ``z`` of its position with covariance ``r``."""
-        h, cov = POSITION, self.cov
+        residual = np.array(z) - POSITION @ np.array(self.mean)
+        return self._updated(POSITION, residual, r)
+
+    def ranged(
+        self, other: PoseEstimate, z: tuple[float, float], sigma_range: float,
+        sigma_bearing: float,
+    ) -> PoseEstimate:  # fmt: skip
+        """The estimate after seeing teammate ``other`` (its believed pose and covariance)
+        at range and bearing ``z``."""
+        dx, dy = other.mean[0] - self.mean[0], other.mean[1] - self.mean[1]
+        rho2 = max(dx * dx + dy * dy, 1e-12)
+        rho = math.sqrt(rho2)
+        h = np.array([[-dx / rho, -dy / rho, 0.0], [dy / rho2, -dx / rho2, -1.0]])
+        j = -h[:, :2]  # the same geometry seen from the teammate's position
+        r = np.diag([sigma_range**2, sigma_bearing**2]) + j @ other.cov[:2, :2] @ j.T
+        predicted = (rho, math.atan2(dy, dx) - self.mean[2])
+        residual = np.array([z[0] - predicted[0], wrap(z[1] - predicted[1])])
+        return self._updated(h, residual, r)
+
+    def _updated(self, h: Matrix, residual: NDArray[np.float64], r: Matrix) -> PoseEstimate:
+        """The Kalman update for a measurement with Jacobian ``h``, ``residual`` and
+        noise ``r`` (Joseph form)."""
+        cov = self.cov
         gain = cov @ h.T @ np.linalg.inv(h @ cov @ h.T + r)
-        mu = np.array(self.mean)
-        mu = mu + gain @ (np.array(z) - h @ mu)
+        mu = np.array(self.mean) + gain @ residual
         keep = np.eye(3) - gain @ h
         cov = keep @ cov @ keep.T + gain @ r @ gain.T
         return PoseEstimate((float(mu[0]), float(mu[1]), wrap(float(mu[2]))), symmetric(cov))
