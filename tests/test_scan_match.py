@@ -6,7 +6,9 @@ from __future__ import annotations
 import math
 
 import numpy as np
+import pytest
 
+from mresim_phys.localization import scan_match
 from mresim_phys.localization.scan_match import Window, likelihood_field, match
 from mresim_phys.types import FREE, OCCUPIED
 
@@ -67,3 +69,24 @@ def test_a_long_corridor_leaves_the_pose_along_it_open() -> None:
     along, across = math.sqrt(found.cov[0, 0]), math.sqrt(found.cov[1, 1])
     assert abs(found.pose[1] - truth[1]) <= 0.3
     assert along > 1.0 and across < 0.3
+
+
+def test_the_compiled_scores_are_the_sum_over_end_points_of_every_window_pose() -> None:
+    """Every pose's score, against a plain numpy sum over its end points (off the map:
+    the floor), on a random field and scan."""
+    rng = np.random.default_rng(4)
+    field = -rng.uniform(0, 4.5, (30, 40))
+    ranges, angles = rng.uniform(0, 25, 50), rng.uniform(-1.5, 1.5, 50)
+    guess, window = (20.2, 14.7, 0.3), Window(reach=1.0, step=0.5, turn=0.05, turn_step=0.05)
+    scores = scan_match._scores(
+        field, *guess, ranges, angles, window.offsets(), window.turns(), -4.5
+    )
+    for k, turn in enumerate(window.turns()):
+        for i, dy in enumerate(window.offsets()):
+            for j, dx in enumerate(window.offsets()):
+                heading = guess[2] + turn + angles
+                c = np.floor(guess[0] + dx + ranges * np.cos(heading)).astype(int)
+                r = np.floor(guess[1] + dy + ranges * np.sin(heading)).astype(int)
+                inside = (r >= 0) & (r < 30) & (c >= 0) & (c < 40)
+                want = field[r[inside], c[inside]].sum() - 4.5 * np.count_nonzero(~inside)
+                assert scores[k, i, j] == pytest.approx(want)
