@@ -191,9 +191,13 @@ def handling_sigterm(pid: int, timeout: float = 30.0) -> None:
     deadline = time.monotonic() + timeout
     bit = 1 << (signal.SIGTERM - 1)
     while time.monotonic() < deadline:
-        status = Path(f"/proc/{pid}/status").read_text(encoding="utf-8")
-        caught = next(line for line in status.splitlines() if line.startswith("SigCgt:"))
-        if int(caught.split()[1], 16) & bit:
+        fields = dict(
+            line.split(":", 1)
+            for line in Path(f"/proc/{pid}/status").read_text(encoding="utf-8").splitlines()
+        )
+        if fields["State"].split()[0] in ("Z", "X"):
+            raise AssertionError(f"process {pid} ended before it caught SIGTERM")
+        if int(fields["SigCgt"], 16) & bit:
             return
         time.sleep(0.002)
     raise AssertionError(f"process {pid} never caught SIGTERM")

@@ -34,11 +34,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numpy.typing import NDArray
 
 from mresim_phys.localization.odometry import Motion, OdometryNoise, Pose, moved, wrap
+from mresim_phys.types import FloatArray
 
-Matrix = NDArray[np.float64]
 POSITION = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])  # H of a position measurement
 
 
@@ -47,7 +46,7 @@ class PoseEstimate:
     """A believed pose and its covariance (x, y in cells; theta in rad)."""
 
     mean: Pose
-    cov: Matrix
+    cov: FloatArray
 
     @classmethod
     def certain(cls, pose: Pose) -> PoseEstimate:
@@ -64,7 +63,7 @@ class PoseEstimate:
         cov = g @ self.cov @ g.T + v @ m @ v.T
         return PoseEstimate(moved(self.mean, motion), symmetric(cov))
 
-    def corrected(self, z: tuple[float, float], r: Matrix) -> PoseEstimate:
+    def corrected(self, z: tuple[float, float], r: FloatArray) -> PoseEstimate:
         """The estimate after a measurement ``z`` of its position with covariance ``r``."""
         residual = np.array(z) - POSITION @ np.array(self.mean)
         return self._updated(POSITION, residual, r)
@@ -85,7 +84,7 @@ class PoseEstimate:
         residual = np.array([z[0] - predicted[0], wrap(z[1] - predicted[1])])
         return self._updated(h, residual, r)
 
-    def _updated(self, h: Matrix, residual: NDArray[np.float64], r: Matrix) -> PoseEstimate:
+    def _updated(self, h: FloatArray, residual: FloatArray, r: FloatArray) -> PoseEstimate:
         """The Kalman update for a measurement with Jacobian ``h``, ``residual`` and
         noise ``r`` (Joseph form)."""
         cov = self.cov
@@ -100,7 +99,7 @@ class PoseEstimate:
         return math.sqrt(max(float(np.linalg.eigvalsh(self.cov[:2, :2]).max()), 0.0))
 
 
-def symmetric(cov: Matrix) -> Matrix:
+def symmetric(cov: FloatArray) -> FloatArray:
     """``cov`` made exactly symmetric (floating point drifts it)."""
-    out: Matrix = (cov + cov.T) / 2.0
+    out: FloatArray = (cov + cov.T) / 2.0
     return out

@@ -20,7 +20,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
-from numpy.typing import NDArray
 from scipy.ndimage import distance_transform_edt
 
 from mresim_phys.localization.odometry import Pose
@@ -58,7 +57,7 @@ class Match:
     the best score per end point (0: every end point on a wall)."""
 
     pose: Pose
-    cov: NDArray[np.float64]
+    cov: FloatArray
     score: float
 
 
