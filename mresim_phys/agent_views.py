@@ -32,11 +32,12 @@ def robot_view(
     """``robot``'s knowledge at ``step``, read-only, as its strategy may see it."""
     belief = robot.belief.view()
     belief.flags.writeable = False
+    believed = robot.believed  # its pose as it believes it (localization/feature.py)
     return RobotView(
         step=step,
         name=robot.name,
-        position=robot.position,
-        heading=robot.heading,
+        position=(believed[0], believed[1]),
+        heading=believed[2],
         belief=belief,
         radius=robot.radius,
         clearance=clearance_of(robot),
@@ -72,7 +73,7 @@ def clearance_of(robot: Robot) -> float:
     clearance = robot.radius + robot.body.wall_margin
     if robot.escape_from is None:
         return clearance
-    return escape_clearance(robot.belief, robot.position, robot.radius, clearance)
+    return escape_clearance(robot.belief, robot.believed_position, robot.radius, clearance)
 
 
 def agent_snapshot(

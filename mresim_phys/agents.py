@@ -26,6 +26,8 @@ from mresim_phys.broken_parts import (
     speed_factor,
 )
 from mresim_phys.knowledge.teammates import PAYLOAD, TeammateInfo, keep_payload
+from mresim_phys.localization.feature import believed_pose
+from mresim_phys.localization.odometry import Pose
 from mresim_phys.planning import Planner
 from mresim_phys.strategies.base import Decision, Strategy
 from mresim_phys.types import UNKNOWN, BeliefGrid, BoolGrid, FloatArray
@@ -180,9 +182,10 @@ class Robot(Agent):
 
     def own_record(self, step: int) -> TeammateInfo:
         """Position, goal, state, role, payload and failed parts, stamped with ``step``."""
+        x, y, _ = self.believed
         return TeammateInfo(
             self.name,
-            self.position,
+            (x, y),
             self.goal,
             self.state,
             self.role,
@@ -190,6 +193,18 @@ class Robot(Agent):
             payload=PAYLOAD.state_of(self.features),
             broken=tuple(sorted(self.broken)),
         )
+
+    @property
+    def believed(self) -> Pose:
+        """The pose the robot believes it has: its map's, its plans' and its record's
+        (``localization/feature.py``; without localisation, its true pose)."""
+        return believed_pose(self.features, self.position, self.heading)
+
+    @property
+    def believed_position(self) -> tuple[float, float]:
+        """The position the robot believes it has."""
+        x, y, _ = believed_pose(self.features, self.position, self.heading)
+        return (x, y)
 
     def stop_for_replan(self) -> None:
         """Drop the path: something the robot now senses blocks it. It stands until its

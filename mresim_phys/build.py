@@ -29,6 +29,7 @@ from mresim_phys.faults.runtime import Faults, build_faults
 from mresim_phys.knowledge.coverage import Coverage
 from mresim_phys.knowledge.latest import LatestCoverage, give_stamps
 from mresim_phys.knowledge.teammates import BASE_NAME
+from mresim_phys.localization.feature import LOCALIZATION, localize
 from mresim_phys.planning import PLANNERS
 from mresim_phys.rng import Streams
 from mresim_phys.scenario.faults import robustness_columns
@@ -36,6 +37,7 @@ from mresim_phys.scenario.load import load_scenario
 from mresim_phys.scenario.on_map import (
     check_apart,
     check_base,
+    check_beacons,
     check_event_boxes,
     check_inside,
     load_map,
@@ -96,6 +98,22 @@ def make_robot(spec: RobotSpec, index: int, streams: Streams, shape: tuple[int, 
         heading=math.radians(spec.heading_deg),
         rng=streams.of_robot("strategy", spec.name),
     )
+
+
+def give_localization(
+    team: list[Robot], specs: list[RobotSpec], streams: Streams, shape: tuple[int, int]
+) -> None:
+    """The localisation state of each robot whose spec has one, at its (jittered) start;
+    its motion noise from its ``odometry`` stream, its corrections' from ``pose-fix``."""
+    for robot, spec in zip(team, specs, strict=True):
+        if spec.localization is not None:
+            own = (
+                streams.of_robot("odometry", robot.name),
+                streams.of_robot("pose-fix", robot.name),
+            )
+            pose = (*robot.position, robot.heading)
+            state = localize(spec.localization, pose, own, (float(shape[1]), float(shape[0])))
+            robot.features[LOCALIZATION.key] = state
 
 
 def make_base(spec: BaseStationSpec, shape: tuple[int, int]) -> Agent:
@@ -296,6 +314,8 @@ def build_setup(scenario: Scenario) -> Setup:
     if scenario.simulation.robots_block:
         check_apart(scenario.robots)
     check_base(world.occupied, scenario.base_station)
+    check_beacons(world.occupied, scenario.robots)
+    give_localization(robots, scenario.robots, streams, world.shape)
     starts = [r.position for r in robots]
     events = [make_event(e) for e in scenario.events]
     check_event_boxes(scenario, world.shape)

@@ -35,7 +35,13 @@ if TYPE_CHECKING:  # the facts a column reads; validating a scenario names colum
 
 Scalar: TypeAlias = int | float | str | None
 Value: TypeAlias = Scalar | Sequence[Scalar]
-FLAGS = ("connected", "latest", "faults")  # what a run's layout may have
+FLAGS = ("connected", "latest", "faults")
+LOCALIZATION_COLUMNS = (
+    "pose_error",
+    "heading_error",
+    "pose_error_mean",
+    "pose_error_max",
+)  # what a run's layout may have
 
 
 class ColumnParams(PluginParams):
@@ -327,6 +333,9 @@ DEFAULTS: tuple[str, ...] = tuple(c.name for c in COLUMNS.registered() if not c.
 registered later (a plugin's) is never a default."""
 
 # Optional columns a feature's own module registers (``features.py``), imported when named.
-FEATURE_COLUMNS = {"robot_battery": "mresim_phys.faults.battery:robot_battery"}
+FEATURE_COLUMNS = {
+    "robot_battery": "mresim_phys.faults.battery:robot_battery",
+    **{n: f"mresim_phys.localization.feature:{n}" for n in LOCALIZATION_COLUMNS},
+}
 for _name, _reference in FEATURE_COLUMNS.items():
     COLUMNS.lazy(_name, _reference, ColumnParams)

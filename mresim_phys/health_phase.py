@@ -73,7 +73,7 @@ def robot_steps(
         old = watch.state_of(r.name)
         reason = None if r.state == old else change_reason(r, old, step, events)
         moving = (r.distance, len(r.path) > 0, r.can_move)
-        place = (r.position, r.radius, r.belief)
+        place = (r.believed_position, r.radius, r.belief)  # its map's frame
         given_up = given_up_of(r.strategy)
         out.append(
             RobotStep(

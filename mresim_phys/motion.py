@@ -32,6 +32,7 @@ from numba import njit
 from mresim_phys.agents import Robot
 from mresim_phys.knowledge.mapping import mark_bump
 from mresim_phys.knowledge.teammates import PAYLOAD
+from mresim_phys.localization.feature import LOCALIZATION
 from mresim_phys.planning.fields import clearance_kernel
 from mresim_phys.strategies.base import ReplansOnContact, ReplansWhen
 from mresim_phys.types import OCCUPIED, FloatArray, IntArray
@@ -59,7 +60,7 @@ def wants_plan(robot: Robot, step: int, interval: int) -> bool:
     strategy: object = robot.strategy  # the protocols are optional, not part of Strategy
     if due or (
         implements(type(strategy), ReplansWhen)
-        and cast(ReplansWhen, strategy).replan_now(step, robot.position, robot.links)
+        and cast(ReplansWhen, strategy).replan_now(step, robot.believed_position, robot.links)
     ):
         return True
     return (
@@ -155,21 +156,33 @@ def move_towards(
     settle: Callable[[], None] = lambda: None,
 ) -> float | None:
     """Move toward the next path point by at most ``budget``; None if a wall is in the way
-    (its map, ``settle``d first, then marks the bump)."""
+    (its map, ``settle``d first, then marks the bump). A robot with localisation drives
+    from its believed pose and its body ends where the odometry's noise takes it
+    (``localization/feature.py``): the true end is what the walls check."""
     target = (float(robot.path[0, 0]), float(robot.path[0, 1]))
-    x, y = robot.position
+    loc = LOCALIZATION.state_of(robot.features)
+    x, y = robot.position if loc is None else loc.believed[:2]
     gap = math.hypot(target[0] - x, target[1] - y)
     if gap <= EPS:
         pop_point(robot)
         return 0.0
     share = min(1.0, budget / gap)
     end = (x + share * (target[0] - x), y + share * (target[1] - y))
-    hit = world.blocked(robot.position, end, robot.radius, rules.shape_filter_of(robot))
+    if loc is None:
+        true_end, leg = end, None
+    else:
+        leg = loc.leg(end)
+        pose = loc.drive(*leg)
+        true_end = (pose[0], pose[1])
+    hit = world.blocked(robot.position, true_end, robot.radius, rules.shape_filter_of(robot))
     if hit is not None:
         settle()
-        stop_with_error(robot, hit.point)
+        stop_with_error(robot, hit.point if loc is None else loc.to_believed(hit.point))
         return None
-    robot.advance_to(end)
+    robot.advance_to(true_end)
+    if loc is not None and leg is not None:
+        robot.heading = pose[2]
+        loc.arrive(*leg, pose)
     robot.status = "active"
     if share >= 1.0:
         pop_point(robot)
@@ -180,9 +193,12 @@ def look_at_goal(robot: Robot) -> None:
     """At the end of a path, turn in place to face the decision's ``look_at`` point."""
     look = robot.decision.look_at if robot.decision is not None else None
     if robot.reached_goal and look is not None:
-        dx, dy = look[0] - robot.position[0], look[1] - robot.position[1]
+        x, y, _ = robot.believed
+        dx, dy = look[0] - x, look[1] - y
         if math.hypot(dx, dy) > EPS:
-            robot.heading = math.atan2(dy, dx)
+            loc = LOCALIZATION.state_of(robot.features)
+            heading = math.atan2(dy, dx)
+            robot.heading = heading if loc is None else loc.turn(heading)
 
 
 def pop_point(robot: Robot) -> None:
@@ -193,11 +209,12 @@ def pop_point(robot: Robot) -> None:
 
 
 def stop_with_error(robot: Robot, contact: tuple[float, float]) -> None:
-    """The move was invalid: error flag, forget the path, remember the obstacle; if its map
-    held that obstacle already, the robot plans wide of corners until it has moved away
-    (``strategies/relax.py``)."""
-    direction = np.array([math.cos(robot.heading), math.sin(robot.heading)])
-    dx, dy = contact[0] - robot.position[0], contact[1] - robot.position[1]
+    """The move was invalid: error flag, forget the path, remember the obstacle (``contact``
+    where the robot believes it: its map's frame); if its map held that obstacle already,
+    the robot plans wide of corners until it has moved away (``strategies/relax.py``)."""
+    x, y, heading = robot.believed
+    direction = np.array([math.cos(heading), math.sin(heading)])
+    dx, dy = contact[0] - x, contact[1] - y
     if math.hypot(dx, dy) > EPS:
         direction = np.array([dx, dy]) / math.hypot(dx, dy)
     if not mark_bump(robot.belief, contact, direction):

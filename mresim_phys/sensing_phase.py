@@ -3,8 +3,10 @@
 :class:`Senses` scans where a robot stands and folds the scan into its map: in one compiled
 call when nothing needs to happen between the cast and the fold (``knowledge.scanfold``),
 else cast (with range noise from the robot's seeded stream), folded and stamped for
-'latest' beliefs in turn; it learns the terrain the scan saw and drops a path the new map
-shows blocked (with 'latest' beliefs or a prior map). Within a robot's turn the scans it
+'latest' beliefs in turn (with localisation: cast from the true pose, matched to the
+robot's map if it does scan matching, folded at its believed pose:
+``localization/perceive.py``); it learns the terrain the scan saw and drops a path the new
+map shows blocked (with 'latest' beliefs or a prior map). Within a robot's turn the scans it
 takes after each path point can be held back (:meth:`Senses.queue_for`) and folded
 together when the turn next reads or writes the map (``motion.take_step``'s ``settle``).
 What a scan touched (its window, its time) goes into the turn's
@@ -23,6 +25,8 @@ from mresim_phys.knowledge.mapping import integrate_scan
 from mresim_phys.knowledge.prior import PRIOR
 from mresim_phys.knowledge.scanfold import ScanQueue, folds_in_one_call, scan_into_map
 from mresim_phys.knowledge.terrain import TERRAIN, learn_terrain
+from mresim_phys.localization.feature import LOCALIZATION
+from mresim_phys.localization.perceive import as_believed, match_scan, scan_matching_of
 from mresim_phys.motion import path_blocked
 from mresim_phys.parallel import Effects
 from mresim_phys.world.queries import QueryFilter
@@ -56,11 +60,13 @@ class Senses:
         if not self.takes_scan(robot):
             return
         laser, observed = robot.laser, LATEST.state_of(robot.features)
+        loc = LOCALIZATION.state_of(robot.features)
         started = perf_counter()
-        if folds_in_one_call(laser, observed):  # the fold is timed as sensing
+        matches = loc is not None and scan_matching_of(loc) is not None
+        if not matches and folds_in_one_call(laser, observed):  # the fold is timed as sensing
             update = scan_into_map(
                 self.world, robot.position, robot.heading, laser, self.filter_of(robot),
-                robot.belief, robot.safe,
+                robot.belief, robot.safe, None if loc is None else loc.believed,
             )  # fmt: skip
             scanned = perf_counter()
         else:
@@ -68,6 +74,9 @@ class Senses:
                 self.world, robot.position, robot.heading, laser, self.filter_of(robot),
                 self.streams[robot.index - 1],
             )  # fmt: skip
+            if loc is not None:  # matched, then folded where the robot believes it is
+                match_scan(loc, robot.belief, result)
+                result = as_believed(result, loc)
             scanned = perf_counter()
             update = integrate_scan(
                 robot.belief, robot.safe, result, laser.safe_fraction, observed, step
@@ -87,9 +96,13 @@ class Senses:
     def queue_for(self, robot: Robot) -> ScanQueue | None:
         """A queue for the robot's scans of this turn (:class:`ScanQueue`), or None when
         each scan must fold at once: range noise or latest observations (see
-        ``folds_in_one_call``), a path to check against every scan, terrain to learn."""
+        ``folds_in_one_call``), a path to check against every scan, terrain to learn, a
+        scan to match to the map before it folds."""
         observed = LATEST.state_of(robot.features)
         if not folds_in_one_call(robot.laser, observed) or PRIOR.key in robot.features:
+            return None
+        loc = LOCALIZATION.state_of(robot.features)
+        if loc is not None and scan_matching_of(loc) is not None:
             return None
         if TERRAIN.key in robot.features and self.terrain is not None:
             return None
@@ -98,7 +111,8 @@ class Senses:
     def hold(self, robot: Robot, queue: ScanQueue) -> None:
         """:meth:`sense`, held in ``queue`` until the robot's map is next read."""
         if self.takes_scan(robot):
-            queue.add(robot.position, robot.heading)
+            loc = LOCALIZATION.state_of(robot.features)
+            queue.add(robot.position, robot.heading, None if loc is None else loc.believed)
 
     def takes_scan(self, robot: Robot) -> bool:
         """Whether the robot can scan where it stands (a working laser, not buried by a

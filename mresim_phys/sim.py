@@ -43,6 +43,8 @@ from mresim_phys.knowledge.health import HealthWatch
 from mresim_phys.knowledge.latest import LatestCoverage
 from mresim_phys.knowledge.robustness import FailureWatch, robot_states
 from mresim_phys.knowledge.teammates import presumed_lost
+from mresim_phys.localization.corrections import landmark_fixes, teammate_fixes
+from mresim_phys.localization.feature import LOCALIZATION
 from mresim_phys.memory import keep_freed_memory
 from mresim_phys.metrics import (
     RobotRecord,
@@ -147,6 +149,7 @@ class Simulation:
         self.move_and_sense(given, due)
         self.world.place_robots([r.position for r in self.robots])
         self.communicate()
+        teammate_fixes(self.robots)
         self.drain_batteries()
         self.record = self.measure()
         return self.record
@@ -262,6 +265,9 @@ class Simulation:
             hold = partial(self.senses.hold, queue=queue)
             settle = partial(self.senses.fold_held, queue, effects)
             take_step(robot, self.world, self.move_rules, given, replan, hold, settle)
+        loc = LOCALIZATION.state_of(robot.features)
+        if loc is not None:  # the base and beacons seen from where it now stands
+            landmark_fixes(loc, self.base.position, self.world, self.robot_filter(robot))
         started = perf_counter()
         self.network.stamp_own(robot, effects.window, self.t)
         effects.spend("communication", perf_counter() - started)
@@ -326,7 +332,7 @@ class Simulation:
         for robot in self.robots:
             for box in ledger.newer_boxes(robot.index, sensed_tick(self.t)).tolist():
                 coverage.touch_box(robot.belief, (box[0], box[1], box[2], box[3]))
-            around = box_around(robot.position, robot.radius + 2, self.world.shape)
+            around = box_around(robot.believed_position, robot.radius + 2, self.world.shape)
             coverage.touch_box(robot.belief, around)
 
     def note_links(self) -> None:

@@ -150,7 +150,7 @@ class Network:
         """``robot``'s map may have changed next to its body: a bump marks a cell there
         outside any scan."""
         shape = self.ledger.stamps[robot.index].shape
-        self.ledger.note(robot.index, box_around(robot.position, robot.radius + 2, shape))
+        self.ledger.note(robot.index, box_around(robot.believed_position, robot.radius + 2, shape))
 
     def communicate(
         self,

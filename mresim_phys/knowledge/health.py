@@ -45,6 +45,7 @@ from typing import Any, Protocol
 from mresim_phys.broken_parts import broken_of
 from mresim_phys.knowledge.activity import health_of
 from mresim_phys.knowledge.frontier_reach import FrontierCheck, frontier_check
+from mresim_phys.localization.feature import LOCALIZATION
 from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray
 
 MOVE_EPS = 0.05  # cells: a robot that moved less in a step did not move
@@ -126,7 +127,7 @@ def step_of(agent: AgentLike) -> RobotStep:
         agent.distance,
         len(agent.path) > 0,
         agent.state != "failed" and "drive" not in broken_of(agent),
-        agent.position,
+        believed_position(agent),
         agent.radius,
         agent.belief,
         health_of(agent).reason,
@@ -134,6 +135,13 @@ def step_of(agent: AgentLike) -> RobotStep:
         agent.given_up,
         agent.goal,
     )
+
+
+def believed_position(agent: AgentLike) -> tuple[float, float]:
+    """Where a snapshot's robot believes it stands (its map's frame): the localisation
+    feature's believed pose, or its position."""
+    belief = LOCALIZATION.of(agent)
+    return agent.position if belief is None else (belief.pose[0], belief.pose[1])
 
 
 def check_of(robot: RobotStep) -> FrontierCheck:

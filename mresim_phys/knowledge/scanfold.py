@@ -27,6 +27,8 @@ from mresim_phys.world.raycast import cast_fan
 from mresim_phys.world.sensing import Laser, ray_offsets
 from mresim_phys.world.space import World
 
+Pose = tuple[float, float, float]  # x, y, heading
+
 
 class MapHolder(Protocol):
     """What a queue folds scans into: a robot's map and its safe cells."""
@@ -46,16 +48,30 @@ def _cast_then_fold(
     belief: BeliefGrid,
     safe: BoolGrid,
     safe_radius: float,
+    placed: FloatArray,
 ) -> tuple[int, int, BeliefGrid]:
-    """``cast_fan`` then ``fold_scan``: (row0, col0, free mask) or row0 = -1. Called only
-    from kernels (a cached kernel that Python also calls can lose its boxing environment,
-    see ``planning.dial._start_paused``): :func:`_cast_and_fold` and
+    """``cast_fan`` from (``ox``, ``oy``) then ``fold_scan``: (row0, col0, free mask) or
+    row0 = -1. ``placed`` (x, y, turn) is where the robot believes the scan was taken
+    (localisation: ``localization/perceive.py``): folded from (x, y), every ray and hit
+    face turned by ``turn``; equal to (ox, oy, 0), the scan folds where it was cast.
+    Called only from kernels (a cached kernel that Python also calls can lose its boxing
+    environment, see ``planning.dial._start_paused``): :func:`_cast_and_fold` and
     :func:`_cast_and_fold_many` are the entries from Python."""
     n = len(angles)
     ranges, normals, wall_hit = np.empty(n), np.empty((n, 2)), np.empty(n, dtype=np.bool_)
     cast_fan(grid, ox, oy, angles, max_range, circles, ranges, normals, wall_hit)
     radius = safe_radius
-    return fold_scan(ox, oy, angles, ranges, normals, wall_hit, max_range, belief, safe, radius)
+    bx, by, turn = placed[0], placed[1], placed[2]
+    if bx == ox and by == oy and turn == 0.0:
+        return fold_scan(ox, oy, angles, ranges, normals, wall_hit, max_range, belief, safe, radius)
+    c, s = np.cos(turn), np.sin(turn)
+    turned = np.empty((n, 2))
+    for k in range(n):
+        turned[k, 0] = c * normals[k, 0] - s * normals[k, 1]
+        turned[k, 1] = s * normals[k, 0] + c * normals[k, 1]
+    return fold_scan(
+        bx, by, angles + turn, ranges, turned, wall_hit, max_range, belief, safe, radius
+    )
 
 
 @njit(cache=True, nogil=True)
@@ -69,9 +85,12 @@ def _cast_and_fold(
     belief: BeliefGrid,
     safe: BoolGrid,
     safe_radius: float,
+    placed: FloatArray,
 ) -> tuple[int, int, BeliefGrid]:
     """One scan: :func:`_cast_then_fold`."""
-    return _cast_then_fold(grid, ox, oy, angles, max_range, circles, belief, safe, safe_radius)
+    return _cast_then_fold(
+        grid, ox, oy, angles, max_range, circles, belief, safe, safe_radius, placed
+    )
 
 
 @njit(cache=True, nogil=True)
@@ -85,15 +104,16 @@ def _cast_and_fold_many(
     safe: BoolGrid,
     safe_radius: float,
 ) -> tuple[int, int, int, int]:
-    """:func:`_cast_then_fold` at each row (x, y, heading) of ``poses`` in turn, the rays at
-    ``heading + offsets``; the union (row0, row1, col0, col1) of the windows of the scans
-    that updated the map, row0 = -1 if none did."""
+    """:func:`_cast_then_fold` at each row (x, y, heading, placed x, placed y, turn) of
+    ``poses`` in turn, the rays at ``heading + offsets``; the union (row0, row1, col0,
+    col1) of the windows of the scans that updated the map, row0 = -1 if none did."""
     r0, r1, c0, c1 = -1, -1, -1, -1
     for i in range(len(poses)):
         angles = poses[i, 2] + offsets
         row0, col0, free = _cast_then_fold(
-            grid, poses[i, 0], poses[i, 1], angles, max_range, circles, belief, safe, safe_radius
-        )
+            grid, poses[i, 0], poses[i, 1], angles, max_range, circles, belief, safe,
+            safe_radius, poses[i, 3:],
+        )  # fmt: skip
         if row0 < 0:
             continue
         h, w = free.shape
@@ -119,16 +139,27 @@ def scan_into_map(
     shape_filter: QueryFilter,
     belief: BeliefGrid,
     safe: BoolGrid,
+    placed: Pose | None = None,
 ) -> Update | None:
     """``integrate_scan(belief, safe, scan(world, origin, heading, laser, shape_filter),
-    laser.safe_fraction)`` for a laser without noise, in one compiled call."""
+    laser.safe_fraction)`` for a laser without noise, in one compiled call; ``placed``:
+    the pose the robot believes it scanned from (None: ``origin`` and ``heading``)."""
     angles = heading + ray_offsets(laser.fov_deg, laser.rays)
     grid, circles = world.ray_targets(shape_filter)
     row0, col0, free = _cast_and_fold(
         grid, float(origin[0]), float(origin[1]), angles, float(laser.range), circles,
         belief, safe, float(laser.safe_fraction * laser.range),
+        _placement((origin[0], origin[1], heading), placed),
     )  # fmt: skip
     return None if row0 < 0 else Update(row0, col0, free.view(bool))
+
+
+def _placement(cast: Pose, placed: Pose | None) -> FloatArray:
+    """(x, y, turn) where a scan cast at ``cast`` is folded (``placed``; None: where it
+    was cast)."""
+    if placed is None or placed == cast:
+        return np.array([cast[0], cast[1], 0.0])
+    return np.array([placed[0], placed[1], placed[2] - cast[2]])
 
 
 class ScanQueue:
@@ -148,11 +179,15 @@ class ScanQueue:
         self, world: World, laser: Laser, shape_filter: QueryFilter, robot: MapHolder
     ) -> None:
         self.world, self.laser, self.shape_filter, self.robot = world, laser, shape_filter, robot
-        self.poses: list[tuple[float, float, float]] = []
+        self.poses: list[tuple[float, ...]] = []
 
-    def add(self, position: tuple[float, float], heading: float) -> None:
-        """Hold a scan taken at ``position`` facing ``heading``."""
-        self.poses.append((float(position[0]), float(position[1]), float(heading)))
+    def add(
+        self, position: tuple[float, float], heading: float, placed: Pose | None = None
+    ) -> None:
+        """Hold a scan taken at ``position`` facing ``heading`` (``placed``: the pose the
+        robot believes it took it from; None: that one)."""
+        cast = (float(position[0]), float(position[1]), float(heading))
+        self.poses.append((*cast, *(float(v) for v in _placement(cast, placed))))
 
     def fold(self) -> Box | None:
         """Cast and fold the held scans into the robot's map, in order; the union of the

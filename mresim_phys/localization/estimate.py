@@ -68,6 +68,13 @@ class PoseEstimate:
         residual = np.array(z) - POSITION @ np.array(self.mean)
         return self._updated(POSITION, residual, r)
 
+    def aligned(self, z: tuple[float, float, float], r: FloatArray) -> PoseEstimate:
+        """The estimate after a measurement ``z`` of the whole pose with covariance ``r``
+        (a scan match); the heading's residual wrapped to [-pi, pi)."""
+        mu = self.mean
+        residual = np.array([z[0] - mu[0], z[1] - mu[1], wrap(z[2] - mu[2])])
+        return self._updated(np.eye(3), residual, r)
+
     def ranged(
         self, other: PoseEstimate, z: tuple[float, float], sigma_range: float,
         sigma_bearing: float,

@@ -30,9 +30,30 @@ def check_on_map(scenario: Scenario) -> LoadedMap:
     if scenario.simulation.robots_block:
         check_apart(scenario.robots)
     check_base(truth.occupied, scenario.base_station)
+    check_beacons(truth.occupied, scenario.robots)
     check_event_boxes(scenario, truth.occupied.shape)
     check_door_names(scenario)
     return truth
+
+
+def check_beacons(occupied: BoolGrid, robots: list[RobotSpec]) -> None:
+    """Every localisation beacon stands inside the map, on a free cell."""
+    rows, cols = occupied.shape
+    for i, robot in enumerate(robots):
+        corrections = robot.localization.corrections if robot.localization else []
+        for k, fix in enumerate(corrections):
+            for j, (x, y) in enumerate(fix.positions if fix.kind == "beacons" else []):
+                where = f"robots[{i}] ({robot.name}).localization.corrections[{k}].positions[{j}]"
+                if not (0 <= x < cols and 0 <= y < rows):
+                    raise ScenarioError(
+                        f"{where} {[x, y]} is outside the {cols}x{rows} map; give"
+                        " 0 <= x < columns and 0 <= y < rows."
+                    )
+                if occupied[int(y), int(x)]:
+                    raise ScenarioError(
+                        f"{where} {[x, y]} is inside a wall (cell column {int(x)}, row"
+                        f" {int(y)} is an obstacle); put the beacon in free space."
+                    )
 
 
 def load_map(spec: MapSpec) -> LoadedMap:

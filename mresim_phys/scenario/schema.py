@@ -21,6 +21,7 @@ from pydantic import (
 )
 
 from mresim_phys.faults.spec import FaultsSpec
+from mresim_phys.localization.spec import LocalizationSpec
 from mresim_phys.scenario.event_union import EventList
 from mresim_phys.scenario.hierarchy import check_hierarchy
 from mresim_phys.scenario.maps import MapSpec, PriorSpec
@@ -148,6 +149,13 @@ class RobotParams(Strict):
     planner: PluginSpec = Field(
         default_factory=lambda: PluginSpec(name="astar"),
         description="Path planner (astar, jps or topological): a name or {name, params}.",
+    )
+    localization: LocalizationSpec | None = Field(
+        None,
+        description=(
+            "Odometry drift and pose corrections: {odometry: {alpha}, corrections: [...]}"
+            " (null: the robot knows its exact pose)."
+        ),
     )
 
 
@@ -311,9 +319,11 @@ class Scenario(Strict):
 
 
 def _inherit(team: dict[str, Any], robot: dict[str, Any]) -> dict[str, Any]:
-    """Robot fields over team defaults; a robot's ``sensor`` dict merges into the team's."""
+    """Robot fields over team defaults; a robot's ``sensor`` and ``localization`` dicts
+    merge into the team's key by key."""
     merged = {**team, **robot}
-    team_sensor, robot_sensor = team.get("sensor"), robot.get("sensor")
-    if isinstance(team_sensor, dict) and isinstance(robot_sensor, dict):
-        merged["sensor"] = {**team_sensor, **robot_sensor}
+    for key in ("sensor", "localization"):
+        theirs, own = team.get(key), robot.get(key)
+        if isinstance(theirs, dict) and isinstance(own, dict):
+            merged[key] = {**theirs, **own}
     return merged
