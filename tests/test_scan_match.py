@@ -72,8 +72,9 @@ def test_a_long_corridor_leaves_the_pose_along_it_open() -> None:
 
 
 def test_the_compiled_scores_are_the_sum_over_end_points_of_every_window_pose() -> None:
-    """Every pose's score, against a plain numpy sum over its end points (off the map:
-    the floor), on a random field and scan."""
+    """Every pose's score, against a plain numpy sum over its end points of the field
+    interpolated between cell centres (off the map: the floor), on a random field and
+    scan."""
     rng = np.random.default_rng(4)
     field = -rng.uniform(0, 4.5, (30, 40))
     ranges, angles = rng.uniform(0, 25, 50), rng.uniform(-1.5, 1.5, 50)
@@ -85,8 +86,24 @@ def test_the_compiled_scores_are_the_sum_over_end_points_of_every_window_pose() 
         for i, dy in enumerate(window.offsets()):
             for j, dx in enumerate(window.offsets()):
                 heading = guess[2] + turn + angles
-                c = np.floor(guess[0] + dx + ranges * np.cos(heading)).astype(int)
-                r = np.floor(guess[1] + dy + ranges * np.sin(heading)).astype(int)
-                inside = (r >= 0) & (r < 30) & (c >= 0) & (c < 40)
-                want = field[r[inside], c[inside]].sum() - 4.5 * np.count_nonzero(~inside)
-                assert scores[k, i, j] == pytest.approx(want)
+                x = guess[0] + dx + ranges * np.cos(heading) - 0.5
+                y = guess[1] + dy + ranges * np.sin(heading) - 0.5
+                assert scores[k, i, j] == pytest.approx(bilinear(field, x, y, -4.5).sum())
+
+
+def bilinear(field: np.ndarray, x: np.ndarray, y: np.ndarray, floor: float) -> np.ndarray:
+    """``field`` at points measured from the centre of cell (0, 0), interpolated between
+    the four cell centres round each (off the map: ``floor``)."""
+    c, r = np.floor(x).astype(int), np.floor(y).astype(int)
+    fx, fy = x - c, y - r
+
+    def at(rr: np.ndarray, cc: np.ndarray) -> np.ndarray:
+        inside = (rr >= 0) & (rr < field.shape[0]) & (cc >= 0) & (cc < field.shape[1])
+        out = np.full(rr.shape, floor)
+        out[inside] = field[rr[inside], cc[inside]]
+        return out
+
+    return (
+        at(r, c) * (1 - fx) * (1 - fy) + at(r, c + 1) * fx * (1 - fy)
+        + at(r + 1, c) * (1 - fx) * fy + at(r + 1, c + 1) * fx * fy
+    )

@@ -19,6 +19,7 @@ sys.path.insert(0, str(ROOT))
 
 from mresim_phys import COMM_MODELS, STRATEGIES  # noqa: E402
 from mresim_phys.faults import spec as fault_spec  # noqa: E402
+from mresim_phys.localization import spec as localization  # noqa: E402
 from mresim_phys.planning import PLANNERS  # noqa: E402
 from mresim_phys.scenario import run_specs, schema  # noqa: E402
 from mresim_phys.scenario.maps import PriorSpec  # noqa: E402
@@ -64,8 +65,23 @@ SECTIONS: list[tuple[str, type[BaseModel]]] = [
     ("faults.random[i]", fault_spec.RandomFaultSpec),
     ("faults.battery", fault_spec.BatterySpec),
     ("faults.hazards[i]", fault_spec.HazardSpec),
+    ("localization (team or robots[i])", localization.LocalizationSpec),
+    ("localization.odometry", localization.OdometrySpec),
+    ("localization.corrections[i], kind: base", localization.BaseFix),
+    ("localization.corrections[i], kind: beacons", localization.BeaconsFix),
+    ("localization.corrections[i], kind: teammate", localization.TeammateFix),
+    ("localization.corrections[i], kind: scan_matching", localization.ScanMatchFix),
 ]
 NOTES = {
+    "localization (team or robots[i])": (
+        "A robot with this block knows its pose only through its odometry and corrections:"
+        " its map, plans, teammate record and strategy use the believed pose, its body,"
+        " laser and radio the true one. A robot's own block merges into the team's key by"
+        " key. Motion noise draws from the stream `odometry/<robot>`, correction noise from"
+        " `pose-fix/<robot>`. Adds the metric columns `pose_error`, `heading_error`,"
+        " `pose_error_mean`, `pose_error_max` and summary.json's `localization` object;"
+        " see [localization.md](localization.md)."
+    ),
     "obstacles[i]": (
         "A moving obstacle's body is the cells whose centre lies inside its shape, standing"
         " where its centre is; it moves in the events phase and never overlaps a wall,"

@@ -45,7 +45,7 @@ from mresim_phys.localization.odometry import (
     wrap,
 )
 from mresim_phys.localization.scan_match import LiveField
-from mresim_phys.localization.spec import LocalizationSpec
+from mresim_phys.localization.spec import LocalizationSpec, ScanMatchFix
 
 if TYPE_CHECKING:
     from mresim_phys.metrics import StepRecord
@@ -66,6 +66,10 @@ class Localization:
     corrected: dict[str, int] = field(default_factory=dict)  # corrections fused, per kind
     live: LiveField | None = None  # scan matching: its map's likelihood field
 
+    @property
+    def matching(self) -> ScanMatchFix | None:
+        """Its scan matching correction, if it has one."""
+        return self.spec.matching
     @property
     def believed(self) -> Pose:
         """The believed pose (the estimate's mean)."""

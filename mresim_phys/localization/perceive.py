@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import replace
+from functools import cache
 
 import numpy as np
 
@@ -24,8 +25,7 @@ from mresim_phys.types import BeliefGrid
 from mresim_phys.world.space import Scan
 
 MIN_POINTS = 20  # a scan with fewer wall hits is not matched: too little to pin a pose
-MAX_POINTS = 90  # end points matched at most (every k-th hit)
-NUDGE = 0.5  # cells along the ray: an end point inside the wall cell it hit, not on its face
+MAX_POINTS = 60  # end points matched at most (every k-th hit)
 TURN_STEP_DEG = 1.0  # the window's heading step
 
 
@@ -44,8 +44,7 @@ def as_believed(scan: Scan, loc: Localization) -> Scan:
 
 def scan_matching_of(loc: Localization) -> ScanMatchFix | None:
     """The robot's scan matching correction, if it has one."""
-    found = [c for c in loc.spec.corrections if isinstance(c, ScanMatchFix)]
-    return found[0] if found else None
+    return loc.matching
 
 
 def match_scan(loc: Localization, belief: BeliefGrid, scan: Scan) -> bool:
@@ -61,8 +60,8 @@ def match_scan(loc: Localization, belief: BeliefGrid, scan: Scan) -> bool:
     if len(hits) < MIN_POINTS:
         return False
     hits = hits[:: -(-len(hits) // MAX_POINTS)]  # every k-th: at most MAX_POINTS
-    ranges, relative = scan.ranges[hits] + NUDGE, scan.angles[hits] - loc.true[2]
-    window = Window(fix.window, 0.25, math.radians(fix.turn_deg), math.radians(TURN_STEP_DEG))
+    ranges, relative = scan.ranges[hits], scan.angles[hits] - loc.true[2]
+    window = window_of(fix)
     if loc.live is None:
         loc.live = LiveField(belief.shape, fix.sigma)
     guess = loc.believed
@@ -71,6 +70,12 @@ def match_scan(loc: Localization, belief: BeliefGrid, scan: Scan) -> bool:
     grid = np.diag([window.step**2 / 12, window.step**2 / 12, window.turn_step**2 / 12])
     loc.fix(loc.estimate.aligned(found.pose, found.cov + grid), "scan_matching")
     return True
+
+
+@cache
+def window_of(fix: ScanMatchFix) -> Window:
+    """The poses ``fix`` tries round the believed pose."""
+    return Window(fix.window, 0.25, math.radians(fix.turn_deg), math.radians(TURN_STEP_DEG))
 
 
 def _reach(

@@ -17,6 +17,7 @@ are one compiled pass (``_scores``, numba): 1.7 ms for 181 rays over the default
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cache
 
 import numpy as np
 from numba import njit
@@ -26,7 +27,9 @@ from mresim_phys.localization.odometry import Pose
 from mresim_phys.types import OCCUPIED, BeliefGrid, FloatArray
 
 MAX_DISTANCE = 3.0  # sigmas: an end point farther from every wall scores as if this far
-COARSE = 4  # the first pass's steps: this many times the window's
+COARSE = 4  # the first pass's position step: this many times the window's
+COARSE_TURN = 2  # and its heading step
+NUDGE = 0.5  # cells along a ray: its end point inside the wall cell it hit, not on its face
 
 
 @dataclass(frozen=True)
@@ -144,43 +147,58 @@ def match(
     field: FloatArray, guess: Pose, ranges: FloatArray, angles: FloatArray, window: Window
 ) -> Match:
     """Match a scan (``ranges`` of its hits, at ``angles`` relative to the heading; cells
-    and rad) taken from about ``guess`` against a map's ``field``: the whole window at
-    ``COARSE`` times its steps, then the window's own steps round the best coarse pose
-    (one coarse step either side). The covariance is the fine distribution's plus the
-    coarse one's where that spreads over more than a coarse step (a corridor's ambiguity,
-    not the coarse grid's own: :func:`_beyond`)."""
-    field = np.ascontiguousarray(field, dtype=np.float64)
-    ranges, angles = np.asarray(ranges, dtype=np.float64), np.asarray(angles, dtype=np.float64)
-    coarse = Window(window.reach, window.step * COARSE, window.turn, window.turn_step * COARSE)
+    and rad; each end point taken ``NUDGE`` beyond its hit, into the wall cell) taken
+    from about ``guess`` against a map's ``field``: the whole window at ``COARSE`` times
+    its position step and ``COARSE_TURN`` times its heading step, then the window's own
+    steps round the best coarse pose (half a coarse step either side; the pose is that
+    distribution's mean). The covariance is the fine distribution's plus the coarse
+    one's where that spreads over more than a coarse step (a corridor's ambiguity, not
+    the coarse grid's own). One compiled call (``_two_passes``)."""
+    coarse = Window(window.reach, window.step * COARSE, window.turn, window.turn_step * COARSE_TURN)
     if coarse.step > window.reach or coarse.turn_step > window.turn:
-        return _search(field, guess, ranges, angles, window)
-    rough = _search(field, guess, ranges, angles, coarse)
-    fine = Window(coarse.step, window.step, coarse.turn_step, window.turn_step)
-    found = _search(field, rough.pose, ranges, angles, fine)
-    return Match(found.pose, _beyond(rough.cov, coarse) + found.cov, found.score)
-
-
-def _beyond(cov: FloatArray, window: Window) -> FloatArray:
-    """``cov`` in the directions where it spreads over more than one of ``window``'s steps
-    (position: the eigenvectors of its 2x2 block; heading: its variance), 0 elsewhere."""
-    values, vectors = np.linalg.eigh(cov[:2, :2])
-    kept = np.where(values > window.step**2, values, 0.0)
-    out = np.zeros((3, 3))
-    out[:2, :2] = (vectors * kept) @ vectors.T
-    out[2, 2] = cov[2, 2] if cov[2, 2] > window.turn_step**2 else 0.0
-    return out
-
-
-def _search(
-    field: FloatArray, guess: Pose, ranges: FloatArray, angles: FloatArray, window: Window
-) -> Match:
-    """Every pose of ``window`` round ``guess`` scored; the best and the covariance."""
-    offsets, turns = window.offsets(), window.turns()
-    scores = _scores(
-        field, float(guess[0]), float(guess[1]), float(guess[2]), ranges, angles, offsets,
-        turns, -(MAX_DISTANCE**2) / 2.0,
+        coarse = window  # a window too small for two passes: one
+    fine = Window(coarse.step / 2, window.step, coarse.turn_step / 2, window.turn_step)
+    pose, cov, score = _two_passes(
+        np.ascontiguousarray(field, dtype=np.float64),
+        np.array(guess, dtype=np.float64),
+        np.asarray(ranges, dtype=np.float64) + NUDGE,
+        np.asarray(angles, dtype=np.float64),
+        *_axes(coarse), *_axes(fine), coarse is not window,
+        np.array([coarse.step**2, coarse.turn_step**2]), -(MAX_DISTANCE**2) / 2.0,
     )  # fmt: skip
-    return _summary(scores, offsets, turns, guess, len(ranges))
+    return Match((float(pose[0]), float(pose[1]), float(pose[2])), cov, score / max(len(ranges), 1))
+
+
+@cache
+def _axes(window: Window) -> tuple[FloatArray, FloatArray]:
+    """The window's position offsets and heading offsets (made once per window)."""
+    return window.offsets(), window.turns()
+
+
+@njit(cache=True, nogil=True)
+def _two_passes(
+    field: FloatArray, guess: FloatArray, ranges: FloatArray, angles: FloatArray,
+    coarse_offsets: FloatArray, coarse_turns: FloatArray, fine_offsets: FloatArray,
+    fine_turns: FloatArray, refine: bool, spread: FloatArray, floor: float,
+) -> tuple[FloatArray, FloatArray, float]:  # fmt: skip
+    """The kernel of :func:`match`: (pose, covariance, best score). Not ``refine``: the
+    coarse pass alone, its best pose and covariance."""
+    scores = _scores(field, guess[0], guess[1], guess[2], ranges, angles, coarse_offsets,
+                     coarse_turns, floor)  # fmt: skip
+    best, _, rough = _moments(scores, coarse_offsets, coarse_turns)
+    if not refine:
+        return guess + best, rough, scores.max()
+    centre = guess + best
+    scores = _scores(field, centre[0], centre[1], centre[2], ranges, angles, fine_offsets,
+                     fine_turns, floor)  # fmt: skip
+    _, mean, cov = _moments(scores, fine_offsets, fine_turns)
+    values, vectors = np.linalg.eigh(rough[:2, :2])  # the coarse spread beyond its grid
+    for a in range(2):
+        if values[a] > spread[0]:
+            cov[:2, :2] += values[a] * np.outer(vectors[:, a], vectors[:, a])
+    if rough[2, 2] > spread[1]:
+        cov[2, 2] += rough[2, 2]
+    return centre + mean, cov, scores.max()
 
 
 @njit(cache=True, nogil=True)
@@ -188,42 +206,66 @@ def _scores(
     field: FloatArray, x0: float, y0: float, theta: float, ranges: FloatArray,
     angles: FloatArray, offsets: FloatArray, turns: FloatArray, floor: float,
 ) -> FloatArray:  # fmt: skip
-    """The score of every pose of the window: (turn, y offset, x offset)."""
-    rows, cols = field.shape
+    """The score of every pose of the window: (turn, y offset, x offset). An end point
+    scores the field interpolated bilinearly between the centres of the four cells round
+    it (:func:`_at`): a pose a quarter cell off scores below the right one, where the
+    cell it falls in alone would score the same (a plateau a cell wide)."""
     n, m = len(ranges), len(offsets)
     out = np.zeros((len(turns), m, m))
     xs, ys = np.empty(n), np.empty(n)
     for k in range(len(turns)):
         for p in range(n):
             heading = theta + turns[k] + angles[p]
-            xs[p] = x0 + ranges[p] * np.cos(heading)
-            ys[p] = y0 + ranges[p] * np.sin(heading)
+            xs[p] = x0 + ranges[p] * np.cos(heading) - 0.5  # from cell centres
+            ys[p] = y0 + ranges[p] * np.sin(heading) - 0.5
         for i in range(m):
             for j in range(m):
                 total = 0.0
                 for p in range(n):
-                    c = int(np.floor(xs[p] + offsets[j]))
-                    r = int(np.floor(ys[p] + offsets[i]))
-                    if 0 <= r < rows and 0 <= c < cols:
-                        total += field[r, c]
-                    else:
-                        total += floor
+                    total += _at(field, xs[p] + offsets[j], ys[p] + offsets[i], floor)
                 out[k, i, j] = total
     return out
 
 
-def _summary(
-    scores: FloatArray, offsets: FloatArray, turns: FloatArray, guess: Pose, points: int
-) -> Match:
-    """The best pose and the covariance of ``p ~ exp(score)`` over the window."""
-    k, i, j = np.unravel_index(int(np.argmax(scores)), scores.shape)
-    weights = np.exp(scores - scores[k, i, j])
-    weights /= weights.sum()
-    t, y, x = np.meshgrid(turns, offsets, offsets, indexing="ij")
-    samples = np.stack([x.ravel(), y.ravel(), t.ravel()])  # (3, m)
-    w = weights.ravel()
-    mean = samples @ w
-    centred = samples - mean[:, None]
-    cov = (centred * w) @ centred.T
-    best = (guess[0] + float(offsets[j]), guess[1] + float(offsets[i]), guess[2] + float(turns[k]))
-    return Match(best, cov, float(scores[k, i, j]) / max(points, 1))
+@njit(cache=True, nogil=True, inline="always")
+def _at(field: FloatArray, x: float, y: float, floor: float) -> float:
+    """``field`` at (``x``, ``y``) measured from the centre of cell (0, 0), bilinear; a
+    cell off the map counts as ``floor``."""
+    rows, cols = field.shape
+    c, r = int(np.floor(x)), int(np.floor(y))
+    fx, fy = x - c, y - r
+    total = 0.0
+    for dr in range(2):
+        for dc in range(2):
+            rr, cc = r + dr, c + dc
+            value = field[rr, cc] if 0 <= rr < rows and 0 <= cc < cols else floor
+            total += value * (fx if dc else 1.0 - fx) * (fy if dr else 1.0 - fy)
+    return total
+
+
+@njit(cache=True, nogil=True)
+def _moments(
+    scores: FloatArray, offsets: FloatArray, turns: FloatArray
+) -> tuple[FloatArray, FloatArray, FloatArray]:
+    """The best offset (x, y, turn), and the mean and covariance of ``p ~ exp(score)``
+    over the window."""
+    flat = np.argmax(scores)
+    k, rest = divmod(flat, scores.shape[1] * scores.shape[2])
+    i, j = divmod(rest, scores.shape[2])
+    top = scores[k, i, j]
+    best = np.array([offsets[j], offsets[i], turns[k]])
+    total, mean, second = 0.0, np.zeros(3), np.zeros((3, 3))
+    v = np.empty(3)
+    for k in range(scores.shape[0]):
+        for i in range(scores.shape[1]):
+            for j in range(scores.shape[2]):
+                w = np.exp(scores[k, i, j] - top)
+                v[0], v[1], v[2] = offsets[j], offsets[i], turns[k]
+                total += w
+                for a in range(3):
+                    mean[a] += w * v[a]
+                    for b in range(3):
+                        second[a, b] += w * v[a] * v[b]
+    mean /= total
+    cov = second / total - np.outer(mean, mean)
+    return best, mean, (cov + cov.T) / 2.0

@@ -17,6 +17,7 @@ the map by ``build.py`` (off the map, in a wall: exit 2).
 
 from __future__ import annotations
 
+from functools import cached_property
 from typing import Annotated, Any, Literal
 
 from pydantic import Discriminator, Field, Tag, field_validator
@@ -112,6 +113,12 @@ class LocalizationSpec(Strict):
     corrections: list[Correction] = Field(
         default_factory=list, description="Corrections, at most one of each kind."
     )
+
+    @cached_property
+    def matching(self) -> ScanMatchFix | None:
+        """The scan matching correction, if there is one."""
+        found = [c for c in self.corrections if isinstance(c, ScanMatchFix)]
+        return found[0] if found else None
 
     @field_validator("corrections")
     @classmethod

@@ -20,11 +20,12 @@ import numpy as np
 import yaml
 
 from mresim_phys.build import region_probe, run_rules
-from mresim_phys.columns import Layout
+from mresim_phys.columns import LOCALIZATION_COLUMNS, Layout
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.errors import ScenarioError
 from mresim_phys.metrics import StepRecord
 from mresim_phys.output.files import PendingFile, write_json_atomic, write_text_atomic
+from mresim_phys.output.localization import PoseRecorder
 from mresim_phys.output.logwriter import RunLogWriter
 from mresim_phys.output.video import (
     VideoRecorder,
@@ -75,8 +76,18 @@ def run_layout(scenario: Scenario) -> Layout:
     faults: the robustness columns; the optional columns its scenario names)."""
     rules = run_rules(scenario)
     names = [r.name for r in scenario.robots]
-    extra = scenario.metrics.columns
+    extra = extra_columns(scenario)
     return Layout.of(names, latest=rules.latest, faults=rules.fault_columns, extra=extra)
+
+
+def extra_columns(scenario: Scenario) -> list[str]:
+    """The optional columns of the run: those its scenario names, then the localisation
+    columns (``localization/feature.py``) if a robot has localisation and they are not
+    named already."""
+    named = list(scenario.metrics.columns)
+    if any(r.localization is not None for r in scenario.robots):
+        named += [c for c in LOCALIZATION_COLUMNS if c not in named]
+    return named
 
 
 class RunWriter:
@@ -323,9 +334,11 @@ def make_recorders(sim: Simulation, out_dir: Path) -> tuple[RunWriter, list[Reco
         raise
     recorders: list[Recorder] = [MetricsRecorder(writer)]
     if spec.log:
-        columns = scenario.metrics.columns
+        columns = extra_columns(scenario)
         log = LogRecorder(out_dir / "log", scenario.name, scenario.seed, sim.fault_columns, columns)
         recorders.append(log)
     if frames is not None:
         recorders.append(frames)
+    if any(r.localization is not None for r in scenario.robots):
+        recorders.append(PoseRecorder())
     return writer, recorders, video_path(spec, scenario.name, scenario.seed)

@@ -29,6 +29,7 @@ from pathlib import Path
 from mresim_phys.metrics import StepRecord
 from mresim_phys.output.files import WriteError
 from mresim_phys.output.health import run_health
+from mresim_phys.output.localization import PoseRecorder, localization_summary
 from mresim_phys.output.physical import physical_summary
 from mresim_phys.output.recorders import Recorder, SnapshotSource, make_recorders, summarise
 from mresim_phys.output.robustness import check_paired, run_robustness, write_robustness
@@ -140,6 +141,8 @@ def record_run(
     summary |= run_robustness(sim) | run_health(sim)
     summary |= explorable_summary(sim.coverage, sim.record, sim.milestones)
     summary |= physical_summary(sim)  # seconds and metres, when the scenario gives dt
+    poses = next((r for r in recorders if isinstance(r, PoseRecorder)), None)
+    summary |= localization_summary(sim, poses)
     interrupted = reason == INTERRUPTED
     if interrupted:
         summary["signal"] = stop.name

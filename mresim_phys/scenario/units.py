@@ -47,6 +47,37 @@ def robot(data: Any, conv: Converter, where: str) -> Any:
         out["sensor"] = {
             k: conv.length(v) if k in ("range", "noise_std") else v for k, v in sensor.items()
         }
+    if mapping(out.get("localization")) is not None:
+        out["localization"] = localization(out["localization"], conv)
+    return out
+
+
+LENGTHS = ("within", "range", "sigma", "sigma_range", "window")  # a correction's lengths
+
+
+def localization(data: dict[str, Any], conv: Converter) -> dict[str, Any]:
+    """A robot's ``localization`` block: the alphas a2 (rad^2 per m^2) and a4 (m^2 per
+    rad^2) per cell, each correction's lengths and beacon positions in cells."""
+    out = dict(data)
+    odometry = mapping(out.get("odometry"))
+    alpha = odometry.get("alpha") if odometry is not None else None
+    if odometry is not None and isinstance(alpha, list) and len(alpha) == 4:
+        a1, a2, a3, a4 = alpha
+        scaled = [a1, conv.per_length(conv.per_length(a2)), a3, conv.length(conv.length(a4))]
+        out["odometry"] = {**odometry, "alpha": scaled}
+    if isinstance(out.get("corrections"), list):
+        out["corrections"] = [_correction(c, conv) for c in out["corrections"]]
+    return out
+
+
+def _correction(data: Any, conv: Converter) -> Any:
+    """One correction's lengths and points in cells."""
+    entry = mapping(data)
+    if entry is None:
+        return data
+    out = {k: conv.length(v) if k in LENGTHS else v for k, v in entry.items()}
+    if isinstance(out.get("positions"), list):
+        out["positions"] = [conv.point(p) for p in out["positions"]]
     return out
 
 

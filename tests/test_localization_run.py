@@ -1,0 +1,286 @@
+"""Robots that do not know exactly where they are, in a run (issue 31): drift, mapping at
+the believed pose, corrections, logs and bad input."""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+import yaml
+from conftest import QUICKSTART
+
+from mresim_phys import Simulation
+from mresim_phys.cli import main
+from mresim_phys.errors import ScenarioError
+from mresim_phys.knowledge.mapping import integrate_scan
+from mresim_phys.knowledge.scanfold import scan_into_map
+from mresim_phys.localization.corrections import landmark_fixes
+from mresim_phys.localization.estimate import PoseEstimate
+from mresim_phys.localization.feature import LOCALIZATION, Localization, localize
+from mresim_phys.localization.perceive import as_believed
+from mresim_phys.localization.scan_match import LiveField, likelihood_field
+from mresim_phys.localization.spec import LocalizationSpec
+from mresim_phys.scenario.load import load_scenario
+from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
+from mresim_phys.world.sensing import scan
+from mresim_phys.world.space import World
+
+ScenarioFile = Callable[..., Path]
+DRIFT = {"odometry": {"alpha": [0.001, 0.00001, 0.001, 0.00001]}}
+
+
+def core(sim: Simulation, steps: int) -> list[tuple[Any, ...]]:
+    """Each step's explored and known-at-base figures and every robot's true pose."""
+    rows = []
+    for record in sim.iterate():
+        poses = tuple((r.position, r.heading) for r in sim.robots)
+        rows.append((record.explored, record.known_at_base, poses))
+        if record.step >= steps:
+            break
+    return rows
+
+
+def errors(sim: Simulation) -> list[float]:
+    """Each robot's position error now."""
+    states = [LOCALIZATION.state_of(r.features) for r in sim.robots]
+    return [s.error()[0] for s in states if s is not None]
+
+
+def test_zero_alphas_are_the_noise_free_run_step_for_step() -> None:
+    exact = core(Simulation.from_yaml(QUICKSTART), 60)
+    zero = {"team.localization": {"odometry": {"alpha": [0, 0, 0, 0]}}}
+    assert core(Simulation.from_yaml(QUICKSTART, **zero), 60) == exact
+
+
+def test_drift_moves_the_body_off_the_believed_pose_and_the_map_with_it() -> None:
+    """With drift the true and believed poses part; each robot's map is drawn where it
+    believes it was, so it holds walls where the truth has none (ghost walls)."""
+    sim = Simulation.from_yaml(QUICKSTART, **{"team.localization": DRIFT})
+    core(sim, 80)
+    assert min(errors(sim)) > 0.5
+    truth = sim.world.occupied
+    ghosts = [int(np.count_nonzero((r.belief == OCCUPIED) & ~truth)) for r in sim.robots]
+    exact = Simulation.from_yaml(QUICKSTART)
+    core(exact, 80)
+    sharp = [int(np.count_nonzero((r.belief == OCCUPIED) & ~truth)) for r in exact.robots]
+    assert min(ghosts) > 3 * max(max(sharp), 10), (ghosts, sharp)
+
+
+def test_a_scan_folds_at_the_believed_pose_in_one_call_as_on_the_slow_path() -> None:
+    """The one-call fold placed at a believed pose gives the very map the cast, the scan
+    turned and moved (``as_believed``) and the separate fold give."""
+    sim = Simulation.from_yaml(QUICKSTART, **{"team.localization": DRIFT})
+    robot = sim.robots[0]
+    loc = LOCALIZATION.state_of(robot.features)
+    assert loc is not None
+    x, y = robot.position
+    loc.estimate = PoseEstimate((x + 2.3, y - 1.7, robot.heading + 0.2), loc.estimate.cov)
+    laser, rays = robot.laser, sim.senses.filter_of(robot)
+    one = np.zeros_like(robot.belief), np.zeros_like(robot.safe)
+    scan_into_map(sim.world, robot.position, robot.heading, laser, rays, *one, loc.believed)
+    slow = np.zeros_like(robot.belief), np.zeros_like(robot.safe)
+    cast = scan(sim.world, robot.position, robot.heading, laser, rays)
+    integrate_scan(*slow, as_believed(cast, loc), laser.safe_fraction)
+    assert np.array_equal(one[0], slow[0]) and np.array_equal(one[1], slow[1])
+    moved = np.zeros_like(robot.belief), np.zeros_like(robot.safe)
+    integrate_scan(*moved, cast, laser.safe_fraction)
+    assert not np.array_equal(one[0], moved[0])  # the placement moved the walls
+
+
+def drive(loc: Localization, legs: list[tuple[float, float]]) -> None:
+    """Drive ``loc`` along ``legs`` (believed-frame points), as ``motion.py`` does."""
+    for end in legs:
+        leg = loc.leg(end)
+        loc.arrive(*leg, loc.drive(*leg))
+
+
+def test_the_drift_of_many_runs_spreads_as_the_filter_predicts() -> None:
+    """400 robots drive the same 12 legs from the same start, each with its own stream:
+    their true end positions spread round the believed one with the covariance the
+    estimate predicts (within 20 %), and every believed pose is the same."""
+    spec = LocalizationSpec.model_validate({"odometry": {"alpha": [0.0005, 0.00005, 0.01, 0.0005]}})
+    legs = [(10.0 + 3 * i, 20.0 + (i % 3) * 2.0) for i in range(12)]
+    ends, believed, predicted = [], set(), None
+    for k in range(400):
+        streams = (np.random.default_rng(k), np.random.default_rng(10_000 + k))
+        loc = localize(spec, (8.0, 20.0, 0.0), streams, (200.0, 200.0))
+        drive(loc, legs)
+        ends.append(loc.true[:2])
+        believed.add(loc.believed)
+        predicted = loc.estimate.cov[:2, :2]
+    assert len(believed) == 1 and predicted is not None
+    mean = np.array(next(iter(believed))[:2])
+    spread = np.cov((np.array(ends) - mean).T)
+    assert np.allclose(spread, predicted, rtol=0.2, atol=0.02 * predicted.max())
+
+
+def test_a_base_fix_pulls_the_error_down_to_the_measurement_noise() -> None:
+    """Robots whose belief is 30 cells off with a wide covariance, one base fix each
+    (sigma 0.5): the error left has the fix's spread (RMS sigma * sqrt 2, within 15 %)."""
+    spec = LocalizationSpec.model_validate(
+        {"odometry": {"alpha": [0.01, 0, 0.01, 0]}, "corrections": [{"kind": "base", "within": 50}]}
+    )
+    world = World(np.zeros((100, 100), dtype=bool), [1.0])
+    left = []
+    for k in range(600):
+        loc = localize(spec, (50.0, 50.0, 0.0), (np.random.default_rng(k),) * 2, (100.0, 100.0))
+        loc.estimate = PoseEstimate((80.0, 50.0, 0.0), np.diag([900.0, 900.0, 0.01]))
+        landmark_fixes(loc, (45.0, 50.0), world, world.query_filter(None, False))
+        left.append(loc.error()[0])
+        assert loc.corrected == {"base": 1}
+    rms = math.sqrt(float(np.mean(np.square(left))))
+    assert rms == pytest.approx(0.5 * math.sqrt(2), rel=0.15)
+
+
+def test_a_beacon_fixes_only_in_line_of_sight_and_range() -> None:
+    occupied = np.zeros((60, 60), dtype=bool)
+    occupied[:, 30] = True  # a wall between the robot and the second beacon
+    world = World(occupied, [1.0])
+    spec = LocalizationSpec.model_validate(
+        {"corrections": [{"kind": "beacons", "positions": [[20, 10], [45, 20], [20, 55]],
+                          "range": 30, "sigma": 0.5}]}
+    )  # fmt: skip
+    loc = localize(spec, (20.0, 20.0, 0.0), (np.random.default_rng(1),) * 2, (60.0, 60.0))
+    loc.estimate = PoseEstimate((25.0, 20.0, 0.0), np.diag([100.0, 100.0, 0.01]))
+    landmark_fixes(loc, (0.5, 0.5), world, world.query_filter(None, False))
+    assert loc.corrected == {"beacon": 1}  # the first: the second is walled off, the third far
+    assert loc.error()[0] < 2.0
+
+
+def test_a_teammate_on_a_link_corrects_a_lost_robot(scenario_file: ScenarioFile) -> None:
+    """Two robots linked all run long: B drifts and sees A (who knows its pose) on the
+    link; with the teammate correction its error stays a fraction of the one without."""
+    drift = {"odometry": {"alpha": [0.004, 0.0001, 0.004, 0.0001]}}
+    fix = {**drift, "corrections": [{"kind": "teammate"}]}
+    runs = {}
+    for name, block in (("alone", drift), ("teammate", fix)):
+        robots = [
+            {"name": "A", "start": [8, 20], "heading_deg": 0},
+            {"name": "B", "start": [8, 40], "heading_deg": 0, "localization": block},
+        ]
+        sim = Simulation(load_scenario(scenario_file(robots=robots, steps=60)))
+        core(sim, 60)
+        state = LOCALIZATION.state_of(sim.robots[1].features)
+        assert state is not None
+        runs[name] = (state.error()[0], dict(state.corrected))
+    assert runs["teammate"][1].get("teammate", 0) > 20
+    assert runs["teammate"][0] < 0.5 * runs["alone"][0], runs
+
+
+def test_scan_matching_holds_the_drift_down() -> None:
+    matching = {**DRIFT, "corrections": [{"kind": "scan_matching"}]}
+    alone = Simulation.from_yaml(QUICKSTART, **{"team.localization": DRIFT})
+    core(alone, 100)
+    matched = Simulation.from_yaml(QUICKSTART, **{"team.localization": matching})
+    core(matched, 100)
+    assert max(errors(matched)) < 0.5 * min(errors(alone)), (errors(matched), errors(alone))
+
+
+def test_the_live_field_is_the_likelihood_field_over_its_box() -> None:
+    """A map edited at random, the field refreshed over a box after each edit: inside
+    the box it equals the field computed from scratch."""
+    rng = np.random.default_rng(3)
+    belief = np.full((70, 90), UNKNOWN, dtype=np.uint8)
+    live = LiveField(belief.shape, 1.3)
+    for _ in range(25):
+        r, c = rng.integers(0, 70), rng.integers(0, 90)
+        belief[max(r - 3, 0) : r + 3, max(c - 3, 0) : c + 3] = rng.choice([FREE, OCCUPIED])
+        box = (int(rng.integers(0, 30)), int(rng.integers(40, 70)), int(rng.integers(0, 40)),
+               int(rng.integers(50, 90)))  # fmt: skip
+        field = live.refresh(belief, box)
+        want = likelihood_field(belief, 1.3)
+        assert np.allclose(field[box[0] : box[1], box[2] : box[3]],
+                           want[box[0] : box[1], box[2] : box[3]])  # fmt: skip
+
+
+def test_same_seed_same_bytes_on_one_thread_or_two(tmp_path: Path) -> None:
+    block = {**DRIFT, "corrections": [{"kind": "teammate"}, {"kind": "scan_matching"}]}
+    data = yaml.safe_load(QUICKSTART.read_text())
+    data["map"]["image"] = str((QUICKSTART.parent / data["map"]["image"]).resolve())
+    data["team"]["localization"], data["steps"] = block, 40
+    outputs = []
+    for threads in (1, 2):
+        path, out = tmp_path / f"t{threads}.yaml", tmp_path / f"t{threads}"
+        path.write_text(yaml.safe_dump({**data, "simulation": {"threads": threads}}))
+        assert main(["run", str(path), "--out", str(out), "--quiet", "--no-plots"]) == 0
+        summary = json.loads((out / "summary.json").read_text())
+        for key in ("wall_time_s", "steps_per_second"):
+            summary.pop(key)
+        outputs.append(((out / "metrics.csv").read_bytes(), summary))
+    assert outputs[0] == outputs[1]
+    header = outputs[0][0].splitlines()[0].decode()
+    assert "pose_error_A" in header and "pose_error_max" in header
+    assert set(outputs[0][1]["localization"]["robots"]) == {"A", "B"}
+
+
+@pytest.mark.parametrize(
+    ("block", "field"),
+    [
+        ({"odometry": {"alpha": [-0.1, 0, 0, 0]}}, "localization.odometry.alpha"),
+        ({"odometry": {"alpha": [float("nan"), 0, 0, 0]}}, "localization.odometry.alpha"),
+        ({"corrections": [{"kind": "base", "sigma": float("inf")}]}, "corrections[0].base.sigma"),
+        ({"corrections": [{"kind": "teammate", "sigma_range": -1}]}, "sigma_range"),
+        ({"corrections": [{"kind": "gps"}]}, "localization.corrections[0]"),
+        ({"corrections": [{"kind": "beacons", "positions": [[41, 10]]}]}, "positions[0]"),
+        ({"corrections": [{"kind": "beacons", "positions": [[500, 30]]}]}, "positions[0]"),
+    ],
+)
+def test_bad_localization_input_is_one_paragraph_naming_the_field(
+    scenario_file: ScenarioFile,
+    capsys: pytest.CaptureFixture[str],
+    block: dict[str, Any],
+    field: str,
+) -> None:
+    path = scenario_file(team={"speed": 2, "radius": 1.0, "localization": block})
+    assert main(["validate", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert str(path) in err and field in err, err
+    assert "Traceback" not in err
+    with pytest.raises(ScenarioError):
+        Simulation(load_scenario(path))
+
+
+def test_a_robot_s_block_merges_into_the_team_s(scenario_file: ScenarioFile) -> None:
+    team = {"speed": 2, "radius": 1.0, "localization": {**DRIFT, "corrections": [{"kind": "base"}]}}
+    robots = [
+        {"name": "A", "start": [8, 20]},
+        {"name": "B", "start": [8, 40], "localization": {"corrections": []}},
+    ]
+    scenario = load_scenario(scenario_file(team=team, robots=robots))
+    a, b = (r.localization for r in scenario.robots)
+    assert a is not None and b is not None
+    assert a.odometry == b.odometry and len(a.corrections) == 1 and b.corrections == []
+
+
+def test_units_in_metres_scale_the_alphas_and_the_corrections(scenario_file: ScenarioFile) -> None:
+    """At 0.1 m a cell: a2 (rad^2 per m^2) becomes a2 / 100 per cell^2, a4 (m^2 per
+    rad^2) 100 * a4, a base fix within 2 m within 20 cells with sigma 5 cells."""
+    block = {"odometry": {"alpha": [0.1, 1.0, 0.1, 0.01]},
+             "corrections": [{"kind": "base", "within": 2.0, "sigma": 0.5}]}  # fmt: skip
+    path = scenario_file(
+        units="m", base_station={"position": [0.85, 3.05], "comm_range": 2.0},
+        team={"speed": 0.2, "radius": 0.1, "localization": block}, dt=1.0,
+        robots=[{"name": "A", "start": [0.85, 4.05]}],
+    )  # fmt: skip
+    spec = load_scenario(path).robots[0].localization
+    assert spec is not None
+    assert spec.odometry.alpha == pytest.approx((0.1, 0.01, 0.1, 1.0))
+    fix = spec.corrections[0]
+    assert fix.kind == "base" and (fix.within, fix.sigma) == pytest.approx((20.0, 5.0))
+
+
+def test_a_turn_in_place_turns_both_poses() -> None:
+    spec = LocalizationSpec.model_validate({"odometry": {"alpha": [0.0, 0.0, 0.0, 0.0]}})
+    loc = localize(spec, (5.0, 5.0, 0.0), (np.random.default_rng(0),) * 2, (20.0, 20.0))
+    assert loc.turn(1.0) == 1.0 and loc.believed == (5.0, 5.0, 1.0) == loc.true
+    noisy = localize(
+        LocalizationSpec.model_validate({"odometry": {"alpha": [0.05, 0, 0, 0]}}),
+        (5.0, 5.0, 0.0), (np.random.default_rng(0),) * 2, (20.0, 20.0),
+    )  # fmt: skip
+    true = noisy.turn(1.0)
+    assert noisy.believed[2] == 1.0 and true != 1.0 and noisy.estimate.cov[2, 2] > 0
