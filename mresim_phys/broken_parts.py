@@ -25,7 +25,7 @@ from typing import Any, Literal
 
 from mresim_phys.features import HasFeatures, NameSetFeature
 
-FailingPart = Literal["robot", "drive", "sensor", "radio", "degraded"]
+FailingPart = Literal["robot", "drive", "sensor", "radio", "degraded", "localization"]
 Factors = tuple[float, float]  # (speed factor, sensor range factor) of a degraded robot
 NOTHING_BROKEN: frozenset[str] = frozenset()  # the broken parts of a robot nothing has failed
 

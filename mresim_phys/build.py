@@ -30,9 +30,10 @@ from mresim_phys.knowledge.coverage import Coverage
 from mresim_phys.knowledge.latest import LatestCoverage, give_stamps
 from mresim_phys.knowledge.teammates import BASE_NAME
 from mresim_phys.localization.feature import LOCALIZATION, localize
+from mresim_phys.localization.spec import LocalizationSpec
 from mresim_phys.planning import PLANNERS
 from mresim_phys.rng import Streams
-from mresim_phys.scenario.faults import robustness_columns
+from mresim_phys.scenario.faults import localization_faults, robustness_columns
 from mresim_phys.scenario.load import load_scenario
 from mresim_phys.scenario.on_map import (
     check_apart,
@@ -101,18 +102,21 @@ def make_robot(spec: RobotSpec, index: int, streams: Streams, shape: tuple[int, 
 
 
 def give_localization(
-    team: list[Robot], specs: list[RobotSpec], streams: Streams, shape: tuple[int, int]
+    team: list[Robot], scenario: Scenario, streams: Streams, shape: tuple[int, int]
 ) -> None:
-    """The localisation state of each robot whose spec has one, at its (jittered) start;
-    its motion noise from its ``odometry`` stream, its corrections' from ``pose-fix``."""
-    for robot, spec in zip(team, specs, strict=True):
-        if spec.localization is not None:
-            own = (
-                streams.of_robot("odometry", robot.name),
-                streams.of_robot("pose-fix", robot.name),
+    """The localisation state of each robot whose spec has one, or that a localisation
+    fault may strike (then without drift), at its (jittered) start; its motion noise from
+    its ``odometry`` stream, its corrections' from ``pose-fix``, a jump's from ``jump``."""
+    struck = localization_faults(scenario)
+    bounds = (float(shape[1]), float(shape[0]))
+    for robot, spec in zip(team, scenario.robots, strict=True):
+        block = spec.localization or (LocalizationSpec() if robot.name in struck else None)
+        if block is not None:
+            odometry, fixes, jumps = (
+                streams.of_robot(s, robot.name) for s in ("odometry", "pose-fix", "jump")
             )
             pose = (*robot.position, robot.heading)
-            state = localize(spec.localization, pose, own, (float(shape[1]), float(shape[0])))
+            state = localize(block, pose, (odometry, fixes, jumps), bounds)
             robot.features[LOCALIZATION.key] = state
 
 
@@ -315,7 +319,7 @@ def build_setup(scenario: Scenario) -> Setup:
         check_apart(scenario.robots)
     check_base(world.occupied, scenario.base_station)
     check_beacons(world.occupied, scenario.robots)
-    give_localization(robots, scenario.robots, streams, world.shape)
+    give_localization(robots, scenario, streams, world.shape)
     starts = [r.position for r in robots]
     events = [make_event(e) for e in scenario.events]
     check_event_boxes(scenario, world.shape)

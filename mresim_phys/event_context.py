@@ -18,6 +18,7 @@ import numpy as np
 from mresim_phys.agents import Agent, Robot
 from mresim_phys.comms.network import Blackout, Network
 from mresim_phys.knowledge.coverage import Coverage
+from mresim_phys.localization.faults import jump_belief
 from mresim_phys.types import BoolGrid, FloatArray
 from mresim_phys.world.changes import Change, circles_cover
 from mresim_phys.world.doors import Door
@@ -104,6 +105,10 @@ class RunEventContext:
     ) -> None:
         """Undo one failure of ``part`` of robot ``robot``."""
         self._robot(robot).repair(part, factors)
+
+    def jump(self, robot: str, distance: float) -> None:
+        """Throw robot ``robot``'s believed pose ``distance`` cells off."""
+        jump_belief(self._robot(robot), distance)
 
     def _robot(self, name: str) -> Robot:
         agent = self.agents[name]

@@ -32,6 +32,7 @@ from numba import njit
 from mresim_phys.agents import Robot
 from mresim_phys.knowledge.mapping import mark_bump
 from mresim_phys.knowledge.teammates import PAYLOAD
+from mresim_phys.localization.faults import frozen
 from mresim_phys.localization.feature import LOCALIZATION
 from mresim_phys.planning.fields import clearance_kernel
 from mresim_phys.strategies.base import ReplansOnContact, ReplansWhen
@@ -182,7 +183,7 @@ def move_towards(
     robot.advance_to(true_end)
     if loc is not None and leg is not None:
         robot.heading = pose[2]
-        loc.arrive(*leg, pose)
+        loc.arrive(*leg, pose, frozen(robot))
     robot.status = "active"
     if share >= 1.0:
         pop_point(robot)
@@ -198,7 +199,7 @@ def look_at_goal(robot: Robot) -> None:
         if math.hypot(dx, dy) > EPS:
             loc = LOCALIZATION.state_of(robot.features)
             heading = math.atan2(dy, dx)
-            robot.heading = heading if loc is None else loc.turn(heading)
+            robot.heading = heading if loc is None else loc.turn(heading, frozen(robot))
 
 
 def pop_point(robot: Robot) -> None:

@@ -25,6 +25,7 @@ from mresim_phys.knowledge.mapping import integrate_scan
 from mresim_phys.knowledge.prior import PRIOR
 from mresim_phys.knowledge.scanfold import ScanQueue, folds_in_one_call, scan_into_map
 from mresim_phys.knowledge.terrain import TERRAIN, learn_terrain
+from mresim_phys.localization.faults import frozen
 from mresim_phys.localization.feature import LOCALIZATION
 from mresim_phys.localization.perceive import as_believed, match_scan, scan_matching_of
 from mresim_phys.motion import path_blocked
@@ -75,7 +76,8 @@ class Senses:
                 self.streams[robot.index - 1],
             )  # fmt: skip
             if loc is not None:  # matched, then folded where the robot believes it is
-                match_scan(loc, robot.belief, result)
+                if not frozen(robot):
+                    match_scan(loc, robot.belief, result)
                 result = as_believed(result, loc)
             scanned = perf_counter()
             update = integrate_scan(

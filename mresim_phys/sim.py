@@ -44,6 +44,7 @@ from mresim_phys.knowledge.latest import LatestCoverage
 from mresim_phys.knowledge.robustness import FailureWatch, robot_states
 from mresim_phys.knowledge.teammates import presumed_lost
 from mresim_phys.localization.corrections import landmark_fixes, teammate_fixes
+from mresim_phys.localization.faults import frozen
 from mresim_phys.localization.feature import LOCALIZATION
 from mresim_phys.memory import keep_freed_memory
 from mresim_phys.metrics import (
@@ -266,7 +267,7 @@ class Simulation:
             settle = partial(self.senses.fold_held, queue, effects)
             take_step(robot, self.world, self.move_rules, given, replan, hold, settle)
         loc = LOCALIZATION.state_of(robot.features)
-        if loc is not None:  # the base and beacons seen from where it now stands
+        if loc is not None and not frozen(robot):  # the base and beacons seen from here
             landmark_fixes(loc, self.base.position, self.world, self.robot_filter(robot))
         started = perf_counter()
         self.network.stamp_own(robot, effects.window, self.t)

@@ -57,7 +57,7 @@ def test_resolved_scenario_round_trips_its_events(scenario_file: ScenarioFile) -
         {"step": 3, "fail": "A", "part": "degraded", "speed_factor": 0.5, "range_factor": None},
         {"step": 4, "until": 9, "blackout": ["base", "B"], "channel": "main"},
     ]
-    events[0]["until"] = 7
+    events[0] |= {"until": 7, "mode": None, "distance": None}
     scenario = load_scenario(scenario_file(events=events))
     dumped = scenario.model_dump(mode="json")["events"]
     assert dumped == events

@@ -107,7 +107,11 @@ def test_the_drift_of_many_runs_spreads_as_the_filter_predicts() -> None:
     legs = [(10.0 + 3 * i, 20.0 + (i % 3) * 2.0) for i in range(12)]
     ends, believed, predicted = [], set(), None
     for k in range(400):
-        streams = (np.random.default_rng(k), np.random.default_rng(10_000 + k))
+        streams = (
+            np.random.default_rng(k),
+            np.random.default_rng(10_000 + k),
+            np.random.default_rng(0),
+        )
         loc = localize(spec, (8.0, 20.0, 0.0), streams, (200.0, 200.0))
         drive(loc, legs)
         ends.append(loc.true[:2])
@@ -128,7 +132,7 @@ def test_a_base_fix_pulls_the_error_down_to_the_measurement_noise() -> None:
     world = World(np.zeros((100, 100), dtype=bool), [1.0])
     left = []
     for k in range(600):
-        loc = localize(spec, (50.0, 50.0, 0.0), (np.random.default_rng(k),) * 2, (100.0, 100.0))
+        loc = localize(spec, (50.0, 50.0, 0.0), (np.random.default_rng(k),) * 3, (100.0, 100.0))
         loc.estimate = PoseEstimate((80.0, 50.0, 0.0), np.diag([900.0, 900.0, 0.01]))
         landmark_fixes(loc, (45.0, 50.0), world, world.query_filter(None, False))
         left.append(loc.error()[0])
@@ -145,7 +149,7 @@ def test_a_beacon_fixes_only_in_line_of_sight_and_range() -> None:
         {"corrections": [{"kind": "beacons", "positions": [[20, 10], [45, 20], [20, 55]],
                           "range": 30, "sigma": 0.5}]}
     )  # fmt: skip
-    loc = localize(spec, (20.0, 20.0, 0.0), (np.random.default_rng(1),) * 2, (60.0, 60.0))
+    loc = localize(spec, (20.0, 20.0, 0.0), (np.random.default_rng(1),) * 3, (60.0, 60.0))
     loc.estimate = PoseEstimate((25.0, 20.0, 0.0), np.diag([100.0, 100.0, 0.01]))
     landmark_fixes(loc, (0.5, 0.5), world, world.query_filter(None, False))
     assert loc.corrected == {"beacon": 1}  # the first: the second is walled off, the third far
@@ -276,11 +280,92 @@ def test_units_in_metres_scale_the_alphas_and_the_corrections(scenario_file: Sce
 
 def test_a_turn_in_place_turns_both_poses() -> None:
     spec = LocalizationSpec.model_validate({"odometry": {"alpha": [0.0, 0.0, 0.0, 0.0]}})
-    loc = localize(spec, (5.0, 5.0, 0.0), (np.random.default_rng(0),) * 2, (20.0, 20.0))
+    loc = localize(spec, (5.0, 5.0, 0.0), (np.random.default_rng(0),) * 3, (20.0, 20.0))
     assert loc.turn(1.0) == 1.0 and loc.believed == (5.0, 5.0, 1.0) == loc.true
     noisy = localize(
         LocalizationSpec.model_validate({"odometry": {"alpha": [0.05, 0, 0, 0]}}),
-        (5.0, 5.0, 0.0), (np.random.default_rng(0),) * 2, (20.0, 20.0),
+        (5.0, 5.0, 0.0), (np.random.default_rng(0),) * 3, (20.0, 20.0),
     )  # fmt: skip
     true = noisy.turn(1.0)
     assert noisy.believed[2] == 1.0 and true != 1.0 and noisy.estimate.cov[2, 2] > 0
+
+
+def ghost_walls(sim: Simulation) -> dict[str, int]:
+    """Per robot: cells its map holds as walls that are free in truth."""
+    truth = sim.world.occupied
+    return {r.name: int(np.count_nonzero((r.belief == OCCUPIED) & ~truth)) for r in sim.robots}
+
+
+def test_a_frozen_localisation_smears_its_map_while_its_teammate_s_stays_sharp(
+    scenario_file: ScenarioFile,
+) -> None:
+    """A's localisation freezes at step 5 (no ``localization:`` block: the fault gives it
+    one without drift); it drives and maps from a belief that stands still. B, untouched,
+    keeps a sharp map; A's error grows with the distance it drives."""
+    event = {"step": 5, "fail": "A", "part": "localization", "mode": "frozen"}
+    quiet = {"speed": 2, "radius": 1.0, "sensor": {"range": 30}, "comm_range": 0}
+    base = {"position": [8, 30], "comm_range": 0}  # no link: B never merges A's map
+    path = scenario_file(events=[event], team=quiet, base_station=base, steps=60)
+    sim = Simulation(load_scenario(path))
+    core(sim, 5)
+    held = LOCALIZATION.state_of(sim.robot("A").features)
+    assert held is not None
+    where = held.believed
+    core(sim, 55)
+    a = LOCALIZATION.state_of(sim.robot("A").features)
+    assert a is not None and LOCALIZATION.key not in sim.robot("B").features
+    assert "localization" in sim.robot("A").broken
+    assert a.believed == where and a.error()[0] > 3
+    ghosts = ghost_walls(sim)
+    assert ghosts["A"] >= 20 and ghosts["B"] <= 2, ghosts
+
+
+def test_a_jump_throws_the_belief_off_by_its_distance_at_once() -> None:
+    events = [{"step": 4, "fail": "B", "part": "localization", "mode": "jump", "distance": 7.5}]
+    sim = Simulation.from_yaml(QUICKSTART, events=events)
+    lines = []
+    for record in sim.iterate():
+        lines += sim.events_now
+        if record.step == 4:
+            break
+    b = LOCALIZATION.state_of(sim.robot("B").features)
+    assert b is not None and b.error()[0] == pytest.approx(7.5)
+    assert b.estimate.cov[0, 0] == 0.0  # it does not know
+    assert "jump B localization 7.5 cells" in lines
+    assert not sim.robot("B").broken
+
+
+def test_random_localisation_jumps_come_from_the_seed(scenario_file: ScenarioFile) -> None:
+    law = {"probability": 0.1, "part": "localization", "mode": "jump", "distance": 3}
+    runs = []
+    for _ in range(2):
+        sim = Simulation(load_scenario(scenario_file(faults={"random": [law]}, steps=40)))
+        lines = []
+        for _record in sim.iterate():
+            lines += sim.events_now
+        runs.append((lines, errors(sim)))
+    assert runs[0] == runs[1]
+    assert sum("jump" in line for line in runs[0][0]) >= 3
+
+
+@pytest.mark.parametrize(
+    ("event", "words"),
+    [
+        ({"part": "localization"}, "needs a mode"),
+        ({"part": "localization", "mode": "jump"}, "needs a distance"),
+        ({"part": "localization", "mode": "jump", "distance": 3, "until": 9}, "no 'until'"),
+        ({"part": "drive", "mode": "frozen"}, "go with part 'localization'"),
+        ({"part": "localization", "mode": "spin"}, "events[0]"),
+    ],
+)
+def test_bad_localisation_faults_are_one_paragraph(
+    scenario_file: ScenarioFile,
+    capsys: pytest.CaptureFixture[str],
+    event: dict[str, Any],
+    words: str,
+) -> None:
+    path = scenario_file(events=[{"step": 3, "fail": "A", **event}])
+    assert main(["validate", str(path)]) == 2
+    err = capsys.readouterr().err
+    assert str(path) in err and "events[0]" in err and words in err, err
+    assert "Traceback" not in err

@@ -71,7 +71,9 @@ class FailureClock:
             return None
         self.failures += 1
         recover = self.spec.recover_after
-        if recover is None:
+        if self.spec.mode == "jump":  # a localisation jump is over at once: draw the next
+            self.next_fail = self._next_after(step)
+        elif recover is None:
             self.next_fail = NEVER  # broken for good: this clock is done
         else:
             self.next_repair, self.next_fail = step + recover, NEVER

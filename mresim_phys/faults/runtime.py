@@ -27,7 +27,8 @@ from mresim_phys.agents import Robot
 from mresim_phys.errors import ScenarioError
 from mresim_phys.faults.battery import battery_of, give_battery, use
 from mresim_phys.faults.clocks import FailureClock, exposure_budget
-from mresim_phys.faults.spec import FaultsSpec, HazardSpec, RandomFaultSpec, chosen
+from mresim_phys.faults.spec import FaultsSpec, HazardSpec, PartSpec, RandomFaultSpec, chosen
+from mresim_phys.localization.faults import jump_belief
 from mresim_phys.rng import Streams
 from mresim_phys.types import BoolGrid
 from mresim_phys.world.footprints import region_cells
@@ -95,13 +96,13 @@ class Faults:
         lines: list[str] = []
         for clock in self.clocks:
             what = clock.due(step)
-            if what is not None:
-                lines.append(act(self.by_name[clock.robot], what, clock.spec))
+            line = act(self.by_name[clock.robot], what, clock.spec) if what else None
+            if line is not None:
+                lines.append(line)
         for k, hazard in enumerate(self.hazards):
             for robot in self.robots:
                 if hazard.strikes(robot):
-                    robot.fail(hazard.spec.part, hazard.spec.factors)
-                    lines.append(f"fail {robot.name}{suffix(hazard.spec.part)} (hazard {k})")
+                    lines.append(f"{strike(robot, hazard.spec)} (hazard {k})")
         if self.contact_limit is not None:
             lines += self.out_of_contact(step, self.contact_limit)
         return lines
@@ -143,13 +144,25 @@ def budgets(spec: HazardSpec, robots: Sequence[Robot], streams: Streams, k: int)
     }
 
 
-def act(robot: Robot, what: str, spec: RandomFaultSpec) -> str:
-    """Apply a clock's ``fail`` or ``repair`` to ``robot``; the line logged."""
+def act(robot: Robot, what: str, spec: RandomFaultSpec) -> str | None:
+    """Apply a clock's ``fail`` or ``repair`` to ``robot``; the line logged (a jump is
+    over at once: its repair is nothing)."""
     if what == "fail":
-        robot.fail(spec.part, spec.factors)
-        return f"fail {robot.name}{suffix(spec.part)} (random)"
+        return f"{strike(robot, spec)} (random)"
+    if spec.mode == "jump":
+        return None
     robot.repair(spec.part, spec.factors)
     return f"recover {robot.name}{suffix(spec.part)}"
+
+
+def strike(robot: Robot, spec: PartSpec) -> str:
+    """Fail ``spec``'s part of ``robot`` (a localisation jump: throw its belief off); the
+    line logged, without its cause."""
+    if spec.mode == "jump" and spec.distance is not None:
+        jump_belief(robot, spec.distance)
+        return f"jump {robot.name} localization {spec.distance:g} cells"
+    robot.fail(spec.part, spec.factors)
+    return f"fail {robot.name}{suffix(spec.part)}"
 
 
 def suffix(part: str) -> str:

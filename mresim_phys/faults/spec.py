@@ -24,9 +24,13 @@ from pydantic import Field, model_validator
 from mresim_phys.strict import Strict
 from mresim_phys.world.parts import (
     FaultPart,
+    LocalizationMode,
+    check_localization,
     check_part,
+    distance_field,
     factor_field,
     factors_of,
+    mode_field,
     part_field,
 )
 from mresim_phys.world.shapes import Region
@@ -40,11 +44,14 @@ class PartSpec(Strict):
     part: FaultPart = part_field()
     speed_factor: float | None = factor_field("the robot's speed")
     range_factor: float | None = factor_field("the sensor range")
+    mode: LocalizationMode | None = mode_field()
+    distance: float | None = distance_field()
     robots: Robots = Field("all", description="Names of the robots it may strike, or 'all'.")
 
     @model_validator(mode="after")
     def _part(self) -> PartSpec:
         check_part(self.part, self.speed_factor, self.range_factor)
+        check_localization(self.part, self.mode, self.distance)
         return self
 
     @property
@@ -73,6 +80,12 @@ class RandomFaultSpec(PartSpec):
     recover_after: int | None = Field(
         None, ge=1, description="Steps until the part works again (null: never)."
     )
+
+    @model_validator(mode="after")
+    def _jumps_recur(self) -> RandomFaultSpec:
+        if self.mode == "jump" and self.recover_after is not None:
+            raise ValueError("a localisation jump is over at once: give no recover_after")
+        return self
 
     @model_validator(mode="after")
     def _one_law(self) -> RandomFaultSpec:

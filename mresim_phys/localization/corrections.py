@@ -26,6 +26,7 @@ import numpy as np
 
 from mresim_phys.agents import Robot
 from mresim_phys.localization.estimate import PoseEstimate
+from mresim_phys.localization.faults import frozen
 from mresim_phys.localization.feature import LOCALIZATION, Localization
 from mresim_phys.localization.odometry import wrap
 from mresim_phys.localization.spec import BaseFix, BeaconsFix, TeammateFix
@@ -70,12 +71,13 @@ def teammate_fixes(robots: Sequence[Robot]) -> None:
     """The teammate corrections after an exchange, for every robot that is not failed
     and has one, from the teammates it is linked with on the main channel."""
     team = [(r, LOCALIZATION.state_of(r.features)) for r in robots if r.alive]
+    working = {r.name for r, _ in team if not frozen(r)}
     if not any(loc is not None and _teammate_fix(loc) for _, loc in team):
         return
     known = {r.name: (r.position, _estimate(r.position, loc)) for r, loc in team}  # as it began
     for robot, loc in team:
         fix = _teammate_fix(loc)
-        if loc is None or fix is None:
+        if loc is None or fix is None or robot.name not in working:
             continue
         for other in robot.links:
             if other in known and other != robot.name:

@@ -59,6 +59,7 @@ class Localization:
     noise: OdometryNoise
     odometry: np.random.Generator  # the body's motion noise
     fixes: np.random.Generator  # the corrections' measurement noise
+    jumps: np.random.Generator  # the direction of a localisation fault's jump
     estimate: PoseEstimate
     true: Pose  # kept equal to (Robot.position, Robot.heading) by this module's callers
     bounds: tuple[float, float]  # the map's width and height: a belief stays on the map
@@ -70,6 +71,7 @@ class Localization:
     def matching(self) -> ScanMatchFix | None:
         """Its scan matching correction, if it has one."""
         return self.spec.matching
+
     @property
     def believed(self) -> Pose:
         """The believed pose (the estimate's mean)."""
@@ -91,20 +93,32 @@ class Localization:
             return target  # no drift: exactly where the odometry says
         return moved(self.true, done)
 
-    def arrive(self, motion: Motion, target: Pose, true: Pose) -> None:
+    def arrive(self, motion: Motion, target: Pose, true: Pose, frozen: bool = False) -> None:
         """``motion`` was made and the body is at ``true``: the believed pose is the
-        odometry's ``target``, its covariance grows by the EKF prediction."""
+        odometry's ``target``, its covariance grows by the EKF prediction (``frozen``: a
+        localisation fault holds the belief where it was)."""
+        self.true = true
+        if frozen:
+            return
         cov = self.estimate.predicted(motion, self.noise).cov
         self.estimate = self._on_map(PoseEstimate(target, cov))
-        self.true = true
 
-    def turn(self, heading: float) -> float:
+    def turn(self, heading: float, frozen: bool = False) -> float:
         """Turn in place to believed ``heading``; the true heading after it."""
         x, y, theta = self.believed
         motion, target = Motion(0.0, 0.0, wrap(heading - theta)), (x, y, heading)
         true = self.drive(motion, target)
-        self.arrive(motion, target, true)
+        self.arrive(motion, target, true, frozen)
         return true[2]
+
+    def jump(self, distance: float) -> None:
+        """A localisation fault throws the believed pose ``distance`` cells off, in a
+        direction drawn from the jump stream; the robot does not know (its covariance
+        stays): the kidnapped robot."""
+        angle = float(self.jumps.uniform(-math.pi, math.pi))
+        x, y, theta = self.believed
+        moved_to = (x + distance * math.cos(angle), y + distance * math.sin(angle), theta)
+        self.estimate = self._on_map(PoseEstimate(moved_to, self.estimate.cov))
 
     def to_believed(self, point: tuple[float, float]) -> tuple[float, float]:
         """``point`` (true frame) as the robot places it: seen from its true pose, drawn
@@ -136,14 +150,18 @@ class Localization:
         return math.hypot(bx - tx, by - ty), abs(wrap(bt - tt))
 
 
+Streams3 = tuple[np.random.Generator, np.random.Generator, np.random.Generator]
+
+
 def localize(
-    spec: LocalizationSpec, pose: Pose, streams: tuple[np.random.Generator, np.random.Generator],
-    bounds: tuple[float, float],
-) -> Localization:  # fmt: skip
-    """A robot's localisation state at its start (its pose known exactly)."""
+    spec: LocalizationSpec, pose: Pose, streams: Streams3, bounds: tuple[float, float]
+) -> Localization:
+    """A robot's localisation state at its start (its pose known exactly); ``streams``:
+    its odometry, pose-fix and jump streams."""
     noise = OdometryNoise(*spec.odometry.alpha)
-    odometry, fixes = streams
-    return Localization(spec, noise, odometry, fixes, PoseEstimate.certain(pose), pose, bounds)
+    odometry, fixes, jumps = streams
+    estimate = PoseEstimate.certain(pose)
+    return Localization(spec, noise, odometry, fixes, jumps, estimate, pose, bounds)
 
 
 @dataclass(frozen=True)

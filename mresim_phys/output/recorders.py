@@ -34,6 +34,7 @@ from mresim_phys.output.video import (
     write_png,
 )
 from mresim_phys.render import LayerSpec, Renderer, frame_scale, parse_layers
+from mresim_phys.scenario.faults import has_localization
 from mresim_phys.scenario.run_specs import RenderSpec
 from mresim_phys.scenario.schema import Scenario
 from mresim_phys.snapshot import Snapshot
@@ -85,7 +86,7 @@ def extra_columns(scenario: Scenario) -> list[str]:
     columns (``localization/feature.py``) if a robot has localisation and they are not
     named already."""
     named = list(scenario.metrics.columns)
-    if any(r.localization is not None for r in scenario.robots):
+    if has_localization(scenario):
         named += [c for c in LOCALIZATION_COLUMNS if c not in named]
     return named
 
@@ -339,6 +340,6 @@ def make_recorders(sim: Simulation, out_dir: Path) -> tuple[RunWriter, list[Reco
         recorders.append(log)
     if frames is not None:
         recorders.append(frames)
-    if any(r.localization is not None for r in scenario.robots):
+    if has_localization(scenario):
         recorders.append(PoseRecorder())
     return writer, recorders, video_path(spec, scenario.name, scenario.seed)

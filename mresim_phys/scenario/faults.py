@@ -28,6 +28,27 @@ def has_faults(scenario: Scenario) -> bool:
     return bool(fault_events(scenario)) or scenario.faults is not None
 
 
+def localization_faults(scenario: Scenario) -> set[str]:
+    """The robots a localisation fault (a ``fail`` event or a random law or hazard of the
+    ``faults:`` block with part ``localization``) may strike."""
+    names = [r.name for r in scenario.robots]
+    struck = {e.fail for e in fault_events(scenario) if e.part == "localization"}
+    faults = scenario.faults
+    laws = [*faults.random, *faults.hazards] if faults is not None else []
+    for law in laws:
+        if law.part == "localization":
+            struck |= set(names) if law.robots == "all" else set(law.robots)
+    return struck
+
+
+def has_localization(scenario: Scenario) -> bool:
+    """Whether a robot of ``scenario`` has localisation: a ``localization:`` block, or a
+    localisation fault that may strike it (metrics.csv then has the pose columns)."""
+    return any(r.localization is not None for r in scenario.robots) or bool(
+        localization_faults(scenario)
+    )
+
+
 def robustness_columns(scenario: Scenario) -> bool:
     """Whether ``metrics.csv`` gets the robustness columns: in a paired run (which has
     faults). Other runs keep their columns, so the results of scenarios written before

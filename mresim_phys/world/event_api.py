@@ -67,6 +67,11 @@ class EventContext(Protocol):
         """Undo one failure of ``part`` of robot ``robot`` (a reboot)."""
         ...
 
+    def jump(self, robot: str, distance: float) -> None:
+        """Robot ``robot``'s believed pose is thrown ``distance`` cells off at once (a
+        localisation fault: the kidnapped robot; it must have localisation)."""
+        ...
+
     def silence(self, agents: Sequence[str], until: int, channels: Channels) -> None:
         """``agents`` (robot names or 'base') neither send nor receive until before ``until``."""
         ...

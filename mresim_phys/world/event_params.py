@@ -21,7 +21,16 @@ from pydantic import Field, model_validator
 
 from mresim_phys.plugin import PluginParams
 from mresim_phys.world.element_params import Crush
-from mresim_phys.world.parts import FaultPart, check_part, factor_field, part_field
+from mresim_phys.world.parts import (
+    FaultPart,
+    LocalizationMode,
+    check_localization,
+    check_part,
+    distance_field,
+    factor_field,
+    mode_field,
+    part_field,
+)
 from mresim_phys.world.shapes import BoxRegion, Region, region_under
 
 RobotPart = FaultPart
@@ -78,6 +87,8 @@ class FailParams(EventParams):
     until: int | None = Field(
         None, ge=1, description="Step at which the part works again (null: never)."
     )
+    mode: LocalizationMode | None = mode_field()
+    distance: float | None = distance_field()
     changes: ClassVar[frozenset[Changes]] = frozenset({"robots"})
 
     def agent_names(self) -> list[tuple[str, str, bool]]:
@@ -87,6 +98,9 @@ class FailParams(EventParams):
     @model_validator(mode="after")
     def _checked(self) -> FailParams:
         check_part(self.part, self.speed_factor, self.range_factor)
+        check_localization(self.part, self.mode, self.distance)
+        if self.mode == "jump" and self.until is not None:
+            raise ValueError("a jump is over at once: give no 'until'")
         if self.until is not None and self.until <= self.step:
             raise ValueError(f"'until' ({self.until}) must come after 'step' ({self.step})")
         return self

@@ -49,7 +49,10 @@ class Failure(Plugin):
         p = self.params
         factors = factors_of(p.speed_factor, p.range_factor)
         suffix = "" if p.part == "robot" else f" {p.part}"
-        if context.step == p.step:
+        if context.step == p.step and p.mode == "jump" and p.distance is not None:
+            context.jump(p.fail, p.distance)
+            context.log(f"jump {p.fail} localization {p.distance:g} cells")
+        elif context.step == p.step:
             context.fail(p.fail, p.part, factors)
             context.log(f"fail {p.fail}{suffix}")
         elif context.step == p.until:
