@@ -108,7 +108,7 @@ class RunEventContext:
 
     def jump(self, robot: str, distance: float) -> None:
         """Throw robot ``robot``'s believed pose ``distance`` cells off."""
-        jump_belief(self._robot(robot), distance)
+        jump_belief(self._robot(robot).features, robot, distance)
 
     def _robot(self, name: str) -> Robot:
         agent = self.agents[name]

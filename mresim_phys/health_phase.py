@@ -13,18 +13,24 @@ watch holds, :func:`change_reason` says why, from what the step left:
 * out of ``error``: ``moved again`` (to ``done`` with a decision of this step: its reason).
 
 The reasons go into the snapshot (the feature ``health``, ``knowledge/activity.py``) and
-so into the run log, from which a replay reads them back.
+so into the run log, from which a replay reads them back; :func:`step_of` reads a replayed
+robot (a snapshot's) as the live run gives it.
 """
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
+from typing import Any, Protocol
 
 from mresim_phys.agents import Robot
+from mresim_phys.broken_parts import broken_of
+from mresim_phys.knowledge.activity import health_of
 from mresim_phys.knowledge.health import HealthWatch, RobotStep
+from mresim_phys.localization.feature import LOCALIZATION
 from mresim_phys.strategies.base import given_up_of
+from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray
 
-PARTS = frozenset(("drive", "sensor", "radio", "degraded"))  # a part's failure is no state
+PARTS = frozenset(("drive", "sensor", "radio", "degraded", "localization"))  # no state
 
 
 def decision_reason(robot: Robot) -> str:
@@ -88,3 +94,55 @@ def robot_steps(
             )
         )
     return out
+
+
+class AgentLike(Protocol):
+    """The fields of an ``AgentSnapshot`` the watch reads (a replayed robot)."""
+
+    @property
+    def name(self) -> str: ...
+    @property
+    def state(self) -> str: ...
+    @property
+    def distance(self) -> float: ...
+    @property
+    def path(self) -> FloatArray: ...
+    @property
+    def features(self) -> Mapping[str, Any]: ...
+    @property
+    def position(self) -> tuple[float, float]: ...
+    @property
+    def radius(self) -> float: ...
+    @property
+    def belief(self) -> BeliefGrid: ...
+    @property
+    def safe(self) -> BoolGrid: ...
+    @property
+    def given_up(self) -> BoolGrid | None: ...
+    @property
+    def goal(self) -> tuple[float, float] | None: ...
+
+
+def step_of(agent: AgentLike) -> RobotStep:
+    """A snapshot's robot as the watch reads it (the same values the live run gives)."""
+    return RobotStep(
+        agent.name,
+        agent.state,
+        agent.distance,
+        len(agent.path) > 0,
+        agent.state != "failed" and "drive" not in broken_of(agent),
+        believed_position(agent),
+        agent.radius,
+        agent.belief,
+        health_of(agent).reason,
+        agent.safe,
+        agent.given_up,
+        agent.goal,
+    )
+
+
+def believed_position(agent: AgentLike) -> tuple[float, float]:
+    """Where a snapshot's robot believes it stands (its map's frame): the localisation
+    feature's believed pose, or its position."""
+    belief = LOCALIZATION.of(agent)
+    return agent.position if belief is None else (belief.pose[0], belief.pose[1])

@@ -183,7 +183,7 @@ def move_towards(
     robot.advance_to(true_end)
     if loc is not None and leg is not None:
         robot.heading = pose[2]
-        loc.arrive(*leg, pose, frozen(robot))
+        loc.arrive(*leg, pose, frozen(robot.features))
     robot.status = "active"
     if share >= 1.0:
         pop_point(robot)
@@ -199,7 +199,7 @@ def look_at_goal(robot: Robot) -> None:
         if math.hypot(dx, dy) > EPS:
             loc = LOCALIZATION.state_of(robot.features)
             heading = math.atan2(dy, dx)
-            robot.heading = heading if loc is None else loc.turn(heading, frozen(robot))
+            robot.heading = heading if loc is None else loc.turn(heading, frozen(robot.features))
 
 
 def pop_point(robot: Robot) -> None:

@@ -76,7 +76,7 @@ class Senses:
                 self.streams[robot.index - 1],
             )  # fmt: skip
             if loc is not None:  # matched, then folded where the robot believes it is
-                if not frozen(robot):
+                if not frozen(robot.features):
                     match_scan(loc, robot.belief, result)
                 result = as_believed(result, loc)
             scanned = perf_counter()

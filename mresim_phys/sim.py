@@ -267,7 +267,7 @@ class Simulation:
             settle = partial(self.senses.fold_held, queue, effects)
             take_step(robot, self.world, self.move_rules, given, replan, hold, settle)
         loc = LOCALIZATION.state_of(robot.features)
-        if loc is not None and not frozen(robot):  # the base and beacons seen from here
+        if loc is not None and not frozen(robot.features):  # the base and beacons seen from here
             landmark_fixes(loc, self.base.position, self.world, self.robot_filter(robot))
         started = perf_counter()
         self.network.stamp_own(robot, effects.window, self.t)

@@ -159,7 +159,7 @@ def strike(robot: Robot, spec: PartSpec) -> str:
     """Fail ``spec``'s part of ``robot`` (a localisation jump: throw its belief off); the
     line logged, without its cause."""
     if spec.mode == "jump" and spec.distance is not None:
-        jump_belief(robot, spec.distance)
+        jump_belief(robot.features, robot.name, spec.distance)
         return f"jump {robot.name} localization {spec.distance:g} cells"
     robot.fail(spec.part, spec.factors)
     return f"fail {robot.name}{suffix(spec.part)}"

@@ -38,15 +38,12 @@ replay rebuilds the same record (``output.runlog.Replay``); nothing here changes
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field, replace
-from typing import Any, Protocol
+from typing import Any
 
-from mresim_phys.broken_parts import broken_of
-from mresim_phys.knowledge.activity import health_of
 from mresim_phys.knowledge.frontier_reach import FrontierCheck, frontier_check
-from mresim_phys.localization.feature import LOCALIZATION
-from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray
+from mresim_phys.types import BeliefGrid, BoolGrid
 
 MOVE_EPS = 0.05  # cells: a robot that moved less in a step did not move
 CHECK_EVERY = 20  # steps between frontier checks of a robot that stays idle or done
@@ -90,58 +87,6 @@ class RobotStep:
         goal = self.goal
         x, y = self.position
         return goal is not None and (goal[0] - x) ** 2 + (goal[1] - y) ** 2 < MOVE_EPS**2
-
-
-class AgentLike(Protocol):
-    """The fields of an ``AgentSnapshot`` the watch reads (a replayed robot)."""
-
-    @property
-    def name(self) -> str: ...
-    @property
-    def state(self) -> str: ...
-    @property
-    def distance(self) -> float: ...
-    @property
-    def path(self) -> FloatArray: ...
-    @property
-    def features(self) -> Mapping[str, Any]: ...
-    @property
-    def position(self) -> tuple[float, float]: ...
-    @property
-    def radius(self) -> float: ...
-    @property
-    def belief(self) -> BeliefGrid: ...
-    @property
-    def safe(self) -> BoolGrid: ...
-    @property
-    def given_up(self) -> BoolGrid | None: ...
-    @property
-    def goal(self) -> tuple[float, float] | None: ...
-
-
-def step_of(agent: AgentLike) -> RobotStep:
-    """A snapshot's robot as the watch reads it (the same values the live run gives)."""
-    return RobotStep(
-        agent.name,
-        agent.state,
-        agent.distance,
-        len(agent.path) > 0,
-        agent.state != "failed" and "drive" not in broken_of(agent),
-        believed_position(agent),
-        agent.radius,
-        agent.belief,
-        health_of(agent).reason,
-        agent.safe,
-        agent.given_up,
-        agent.goal,
-    )
-
-
-def believed_position(agent: AgentLike) -> tuple[float, float]:
-    """Where a snapshot's robot believes it stands (its map's frame): the localisation
-    feature's believed pose, or its position."""
-    belief = LOCALIZATION.of(agent)
-    return agent.position if belief is None else (belief.pose[0], belief.pose[1])
 
 
 def check_of(robot: RobotStep) -> FrontierCheck:

@@ -21,10 +21,10 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from typing import Any, Protocol
 
 import numpy as np
 
-from mresim_phys.agents import Robot
 from mresim_phys.localization.estimate import PoseEstimate
 from mresim_phys.localization.faults import frozen
 from mresim_phys.localization.feature import LOCALIZATION, Localization
@@ -34,6 +34,20 @@ from mresim_phys.world.queries import QueryFilter
 from mresim_phys.world.space import World
 
 Place = tuple[float, float]
+
+
+class Teammate(Protocol):
+    """What the teammate correction reads of a robot (``agents.Robot``)."""
+
+    name: str
+    position: Place  # the true position
+    links: tuple[str, ...]  # the agents it is linked with on the main channel
+    features: dict[str, Any]
+
+    @property
+    def alive(self) -> bool:
+        """Whether it still senses, moves and communicates."""
+        ...
 
 
 def landmark_fixes(loc: Localization, base: Place, world: World, rays: QueryFilter) -> None:
@@ -67,11 +81,11 @@ def _sees(world: World, here: Place, there: Place, reach: float, rays: QueryFilt
     return bool(scan.ranges[0] >= gap - 1e-6)
 
 
-def teammate_fixes(robots: Sequence[Robot]) -> None:
+def teammate_fixes(robots: Sequence[Teammate]) -> None:
     """The teammate corrections after an exchange, for every robot that is not failed
     and has one, from the teammates it is linked with on the main channel."""
     team = [(r, LOCALIZATION.state_of(r.features)) for r in robots if r.alive]
-    working = {r.name for r, _ in team if not frozen(r)}
+    working = {r.name for r, _ in team if not frozen(r.features)}
     if not any(loc is not None and _teammate_fix(loc) for _, loc in team):
         return
     known = {r.name: (r.position, _estimate(r.position, loc)) for r, loc in team}  # as it began

@@ -18,18 +18,23 @@ without a ``localization:`` block (no drift, no corrections).
 
 from __future__ import annotations
 
-from mresim_phys.agents import Robot
+from collections.abc import Mapping
+from typing import Any
+
+from mresim_phys.broken_parts import broken_in
 from mresim_phys.localization.feature import LOCALIZATION
 
 
-def jump_belief(robot: Robot, distance: float) -> None:
-    """Throw ``robot``'s believed pose ``distance`` cells off (``mode: jump``)."""
-    loc = LOCALIZATION.state_of(robot.features)
+def jump_belief(states: Mapping[str, Any], name: str, distance: float) -> None:
+    """Throw the believed pose of the robot ``name`` with feature ``states`` (its
+    ``Robot.features``) ``distance`` cells off (``mode: jump``)."""
+    loc = LOCALIZATION.state_of(states)
     if loc is None:
-        raise ValueError(f"robot {robot.name!r} has no localisation to jump")
+        raise ValueError(f"robot {name!r} has no localisation to jump")
     loc.jump(distance)
 
 
-def frozen(robot: Robot) -> bool:
-    """Whether ``robot``'s localisation is frozen (``mode: frozen`` in force)."""
-    return "localization" in robot.broken
+def frozen(states: Mapping[str, Any]) -> bool:
+    """Whether the localisation of a robot with feature ``states`` is frozen (``mode:
+    frozen`` in force)."""
+    return "localization" in broken_in(states)

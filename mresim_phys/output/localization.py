@@ -21,6 +21,7 @@ off.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any
 
@@ -28,10 +29,10 @@ import numpy as np
 
 from mresim_phys.localization.feature import LOCALIZATION, Localization
 from mresim_phys.metrics import StepRecord
+from mresim_phys.snapshot import Snapshot
 from mresim_phys.types import FREE, OCCUPIED, BeliefGrid, BoolGrid
 
 if TYPE_CHECKING:
-    from mresim_phys.output.recorders import SnapshotSource
     from mresim_phys.sim import Simulation
 
 
@@ -41,7 +42,7 @@ class PoseRecorder:
 
     errors: dict[str, list[float]] = field(default_factory=dict)
 
-    def on_step(self, record: StepRecord, snapshot: SnapshotSource) -> None:
+    def on_step(self, record: StepRecord, snapshot: Callable[[], Snapshot]) -> None:
         """Note each robot's error at this step (robots without localisation: none)."""
         for robot in record.robots:
             belief = LOCALIZATION.of(robot)

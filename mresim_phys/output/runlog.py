@@ -25,9 +25,10 @@ from typing import Any
 import numpy as np
 
 from mresim_phys.errors import MresimError
+from mresim_phys.health_phase import step_of
 from mresim_phys.knowledge.activity import with_activity
 from mresim_phys.knowledge.coverage import Coverage
-from mresim_phys.knowledge.health import HealthReport, HealthWatch, step_of
+from mresim_phys.knowledge.health import HealthReport, HealthWatch
 from mresim_phys.knowledge.latest import LatestCoverage
 from mresim_phys.knowledge.robustness import FailureWatch, logged_states
 from mresim_phys.metrics import RobotRecord, StepRecord, measure_step, update_known_at_base

@@ -61,9 +61,26 @@ def flatten_summary(summary: dict[str, Any]) -> dict[str, Any]:
             row["failed_robots"] = len(value)
         elif key == "health" and isinstance(value, dict):
             row |= {name: value.get(name) for name in TOTALS}
+        elif key == "localization" and isinstance(value, dict):
+            row |= localization_columns(value)
         elif not isinstance(value, (dict, list)):
             row[key] = value
     return row
+
+
+def localization_columns(block: dict[str, Any]) -> dict[str, Any]:
+    """summary.json's ``localization`` object as columns: the team's pose errors, the base
+    map's consistency and the robots' mean consistency."""
+    team, base, robots = block["team"], block["base"], list(block["robots"].values())
+    return {
+        "pose_error_final_mean": team["final_mean_error"],
+        "pose_error_max": team["max_error"],
+        "pose_error_mean": team["mean_error"],
+        "base_false_free": base["false_free"],
+        "base_false_occupied": base["false_occupied"],
+        "robots_false_free": sum(r["false_free"] for r in robots) / len(robots),
+        "robots_false_occupied": sum(r["false_occupied"] for r in robots) / len(robots),
+    }
 
 
 def robustness_row(folder: Path) -> dict[str, Any]:
