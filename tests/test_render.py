@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 from pathlib import Path
 
@@ -9,6 +10,7 @@ import numpy as np
 import pytest
 
 from mresim_phys import Simulation
+from mresim_phys.localization.feature import PoseBelief
 from mresim_phys.render import (
     DEFAULT_GLOBAL,
     DEFAULT_ROBOT,
@@ -20,6 +22,7 @@ from mresim_phys.render import (
     Style,
     parse_layers,
 )
+from mresim_phys.render.pose import ellipse_axes
 from mresim_phys.snapshot import AgentSnapshot, Snapshot, read_only
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 
@@ -342,3 +345,79 @@ def test_potential_and_through_wall_rendezvous_points_drawn_by_their_layers() ->
     assert near(walls, (8, 10), STYLE.robot_colour(0), tol=10)
     assert (candidates != plain).any() and (walls != plain).any()
     assert not (candidates != plain)[:, : plain.shape[1] // 2].any()  # each layer its own
+
+
+# --- believed poses (localisation) ---------------------------------------------------------
+
+BELIEVED = (30.5, 8.5)  # A's believed position in believed_snapshot(); its true one (20.5, 15.5)
+
+
+Cov = tuple[float, float, float, float, float, float]  # xx, xy, yy, xt, yt, tt
+
+
+def believed_snapshot(cov: Cov = (4.0, 0.0, 1.0, 0.0, 0.0, 0.01)) -> Snapshot:
+    """``snapshot()`` with robot A believing it is at :data:`BELIEVED` (covariance ``cov``:
+    a 95 % ellipse of semi-axes 4.9 cells along x and 2.4 along y)."""
+    belief = PoseBelief((*BELIEVED, 0.0), cov, math.dist(BELIEVED, (20.5, 15.5)), 0.0)
+    return snapshot(features={"localization": belief})
+
+
+def bluish(frame: np.ndarray, xy: tuple[float, float], scale: float, tol: int = 70) -> bool:
+    """Whether a pixel near robot A's colour (grey, white and green are farther than
+    ``tol``) is within 3 pixels of world point ``xy``."""
+    c, r = (round(v * scale - 0.5) for v in xy)
+    patch = frame[r - 3 : r + 4, c - 3 : c + 4].astype(int)
+    return bool((np.abs(patch - STYLE.robot_colour(0)).max(axis=2) <= tol).any())
+
+
+def test_a_believed_pose_draws_its_circle_line_and_ellipse_where_it_is_believed() -> None:
+    snap, scale, layers = believed_snapshot(), 8.0, MAP_ONLY + ",location"
+    on, off = render(snap, layers + ",localization", scale), render(snap, layers, scale)
+    x, y = BELIEVED
+    size = 8 / scale  # the hollow circle's radius: A's glyph (radius 1 cell, 8 px)
+    major, minor = math.sqrt(5.991 * 4.0), math.sqrt(5.991 * 1.0)  # cells, along x and y
+    marks = [(x + size, y), (x - size, y), (x, y + size), (x, y - size)]  # the circle
+    marks += [(x + major, y), (x - major, y), (x, y + minor), (x, y - minor)]  # the ellipse
+    marks.append(((x + 20.5) / 2, (y + 15.5) / 2))  # the line from the true position
+    for xy in marks:
+        assert bluish(on, xy, scale) and not bluish(off, xy, scale), xy
+    inside = (round((y - 0.4) * scale), round((x + 0.4) * scale))  # off the line
+    assert pixel(on, inside) == pixel(off, inside)  # hollow
+    assert not bluish(on, (x, y + major), scale)  # the ellipse lies along x
+    assert (render(snap, MAP_ONLY + ",localization", scale) != render(snap, MAP_ONLY, scale)).any()
+
+
+def test_a_certain_belief_draws_no_ellipse_and_a_path_starts_at_the_believed_position() -> None:
+    snap = believed_snapshot((0.0, 0.0, 0.0, 0.0, 0.0, 0.0))
+    a = replace(snap.robots[0], path=np.array([[30.5, 24.5]]))
+    snap = replace(snap, agents=(snap.base, a, snap.robots[1]))
+    frame, scale = render(snap, MAP_ONLY + ",path", 8.0), 8.0
+    assert bluish(frame, (30.5, 16.5), scale)  # on the leg from the believed position
+    assert not bluish(frame, (25.5, 20.0), scale)  # none from the true one
+    certain = snap.robots[0].features["localization"]
+    assert ellipse_axes(certain, np.array((16.0, 16.0))) is None
+
+
+def test_ellipse_axes_follow_the_covariance() -> None:
+    cov = (2.5, 1.5, 2.5, 0.0, 0.0, 0.0)  # eigenvalues 4 and 1 along the diagonals
+    ellipse = ellipse_axes(PoseBelief((1.0, 1.0, 0.0), cov, 0.0, 0.0), np.array((16.0, 16.0)))
+    assert ellipse is not None
+    axes, angle = ellipse
+    assert axes == (round(16 * math.sqrt(5.991 * 4)), round(16 * math.sqrt(5.991)))
+    assert angle % 180 == pytest.approx(45.0)
+
+
+@pytest.mark.parametrize("layers", ["default", "all", MAP_ONLY + ",location,path,goal"])
+def test_robots_without_localisation_draw_the_same_with_the_layer_on_or_off(layers: str) -> None:
+    snap = snapshot(path=np.array([[25.5, 15.5], [25.5, 5.5]]), goal=(25.5, 5.5))
+    on = render(snap, layers + ",localization", 8.0)
+    assert on.tobytes() == render(snap, layers + ",-localization", 8.0).tobytes()
+
+
+def test_the_legend_names_the_believed_pose_only_where_it_is_drawn() -> None:
+    snap, plain = believed_snapshot(), snapshot()
+    band = slice(-40, None)  # the legend band at the bottom of the frame
+    shown = render(snap, "default", 8.0)[band]
+    assert (shown != render(snap, "default,-localization", 8.0)[band]).any()
+    hidden = render(snap, "default,A:-localization", 8.0)[band]
+    assert (render(plain, "default", 8.0)[band] == hidden).all()

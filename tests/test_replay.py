@@ -9,9 +9,12 @@ from pathlib import Path
 import cv2
 import numpy as np
 import pytest
+import yaml
 
 from mresim_phys.cli import main
+from mresim_phys.localization.feature import LOCALIZATION
 from mresim_phys.output.runlog import RunLog
+from mresim_phys.render import Renderer, frame_scale, parse_layers
 
 ScenarioFile = Callable[..., Path]
 ROOT = Path(__file__).resolve().parent.parent
@@ -72,6 +75,27 @@ def test_replayed_planner_views_equal_live_frames(tmp_path: Path) -> None:
     last = list(RunLog.open(out / "log").snapshots())[-1]  # the views of the last step
     skeletons = [r.name for r in last.robots if r.skeleton is not None and r.skeleton.any()]
     assert skeletons == ["C", "D"]  # the topological planners' views were logged
+
+
+def test_replayed_believed_poses_equal_live_frames(tmp_path: Path) -> None:
+    """A run with odometry drift: the believed poses, their ellipses and the paths drawn
+    from them replay pixel for pixel (the quickstart with ``team.localization``)."""
+    data = yaml.safe_load((ROOT / "scenarios" / "01_quickstart.yaml").read_text())
+    data["map"]["image"] = str((ROOT / "maps" / "small_rooms.png").resolve())
+    data["team"]["localization"] = {"odometry": {"alpha": [0.001, 0.00001, 0.001, 0.00001]}}
+    path, out, flags = tmp_path / "drift.yaml", tmp_path / "run", ["--snapshot", "20,40"]
+    path.write_text(yaml.safe_dump(data))
+    run(path, out, "--steps", "40", "--video", str(tmp_path / "live.mp4"), *flags)
+    assert main(["replay", str(out), *flags]) == 0
+    for step in (20, 40):
+        live = read_png(out / f"step-{step:05d}.png")
+        assert np.array_equal(live, read_png(out / f"replay-step-{step:05d}.png"))
+    last = list(RunLog.open(out / "log").snapshots())[-1]
+    beliefs = [LOCALIZATION.of(robot) for robot in last.robots]
+    assert all(b is not None and b.error > 0.1 and b.sigma > 0.1 for b in beliefs)
+    shape = last.truth.shape
+    without = Renderer(shape, parse_layers("default,-localization"), frame_scale(shape, 1))
+    assert not np.array_equal(live, without.render(last))  # the believed poses are drawn
 
 
 @pytest.mark.parametrize("model", ["disk", "path_loss"])

@@ -13,6 +13,7 @@ import sys
 import urllib.error
 import urllib.request
 from collections.abc import Callable
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 
@@ -24,10 +25,12 @@ from aiohttp.test_utils import make_mocked_request
 
 import mresim_phys.viewer
 from mresim_phys.cli import main
+from mresim_phys.localization.feature import PoseBelief
 from mresim_phys.metrics import RobotRecord, StepRecord
 from mresim_phys.output.runlog import RunLog
 from mresim_phys.render import LayerSpec, parse_layers
-from mresim_phys.snapshot import Snapshot
+from mresim_phys.snapshot import AgentSnapshot, Snapshot
+from mresim_phys.viewer.frames import agent_row
 from mresim_phys.viewer.guard import is_local
 from mresim_phys.viewer.protocol import ProtocolError, layer_spec, parse_message
 from mresim_phys.viewer.replaysource import ReplaySource
@@ -241,8 +244,25 @@ def test_the_info_message_lists_every_layer_and_agent(run_dir: Path) -> None:
     info = json.loads(json.dumps(ReplaySource.open(run_dir).info()))
     assert info["names"] == ["base", "A", "B"] and info["kinds"] == ["base", "robot", "robot"]
     assert "walls" in info["global_layers"] and "free_space" in info["robot_layers"]
+    assert "localization" in info["robot_layers"]  # the page builds its columns from these
     assert info["steps"] == 41 and info["mode"] == "replay"
     assert set(info["layers"]["robots"]["A"]) == set(parse_layers("all").for_agent("A"))
+
+
+def test_a_localised_robot_s_hover_row_has_its_belief_and_the_path_left_from_it() -> None:
+    """The ``localization`` feature's hover entry rides in the row; the path left is
+    measured from the believed position, where the path is drawn from."""
+    belief = PoseBelief((10.0, 4.0, 0.0), (1.0, 0.0, 1.0, 0.0, 0.0, 0.01), 6.0, 0.0)
+    grid = np.zeros((12, 12), dtype=np.uint8)
+    robot = AgentSnapshot("A", "robot", (4.0, 4.0), 0.0, 1.0, "active", "explorer", 10.0,
+                          grid, grid.astype(bool), path=np.array([[10.0, 8.0]]),
+                          features={"localization": belief})  # fmt: skip
+    row = agent_row(robot, (0.0, 0.0), 3.0)
+    assert row["position"] == [4.0, 4.0] and row["path_left"] == 4.0
+    hover = {"believed": [10.0, 4.0], "heading_deg": 0.0, "error": 6.0, "sigma": 1.0}
+    assert row["localization"] == hover
+    plain = agent_row(replace(robot, features={}), (0.0, 0.0), 3.0)
+    assert plain["localization"] is None and plain["path_left"] == 7.21
 
 
 def outside_address() -> str | None:

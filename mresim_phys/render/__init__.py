@@ -2,7 +2,8 @@
 
 Modules, each importing only the ones before it: ``layers`` (layer names, LayerSpec,
 ``--layers`` parsing), ``style`` (colours, sizes, label classes), ``raster`` (numba label
-grid), ``draw`` (cv2 overlays) and ``frame`` (:class:`Renderer`, the two stages together).
+grid), ``pose`` (believed poses), ``draw`` (cv2 overlays) and ``frame``
+(:class:`Renderer`, the two stages together).
 
 Typical use: ``Renderer(truth.shape, parse_layers("all")).render(snapshot)``. Importing
 the package is light (``layers``: a scenario's ``render`` block is validated without

@@ -1,13 +1,14 @@
 """Views (phase 8), vector stage: what a frame shows in output pixels, over the coloured map.
 
 Open doors (dashed lines) and moving obstacles' names, comm ranges, links, hierarchy,
-paths, goals, rendezvous points, robots (a done, idle or stuck one unlike a working one),
-names (placed apart: ``render.labels``), header and legend (``render.legend``), bottom to
-top, with cv2 primitives in 4-bit fixed point (anti-aliased). Points are converted to
-pixels in one numpy call per frame (every agent, every path point, every goal), robot
-triangles in another, and all links are one ``cv2.polylines`` call; the drawing order (and
-so every blended pixel) is the same as one robot at a time. The legend band is drawn once
-per set of robot names (and world legend entries) and pasted.
+paths, goals, rendezvous points, believed poses (``render.pose``), robots (a done, idle or
+stuck one unlike a working one), names (placed apart: ``render.labels``), header and legend
+(``render.legend``), bottom to top, with cv2 primitives in 4-bit fixed point
+(anti-aliased). Points are converted to pixels in one numpy call per frame (every agent,
+every path point, every goal), robot triangles in another, and all links are one
+``cv2.polylines`` call; the drawing order (and so every blended pixel) is the same as one
+robot at a time. The legend band is drawn once per set of robot names (and world legend
+entries and marks) and pasted.
 
 Typical use: ``Overlay(layers, style, scale, to_px).draw(image, snapshot)``.
 """
@@ -25,8 +26,9 @@ from mresim_phys.features import FEATURES
 from mresim_phys.knowledge.activity import health_of
 from mresim_phys.render.labels import Label, place_labels
 from mresim_phys.render.layers import LayerSpec
-from mresim_phys.render.legend import legend_band
+from mresim_phys.render.legend import BELIEVED, legend_band
 from mresim_phys.render.legend import world_legend as world_legend
+from mresim_phys.render.pose import draw_beliefs, path_start, shows_beliefs
 from mresim_phys.render.scale_bar import draw_scale_bar
 from mresim_phys.render.style import AA, BGR, FONT, ONE, SHIFT, Style
 
@@ -53,7 +55,7 @@ class Overlay:
 
     def __init__(self, layers: LayerSpec, style: Style, scale: float, to_px: np.ndarray) -> None:
         self.layers, self.style, self.scale, self.to_px = layers, style, scale, to_px
-        self._legend: tuple[tuple[tuple[str, ...], tuple[str, ...]], np.ndarray] | None = None
+        self._legend: tuple[tuple[tuple[str, ...], ...], np.ndarray] | None = None
 
     def px(self, xy: Sequence[float] | np.ndarray) -> np.ndarray:
         """World (x, y) points -> fixed-point output pixel coordinates (int32, 4 bits)."""
@@ -80,6 +82,9 @@ class Overlay:
         for i, robot in enumerate(snap.robots, start=1):
             self._draw_plans(image, robot, paths[i], goals[i], colours[i], layers[i])
         sizes = [max(style.robot_px, robot.radius * self.scale) for robot in snap.robots]
+        draw_beliefs(
+            image, snap.robots, centres[1:], colours[1:], layers[1:], self.px, self.to_px, sizes
+        )
         labels = iter(self._labels(snap, layers, centres, sizes))
         if "location" in layers[0]:
             c, half = centres[0], 5 * ONE
@@ -97,8 +102,9 @@ class Overlay:
             draw_header(image, snap, style, snap.dt)
         legend = 0
         if "legend" in on:
+            marks = (BELIEVED,) if shows_beliefs(snap.robots, layers[1:]) else ()
             legend = self._paste_legend(image, tuple(r.name for r in snap.robots),
-                                        world_legend(snap, on))  # fmt: skip
+                                        world_legend(snap, on), marks)  # fmt: skip
         if "scale_bar" in on and snap.resolution is not None:
             rows, cols = snap.truth.shape
             height = min(round(rows * self.scale), image.shape[0] - legend)
@@ -126,15 +132,16 @@ class Overlay:
     def _points(
         self, snap: Snapshot, layers: list[frozenset[str]]
     ) -> tuple[np.ndarray, list[np.ndarray | None], list[np.ndarray | None]]:
-        """Pixel centres of all agents and, per agent, its drawn path (from its position)
-        and goal (None where not drawn; the base has neither), converted in one call."""
+        """Pixel centres of all agents and, per agent, its drawn path (from its position,
+        or its believed one with localisation: ``render.pose``) and goal (None where not
+        drawn; the base has neither), converted in one call."""
         pieces = [np.array([a.position for a in snap.agents], dtype=float)]
         drawn = [(0, False)]  # per agent: points in its drawn path, goal drawn
         for robot, mine in zip(snap.robots, layers[1:], strict=True):
             path = len(robot.path) + 1 if "path" in mine and len(robot.path) else 0
             goal = "goal" in mine and robot.goal is not None
             if path:
-                pieces += [np.reshape(robot.position, (1, 2)), np.asarray(robot.path, float)]
+                pieces += [np.reshape(path_start(robot), (1, 2)), np.asarray(robot.path, float)]
             if goal:
                 pieces.append(np.reshape(np.asarray(robot.goal, float), (1, 2)))
             drawn.append((path, goal))
@@ -222,12 +229,13 @@ class Overlay:
                 draw_label(image, movable.name, centre, w / 2 * self.scale, style.obstacle, style)
 
     def _paste_legend(
-        self, image: np.ndarray, names: tuple[str, ...], extras: tuple[str, ...]
-    ) -> int:
+        self, image: np.ndarray, names: tuple[str, ...], extras: tuple[str, ...],
+        marks: tuple[str, ...] = (),
+    ) -> int:  # fmt: skip
         """The legend band over the bottom of ``image``; its height in pixels."""
-        key = (names, extras)
+        key = (names, extras, marks)
         if self._legend is None or self._legend[0] != key:
-            band = legend_band(image.shape[1], names, self.layers, self.style, extras)
+            band = legend_band(image.shape[1], names, self.layers, self.style, extras, marks)
             self._legend = (key, band)
         band = self._legend[1][-image.shape[0] :]
         image[image.shape[0] - band.shape[0] :] = band

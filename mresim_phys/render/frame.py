@@ -6,9 +6,10 @@ the larger wins) + 6 * free/safe space tint (later robots over earlier), coloure
 lookup table (:meth:`Style.lut <mresim_phys.render.style.Style.lut>`) and resized once;
 a changing world's rubble, closed doors and moving obstacles are solid labels over them.
 Vector stage (:mod:`~mresim_phys.render.draw`), in output pixels with cv2 primitives: comm
-ranges, links, hierarchy, paths, goals, rendezvous points, robots, names, header and legend.
+ranges, links, hierarchy, paths, goals, rendezvous points, believed poses, robots, names,
+header and legend.
 Modules import downwards only: ``layers`` <- ``style`` <- ``raster``, ``labels``,
-``legend`` <- ``draw`` <- ``frame``.
+``legend``, ``pose`` <- ``draw`` <- ``frame``.
 On an 8-robot 800x600 office frame with every layer on, a new snapshot each frame costs
 ~2-3 ms (``benchmarks/bench_render.py``; the numpy/cv2 renderer it replaced took 6-8 ms).
 

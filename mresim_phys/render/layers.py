@@ -4,7 +4,8 @@ Global layers (map classes; moving obstacles, doors and debris of a changing wor
 links, hierarchy, legend, header, terrain shading, a prior map's walls, the knowledge lost
 at failures, hazard zones, a scale bar) and per-robot layers (location, path, goal, free and safe
 space, frontiers, comm range, skeleton, rendezvous: the agreed points, the potential ones
-and those linked through walls, the teammates it presumes lost);
+and those linked through walls, the teammates it presumes lost, its believed pose with
+localisation);
 a :class:`LayerSpec` says which are on, for all robots and for named ones;
 :func:`parse_layers` reads the ``--layers`` / ``render.layers`` text.
 
@@ -28,6 +29,7 @@ GLOBAL_LAYERS += ("scale_bar",)  # metres on the frame, when the map's resolutio
 ROBOT_LAYERS: tuple[str, ...] = ("location", "path", "free_space", "safe_space", "frontiers")
 ROBOT_LAYERS += ("comm_range", "goal", "skeleton", "rendezvous", "presumed_lost")
 ROBOT_LAYERS += ("rv_candidates", "rv_through_walls")  # multi-point rendezvous
+ROBOT_LAYERS += ("localization",)  # a robot's believed pose and its 95 % ellipse
 LAYERS = GLOBAL_LAYERS + ROBOT_LAYERS
 DEFAULT_GLOBAL = frozenset(GLOBAL_LAYERS)
 DEFAULT_ROBOT = frozenset(ROBOT_LAYERS) - {"free_space", "safe_space", "rv_candidates"}

@@ -3,7 +3,9 @@
 Colour swatches for the map classes shown, the changing world's parts a frame holds
 (:func:`world_legend`: obstacles, doors, rubble, hazard zones) and every robot; then, when
 robots are drawn, the glyphs of a robot that is done, idle, stuck or fruitless (the run-health
-record's activity, ``knowledge/health.py``), as ``render.draw`` draws them on the map.
+record's activity, ``knowledge/health.py``), as ``render.draw`` draws them on the map; then
+the marks a frame holds (``believed pose``: the hollow circle ``render.pose`` draws where a
+robot with localisation believes it is).
 
 Typical use: ``legend_band(width, names, layers, style, world_legend(snap, on))``.
 """
@@ -26,6 +28,7 @@ LEGEND = {"walls": "wall", "unexplored": "unexplored", "team_known": "team_known
 LEGEND["known_at_base"] = "known_at_base"  # global layer -> Style colour, in legend order
 STATE_GLYPHS = ("done", "idle", "stuck", "fruitless")  # legend entries of robots not at work
 GLYPH_COLOUR: BGR = (90, 90, 90)  # the legend's robot glyphs (a robot's own colour on frames)
+BELIEVED = "believed pose"  # the legend mark of a believed pose (``render.pose``)
 
 
 def world_legend(snap: Snapshot, on: frozenset[str]) -> tuple[str, ...]:
@@ -41,11 +44,13 @@ def world_legend(snap: Snapshot, on: frozenset[str]) -> tuple[str, ...]:
 
 
 def legend_band(
-    width: int, names: Sequence[str], layers: LayerSpec, style: Style, extras: Sequence[str] = ()
-) -> np.ndarray:
+    width: int, names: Sequence[str], layers: LayerSpec, style: Style,
+    extras: Sequence[str] = (), marks: Sequence[str] = (),
+) -> np.ndarray:  # fmt: skip
     """A band image with colour swatches for the map classes shown, the changing world's
     ``extras`` (Style colour names) and every robot, then (when robots are drawn) the
-    glyphs of a robot that is done, idle, stuck or fruitless (:data:`STATE_GLYPHS`)."""
+    glyphs of a robot that is done, idle, stuck or fruitless (:data:`STATE_GLYPHS`), then
+    the glyphs of ``marks`` (:data:`BELIEVED`)."""
     on = layers.global_layers
     robot_layers = set(layers.robot_layers).union(*layers.per_robot.values())
     items = [
@@ -55,7 +60,7 @@ def legend_band(
         items.append(("frontier", style.frontier))
     items += [(name, getattr(style, name)) for name in extras]
     items += [(name, style.robot_colour(i)) for i, name in enumerate(names)]
-    glyphs = STATE_GLYPHS if "location" in robot_layers else ()
+    glyphs = (*(STATE_GLYPHS if "location" in robot_layers else ()), *marks)
     (_, th), base = cv2.getTextSize("Ag", FONT, style.font_scale, 1)
     line, spots, x, y = th + base + 4, [], 4, 0
     for text, colour in [*items, *((g, GLYPH_COLOUR) for g in glyphs)]:
@@ -79,9 +84,13 @@ def legend_glyph(
     band: np.ndarray, kind: str, corner: tuple[int, int], side: int, style: Style
 ) -> None:
     """A small robot glyph in the ``side``-pixel square at ``corner``, drawn as a robot
-    that is ``kind`` (done, idle, stuck or fruitless) is drawn on a frame, in
-    :data:`GLYPH_COLOUR`."""
+    that is ``kind`` (done, idle, stuck or fruitless) is drawn on a frame, or the believed
+    pose mark (:data:`BELIEVED`: a hollow circle), in :data:`GLYPH_COLOUR`."""
     x, y = corner
+    if kind == BELIEVED:
+        centre = ((2 * x + side) * ONE // 2, (2 * y + side) * ONE // 2)
+        cv2.circle(band, centre, (side * ONE) // 2 - ONE // 2, GLYPH_COLOUR, 2, AA, SHIFT)
+        return
     tip, back = (x + side) * ONE, x * ONE + ONE
     pts = np.array([[tip, (y + side // 2) * ONE], [back, y * ONE], [back, (y + side) * ONE]])
     pts = pts.astype(np.int32)

@@ -4,9 +4,10 @@ A :class:`FrameMaker` renders a snapshot with the layers a page asks for through
 :class:`~mresim_phys.render.Renderer` (same scale, style and communication regions) as a
 run's video, and encodes it as PNG (lossless: the page's pixels are the renderer's).
 :func:`agent_rows` gives what hovering a robot shows (state, activity: working, waiting,
-idle or stuck, role, distance travelled, path left, battery, last contact with the base)
-and where the robot is in frame pixels. Typical use: ``FrameMaker(shape,
-scale).png(snapshot, layers)``.
+idle or stuck, role, distance travelled, path left: from the believed position with
+localisation, battery, last contact with the base, each feature's hover entry: the
+believed pose with localisation) and where the robot is in frame pixels. Typical use:
+``FrameMaker(shape, scale).png(snapshot, layers)``.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ import numpy as np
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.features import FEATURES
 from mresim_phys.render import LayerSpec, Renderer, frame_scale
+from mresim_phys.render.pose import path_start
 from mresim_phys.snapshot import AgentSnapshot, Snapshot
 
 RENDERERS_KEPT = 8  # renderers of different layer sets kept (each holds scratch grids)
@@ -116,8 +118,9 @@ def feature_entries(agent: AgentSnapshot) -> dict[str, Any]:
 
 
 def agent_row(agent: AgentSnapshot, px: tuple[float, float], radius: float) -> dict[str, Any]:
-    """One agent's hover row (JSON-ready; distances in cells)."""
-    start = np.array([agent.position], dtype=float)
+    """One agent's hover row (JSON-ready; distances in cells; the path left from where the
+    path is drawn from: the believed position with localisation)."""
+    start = np.array([path_start(agent)], dtype=float)
     return {
         "name": agent.name,
         "kind": agent.kind,

@@ -264,10 +264,16 @@ function onHover(ev) {
     `role       ${hit.role}`, `travelled  ${hit.distance} cells`, `path left  ${hit.path_left} cells`,
     `battery    ${battery}`, `base heard ${contact}`,
     `presumes lost ${hit.lost ? hit.lost.join(", ") : "-"}`,
+    ...(hit.localization ? [believedLine(hit.localization)] : []),
   ].join("\n");
   tip.style.left = `${ev.clientX - rect.left + 12}px`;
   tip.style.top = `${ev.clientY - rect.top + 12}px`;
   tip.hidden = false;
+}
+
+function believedLine(b) {
+  // the localization feature's hover entry: believed position, heading, error and sigma (cells)
+  return `believed   ${b.believed.join(", ")} at ${b.heading_deg} deg, error ${b.error}, sigma ${b.sigma} cells`;
 }
 
 function onKey(ev) {
