@@ -369,3 +369,43 @@ def test_bad_localisation_faults_are_one_paragraph(
     err = capsys.readouterr().err
     assert str(path) in err and "events[0]" in err and words in err, err
     assert "Traceback" not in err
+
+
+SCENARIOS = QUICKSTART.parent
+BY_STRATEGY = {
+    "frontier": "01_quickstart.yaml",
+    "random_walk": "06_small_rooms_random_walk.yaml",
+    "hungarian": "19_office_hungarian.yaml",
+    "min_pos": "20_office_min_pos.yaml",
+    "utility_return": "21_rooms_utility_return.yaml",
+    "leader_follower": "22_rooms_leader_follower.yaml",
+    "role_based": "23_rooms_role_based.yaml",
+    "role_switch": "25_library_role_switch.yaml",
+    "sector_rendezvous": "26_rubble_sector_rendezvous.yaml",
+}
+
+
+@pytest.mark.parametrize("strategy", sorted(BY_STRATEGY))
+def test_every_built_in_strategy_explores_under_drift_from_its_beliefs(strategy: str) -> None:
+    """Each built-in strategy's shipped scenario, every robot drifting with scan matching
+    and teammate fixes, 40 steps: it runs, its robots move and explore, and what each
+    strategy was shown is the believed pose (a view's position is never the true one
+    once they part)."""
+    block = {**DRIFT, "corrections": [{"kind": "scan_matching"}, {"kind": "teammate"}]}
+    sim = Simulation.from_yaml(SCENARIOS / BY_STRATEGY[strategy], **{"team.localization": block})
+    record = sim.record
+    for record in sim.iterate():
+        if record.step >= 40:
+            break
+    assert record.distance > 0 and record.explored > 0.02
+    parted = [r for r in sim.robots if r.alive and errors_of(r) > 0.05]
+    assert parted, "no robot drifted"
+    for robot in parted:
+        view = sim.view_of(robot)
+        assert view.position == robot.believed_position != robot.position
+
+
+def errors_of(robot: Any) -> float:
+    """A robot's position error."""
+    state = LOCALIZATION.state_of(robot.features)
+    return 0.0 if state is None else state.error()[0]

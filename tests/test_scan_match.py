@@ -104,6 +104,8 @@ def bilinear(field: np.ndarray, x: np.ndarray, y: np.ndarray, floor: float) -> n
         return out
 
     return (
-        at(r, c) * (1 - fx) * (1 - fy) + at(r, c + 1) * fx * (1 - fy)
-        + at(r + 1, c) * (1 - fx) * fy + at(r + 1, c + 1) * fx * fy
+        at(r, c) * (1 - fx) * (1 - fy)
+        + at(r, c + 1) * fx * (1 - fy)
+        + at(r + 1, c) * (1 - fx) * fy
+        + at(r + 1, c + 1) * fx * fy
     )
