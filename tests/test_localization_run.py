@@ -25,7 +25,9 @@ from mresim_phys.localization.feature import LOCALIZATION, Localization, localiz
 from mresim_phys.localization.perceive import as_believed
 from mresim_phys.localization.scan_match import LiveField, likelihood_field
 from mresim_phys.localization.spec import LocalizationSpec
+from mresim_phys.output.localization import consistency
 from mresim_phys.scenario.load import load_scenario
+from mresim_phys.sweeps.tables import flatten_summary
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 from mresim_phys.world.sensing import scan
 from mresim_phys.world.space import World
@@ -409,3 +411,30 @@ def errors_of(robot: Any) -> float:
     """A robot's position error."""
     state = LOCALIZATION.state_of(robot.features)
     return 0.0 if state is None else state.error()[0]
+
+
+def test_map_consistency_counts_ghost_openings_and_ghost_walls() -> None:
+    truth = np.zeros((6, 8), dtype=bool)
+    truth[:, 4] = True  # a wall down the middle
+    reachable = ~truth
+    reachable[:, 5:] = False  # only the left side is reachable
+    belief = np.full(truth.shape, UNKNOWN, dtype=np.uint8)
+    belief[0, 4] = belief[1, 4] = FREE  # two ghost openings in the wall
+    belief[2, 1] = OCCUPIED  # a ghost wall where the robots can go
+    belief[3, 6] = OCCUPIED  # a wall believed where it is free but out of reach: not counted
+    belief[4, 4] = OCCUPIED  # a true wall
+    got = consistency(belief, truth, reachable)
+    area = int(reachable.sum())
+    assert got == {"false_free": 2 / area, "false_occupied": 1 / area}
+
+
+def test_a_sweep_table_has_the_localisation_figures() -> None:
+    robot = {"false_free": 0.1, "false_occupied": 0.3}
+    block = {
+        "robots": {"A": robot, "B": {"false_free": 0.3, "false_occupied": 0.1}},
+        "team": {"final_mean_error": 2.0, "max_error": 9.0, "mean_error": 1.5},
+        "base": {"false_free": 0.05, "false_occupied": 0.2},
+    }
+    row = flatten_summary({"steps": 10, "localization": block})
+    assert row["pose_error_max"] == 9.0 and row["base_false_occupied"] == 0.2
+    assert row["robots_false_free"] == pytest.approx(0.2)

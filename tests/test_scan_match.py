@@ -78,17 +78,20 @@ def test_the_compiled_scores_are_the_sum_over_end_points_of_every_window_pose() 
     rng = np.random.default_rng(4)
     field = -rng.uniform(0, 4.5, (30, 40))
     ranges, angles = rng.uniform(0, 25, 50), rng.uniform(-1.5, 1.5, 50)
-    guess, window = (20.2, 14.7, 0.3), Window(reach=1.0, step=0.5, turn=0.05, turn_step=0.05)
-    scores = scan_match._scores(
-        field, *guess, ranges, angles, window.offsets(), window.turns(), -4.5
-    )
-    for k, turn in enumerate(window.turns()):
-        for i, dy in enumerate(window.offsets()):
-            for j, dx in enumerate(window.offsets()):
-                heading = guess[2] + turn + angles
-                x = guess[0] + dx + ranges * np.cos(heading) - 0.5
-                y = guess[1] + dy + ranges * np.sin(heading) - 0.5
-                assert scores[k, i, j] == pytest.approx(bilinear(field, x, y, -4.5).sum())
+    guess = (20.2, 14.7, 0.3)
+    for step in (0.5, 1.0):  # offsets within a cell, and whole cells (the coarse pass)
+        window = Window(reach=2.0, step=step, turn=0.05, turn_step=0.05)
+        scores = scan_match._scores(
+            field, *guess, ranges, angles, window.offsets(), window.turns(), -4.5
+        )
+        for k, turn in enumerate(window.turns()):
+            for i, dy in enumerate(window.offsets()):
+                for j, dx in enumerate(window.offsets()):
+                    heading = guess[2] + turn + angles
+                    x = guess[0] + dx + ranges * np.cos(heading) - 0.5
+                    y = guess[1] + dy + ranges * np.sin(heading) - 0.5
+                    want = bilinear(field, x, y, -4.5).sum()
+                    assert scores[k, i, j] == pytest.approx(want)
 
 
 def bilinear(field: np.ndarray, x: np.ndarray, y: np.ndarray, floor: float) -> np.ndarray:

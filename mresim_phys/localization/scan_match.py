@@ -213,11 +213,17 @@ def _scores(
     n, m = len(ranges), len(offsets)
     out = np.zeros((len(turns), m, m))
     xs, ys = np.empty(n), np.empty(n)
+    whole = True  # whole-cell offsets: a point's weights are the same at every offset
+    for j in range(m):
+        whole = whole and offsets[j] == np.floor(offsets[j])
     for k in range(len(turns)):
         for p in range(n):
             heading = theta + turns[k] + angles[p]
             xs[p] = x0 + ranges[p] * np.cos(heading) - 0.5  # from cell centres
             ys[p] = y0 + ranges[p] * np.sin(heading) - 0.5
+        if whole:
+            _whole_offsets(field, xs, ys, offsets, floor, out[k])
+            continue
         for i in range(m):
             for j in range(m):
                 total = 0.0
@@ -225,6 +231,31 @@ def _scores(
                     total += _at(field, xs[p] + offsets[j], ys[p] + offsets[i], floor)
                 out[k, i, j] = total
     return out
+
+
+@njit(cache=True, nogil=True)
+def _whole_offsets(
+    field: FloatArray, xs: FloatArray, ys: FloatArray, offsets: FloatArray, floor: float,
+    out: FloatArray,
+) -> None:  # fmt: skip
+    """:func:`_scores` of one heading for whole-cell ``offsets``: each end point's four
+    cells and weights found once, then read at every offset (the same sums)."""
+    rows, cols = field.shape
+    for p in range(len(xs)):
+        c, r = int(np.floor(xs[p])), int(np.floor(ys[p]))
+        fx, fy = xs[p] - c, ys[p] - r
+        w00, w01 = (1.0 - fx) * (1.0 - fy), fx * (1.0 - fy)
+        w10, w11 = (1.0 - fx) * fy, fx * fy
+        for i in range(len(offsets)):
+            rr = r + int(offsets[i])
+            for j in range(len(offsets)):
+                cc = c + int(offsets[j])
+                if rr >= 0 and rr + 1 < rows and cc >= 0 and cc + 1 < cols:
+                    value = (field[rr, cc] * w00 + field[rr, cc + 1] * w01
+                             + field[rr + 1, cc] * w10 + field[rr + 1, cc + 1] * w11)  # fmt: skip
+                else:
+                    value = _at(field, xs[p] + offsets[j], ys[p] + offsets[i], floor)
+                out[i, j] += value
 
 
 @njit(cache=True, nogil=True, inline="always")
