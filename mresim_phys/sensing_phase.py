@@ -23,7 +23,12 @@ from mresim_phys.agents import Robot
 from mresim_phys.knowledge.latest import LATEST
 from mresim_phys.knowledge.mapping import integrate_scan
 from mresim_phys.knowledge.prior import PRIOR
-from mresim_phys.knowledge.scanfold import ScanQueue, folds_in_one_call, scan_into_map
+from mresim_phys.knowledge.scanfold import (
+    ScanQueue,
+    fold_placed,
+    folds_in_one_call,
+    scan_into_map,
+)
 from mresim_phys.knowledge.terrain import TERRAIN, learn_terrain
 from mresim_phys.localization.faults import frozen
 from mresim_phys.localization.feature import LOCALIZATION
@@ -75,14 +80,18 @@ class Senses:
                 self.world, robot.position, robot.heading, laser, self.filter_of(robot),
                 self.streams[robot.index - 1],
             )  # fmt: skip
-            if loc is not None:  # matched, then folded where the robot believes it is
-                if not frozen(robot.features):
-                    match_scan(loc, robot.belief, result)
-                result = as_believed(result, loc)
+            if loc is not None and not frozen(robot.features):
+                match_scan(loc, robot.belief, result)  # then folded where it believes it is
             scanned = perf_counter()
-            update = integrate_scan(
-                robot.belief, robot.safe, result, laser.safe_fraction, observed, step
-            )
+            if loc is not None and observed is None:
+                update = fold_placed(
+                    result, robot.heading, laser, robot.belief, robot.safe, loc.believed
+                )
+            else:
+                result = result if loc is None else as_believed(result, loc)
+                update = integrate_scan(
+                    robot.belief, robot.safe, result, laser.safe_fraction, observed, step
+                )
         known = TERRAIN.state_of(robot.features)
         if update is not None and known is not None and self.terrain is not None:
             learn_terrain(known, self.terrain, update)

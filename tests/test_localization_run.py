@@ -18,7 +18,7 @@ from mresim_phys import Simulation
 from mresim_phys.cli import main
 from mresim_phys.errors import ScenarioError
 from mresim_phys.knowledge.mapping import integrate_scan
-from mresim_phys.knowledge.scanfold import scan_into_map
+from mresim_phys.knowledge.scanfold import fold_placed, scan_into_map
 from mresim_phys.localization.corrections import landmark_fixes
 from mresim_phys.localization.estimate import PoseEstimate
 from mresim_phys.localization.feature import LOCALIZATION, Localization, localize
@@ -89,6 +89,9 @@ def test_a_scan_folds_at_the_believed_pose_in_one_call_as_on_the_slow_path() -> 
     cast = scan(sim.world, robot.position, robot.heading, laser, rays)
     integrate_scan(*slow, as_believed(cast, loc), laser.safe_fraction)
     assert np.array_equal(one[0], slow[0]) and np.array_equal(one[1], slow[1])
+    placed = np.zeros_like(robot.belief), np.zeros_like(robot.safe)
+    fold_placed(cast, robot.heading, laser, *placed, loc.believed)  # after a scan match
+    assert np.array_equal(one[0], placed[0]) and np.array_equal(one[1], placed[1])
     moved = np.zeros_like(robot.belief), np.zeros_like(robot.safe)
     integrate_scan(*moved, cast, laser.safe_fraction)
     assert not np.array_equal(one[0], moved[0])  # the placement moved the walls

@@ -25,7 +25,7 @@ from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray
 from mresim_phys.world.queries import QueryFilter
 from mresim_phys.world.raycast import cast_fan
 from mresim_phys.world.sensing import Laser, ray_offsets
-from mresim_phys.world.space import World
+from mresim_phys.world.space import Scan, World
 
 Pose = tuple[float, float, float]  # x, y, heading
 
@@ -60,18 +60,78 @@ def _cast_then_fold(
     n = len(angles)
     ranges, normals, wall_hit = np.empty(n), np.empty((n, 2)), np.empty(n, dtype=np.bool_)
     cast_fan(grid, ox, oy, angles, max_range, circles, ranges, normals, wall_hit)
+    return _place_and_fold(
+        ox, oy, angles, ranges, normals, wall_hit, max_range, belief, safe, safe_radius, placed
+    )
+
+
+@njit(cache=True, nogil=True)
+def _place_and_fold(
+    ox: float,
+    oy: float,
+    angles: FloatArray,
+    ranges: FloatArray,
+    normals: FloatArray,
+    wall_hit: np.ndarray,
+    max_range: float,
+    belief: BeliefGrid,
+    safe: BoolGrid,
+    safe_radius: float,
+    placed: FloatArray,
+) -> tuple[int, int, BeliefGrid]:
+    """``fold_scan`` of a scan cast from (``ox``, ``oy``), folded from ``placed`` (x, y,
+    turn): every ray and hit face turned by ``turn``. Called only from kernels."""
     radius = safe_radius
     bx, by, turn = placed[0], placed[1], placed[2]
     if bx == ox and by == oy and turn == 0.0:
         return fold_scan(ox, oy, angles, ranges, normals, wall_hit, max_range, belief, safe, radius)
     c, s = np.cos(turn), np.sin(turn)
-    turned = np.empty((n, 2))
-    for k in range(n):
+    turned = np.empty((len(angles), 2))
+    for k in range(len(angles)):
         turned[k, 0] = c * normals[k, 0] - s * normals[k, 1]
         turned[k, 1] = s * normals[k, 0] + c * normals[k, 1]
+    turned_angles = angles + turn
     return fold_scan(
-        bx, by, angles + turn, ranges, turned, wall_hit, max_range, belief, safe, radius
+        bx, by, turned_angles, ranges, turned, wall_hit, max_range, belief, safe, radius
     )
+
+
+@njit(cache=True, nogil=True)
+def _fold_placed(
+    ox: float,
+    oy: float,
+    angles: FloatArray,
+    ranges: FloatArray,
+    normals: FloatArray,
+    wall_hit: np.ndarray,
+    max_range: float,
+    belief: BeliefGrid,
+    safe: BoolGrid,
+    safe_radius: float,
+    placed: FloatArray,
+) -> tuple[int, int, BeliefGrid]:
+    """:func:`_place_and_fold` called from Python (a kernel of its own: see
+    :func:`_cast_then_fold`)."""
+    return _place_and_fold(
+        ox, oy, angles, ranges, normals, wall_hit, max_range, belief, safe, safe_radius, placed
+    )
+
+
+def fold_placed(
+    scan: Scan, heading: float, laser: Laser, belief: BeliefGrid, safe: BoolGrid, placed: Pose
+) -> Update | None:
+    """``integrate_scan`` of ``scan`` (cast from its origin facing ``heading``) as the
+    robot places it, from its believed pose ``placed``, in one compiled call (no 'latest'
+    stamps): the same map as ``integrate_scan`` of the scan moved and turned there
+    (``localization/perceive.as_believed``)."""
+    angles = np.ascontiguousarray(scan.angles, dtype=np.float64)
+    where = _placement((scan.origin[0], scan.origin[1], heading), placed)
+    row0, col0, free = _fold_placed(
+        float(scan.origin[0]), float(scan.origin[1]), angles, scan.ranges, scan.normals,
+        scan.wall_hit, float(scan.max_range), belief, safe,
+        float(laser.safe_fraction * laser.range), where,
+    )  # fmt: skip
+    return None if row0 < 0 else Update(row0, col0, free.view(bool))
 
 
 @njit(cache=True, nogil=True)

@@ -34,6 +34,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from mresim_phys.localization.odometry import Motion, OdometryNoise, Pose, moved, wrap
 from mresim_phys.types import FloatArray
@@ -55,13 +56,10 @@ class PoseEstimate:
 
     def predicted(self, motion: Motion, noise: OdometryNoise) -> PoseEstimate:
         """The estimate after ``motion`` as the odometry reports it."""
+        variances = np.array(noise.variances(motion))
         theta = self.mean[2] + motion.rot1
-        c, s, t = math.cos(theta), math.sin(theta), motion.trans
-        g = np.array([[1.0, 0.0, -t * s], [0.0, 1.0, t * c], [0.0, 0.0, 1.0]])
-        v = np.array([[-t * s, c, 0.0], [t * c, s, 0.0], [1.0, 0.0, 1.0]])
-        m = np.diag(noise.variances(motion))
-        cov = g @ self.cov @ g.T + v @ m @ v.T
-        return PoseEstimate(moved(self.mean, motion), symmetric(cov))
+        cov = _predicted(self.cov, theta, motion.trans, variances)
+        return PoseEstimate(moved(self.mean, motion), cov)
 
     def corrected(self, z: tuple[float, float], r: FloatArray) -> PoseEstimate:
         """The estimate after a measurement ``z`` of its position with covariance ``r``."""
@@ -94,18 +92,38 @@ class PoseEstimate:
     def _updated(self, h: FloatArray, residual: FloatArray, r: FloatArray) -> PoseEstimate:
         """The Kalman update for a measurement with Jacobian ``h``, ``residual`` and
         noise ``r`` (Joseph form)."""
-        cov = self.cov
-        gain = cov @ h.T @ np.linalg.inv(h @ cov @ h.T + r)
-        mu = np.array(self.mean) + gain @ residual
-        keep = np.eye(3) - gain @ h
-        cov = keep @ cov @ keep.T + gain @ r @ gain.T
-        return PoseEstimate((float(mu[0]), float(mu[1]), wrap(float(mu[2]))), symmetric(cov))
+        mu, cov = _kalman(np.array(self.mean), self.cov, h, residual, r)
+        return PoseEstimate((float(mu[0]), float(mu[1]), wrap(float(mu[2]))), cov)
 
     def position_sigma(self) -> float:
         """The position's standard deviation along its worst axis (cells)."""
         return math.sqrt(max(float(np.linalg.eigvalsh(self.cov[:2, :2]).max()), 0.0))
 
 
+@njit(cache=True, nogil=True)
+def _predicted(cov: FloatArray, theta: float, t: float, variances: FloatArray) -> FloatArray:
+    """``G cov G^T + V M V^T`` of :meth:`PoseEstimate.predicted` (``theta``: the heading
+    after the first turn, ``t`` the translation), compiled: it runs at every leg."""
+    c, s = np.cos(theta), np.sin(theta)
+    g = np.array([[1.0, 0.0, -t * s], [0.0, 1.0, t * c], [0.0, 0.0, 1.0]])
+    v = np.array([[-t * s, c, 0.0], [t * c, s, 0.0], [1.0, 0.0, 1.0]])
+    out: FloatArray = g @ cov @ g.T + (v * variances) @ v.T
+    return symmetric(out)
+
+
+@njit(cache=True, nogil=True)
+def _kalman(
+    mu: FloatArray, cov: FloatArray, h: FloatArray, residual: FloatArray, r: FloatArray
+) -> tuple[FloatArray, FloatArray]:
+    """The Kalman update of :meth:`PoseEstimate._updated` (Joseph form), compiled: a
+    correction is fused after every scan of a robot that matches its scans."""
+    gain = cov @ h.T @ np.linalg.inv(h @ cov @ h.T + r)
+    keep = np.eye(3) - gain @ h
+    out = keep @ cov @ keep.T + gain @ r @ gain.T
+    return mu + gain @ residual, symmetric(out)
+
+
+@njit(cache=True, nogil=True)
 def symmetric(cov: FloatArray) -> FloatArray:
     """``cov`` made exactly symmetric (floating point drifts it)."""
     out: FloatArray = (cov + cov.T) / 2.0

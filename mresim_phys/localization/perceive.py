@@ -17,15 +17,16 @@ from dataclasses import replace
 from functools import cache
 
 import numpy as np
+from numba import njit
 
 from mresim_phys.localization.feature import Localization
-from mresim_phys.localization.scan_match import LiveField, Window, match
+from mresim_phys.localization.scan_match import LiveField, Window, for_match, match
 from mresim_phys.localization.spec import ScanMatchFix
 from mresim_phys.types import BeliefGrid
 from mresim_phys.world.space import Scan
 
 MIN_POINTS = 20  # a scan with fewer wall hits is not matched: too little to pin a pose
-MAX_POINTS = 60  # end points matched at most (every k-th hit)
+MAX_POINTS = 30  # end points matched at most (every k-th hit)
 TURN_STEP_DEG = 1.0  # the window's heading step
 
 
@@ -65,7 +66,7 @@ def match_scan(loc: Localization, belief: BeliefGrid, scan: Scan) -> bool:
     if loc.live is None:
         loc.live = LiveField(belief.shape, fix.sigma)
     guess = loc.believed
-    field = loc.live.refresh(belief, _reach(guess, ranges, relative, window))
+    field = for_match(loc.live, belief, _reach(guess, ranges, relative, window))
     found = match(field, guess, ranges, relative, window)
     grid = np.diag([window.step**2 / 12, window.step**2 / 12, window.turn_step**2 / 12])
     loc.fix(loc.estimate.aligned(found.pose, found.cov + grid), "scan_matching")
@@ -82,13 +83,25 @@ def _reach(
     guess: tuple[float, float, float], ranges: np.ndarray, angles: np.ndarray, window: Window
 ) -> tuple[int, int, int, int]:
     """The box (row0, row1, col0, col1) the scan's end points reach from any pose of the
-    window round ``guess``."""
-    xs, ys = [], []
-    for turn in (-window.turn, 0.0, window.turn):
-        heading = guess[2] + turn + angles
-        xs.append(guess[0] + ranges * np.cos(heading))
-        ys.append(guess[1] + ranges * np.sin(heading))
-    margin = window.reach + 2.0
-    x, y = np.concatenate(xs), np.concatenate(ys)
-    return (int(y.min() - margin), int(y.max() + margin) + 1, int(x.min() - margin),
-            int(x.max() + margin) + 1)  # fmt: skip
+    window round ``guess``: their box at the guess, widened by the window's reach, the
+    farthest point's sweep over the window's turn and two cells."""
+    x0, y0, theta = guess
+    box = _end_box(float(x0), float(y0), float(theta), ranges, angles)
+    margin = window.reach + float(box[4]) * window.turn + 2.0
+    return (int(box[2] - margin), int(box[3] + margin) + 1, int(box[0] - margin),
+            int(box[1] + margin) + 1)  # fmt: skip
+
+
+@njit(cache=True, nogil=True)
+def _end_box(
+    x0: float, y0: float, theta: float, ranges: np.ndarray, angles: np.ndarray
+) -> np.ndarray:
+    """(x min, x max, y min, y max, longest range) of the end points at a pose."""
+    out = np.array([np.inf, -np.inf, np.inf, -np.inf, 0.0])
+    for k in range(len(ranges)):
+        x = x0 + ranges[k] * np.cos(theta + angles[k])
+        y = y0 + ranges[k] * np.sin(theta + angles[k])
+        out[0], out[1] = min(out[0], x), max(out[1], x)
+        out[2], out[3] = min(out[2], y), max(out[3], y)
+        out[4] = max(out[4], ranges[k])
+    return out

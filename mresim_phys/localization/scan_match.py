@@ -24,11 +24,13 @@ from numba import njit
 from scipy.ndimage import distance_transform_edt
 
 from mresim_phys.localization.odometry import Pose
-from mresim_phys.types import OCCUPIED, BeliefGrid, FloatArray
+from mresim_phys.types import OCCUPIED, BeliefGrid, FloatArray, IntArray
 
 MAX_DISTANCE = 3.0  # sigmas: an end point farther from every wall scores as if this far
 COARSE = 4  # the first pass's position step: this many times the window's
-COARSE_TURN = 2  # and its heading step
+REFRESH_EVERY = 4  # for_match: a robot's matches between refreshes of its field
+SLACK = 8  # cells round a match's box that a refresh makes exact too
+COARSE_TURN = 3  # and its heading step
 NUDGE = 0.5  # cells along a ray: its end point inside the wall cell it hit, not on its face
 
 
@@ -81,7 +83,7 @@ class LiveField:
     The field of a cell depends only on the walls within ``MAX_DISTANCE`` sigmas of it, so
     :meth:`refresh` compares the map's walls with those the field was made from over a
     box (the box a scan's end points can reach, widened by that radius), and recomputes
-    only the cells near a wall that appeared or went (``_refresh``, numba): the same
+    only the cells near a wall that appeared or went (``_recompute``, numba): the same
     values :func:`likelihood_field` gives over the box, for a few cells' work a scan.
     """
 
@@ -90,57 +92,96 @@ class LiveField:
         self.radius = int(np.ceil(MAX_DISTANCE * sigma))
         self.field = np.full(shape, -(MAX_DISTANCE**2) / 2.0)
         self.walls = np.zeros(shape, dtype=np.bool_)  # the walls the field was made from
+        self.box: tuple[int, int, int, int] | None = None  # where a match last made it exact
+        self.age = 0  # matches since
 
     def refresh(self, belief: BeliefGrid, box: tuple[int, int, int, int]) -> FloatArray:
-        """The field, exact over ``box`` (row0, row1, col0, col1) for ``belief`` now."""
-        r0, r1, c0, c1 = box
-        _refresh(
-            belief, self.walls, self.field, r0 - self.radius, r1 + self.radius,
-            c0 - self.radius, c1 + self.radius, self.radius, float(self.sigma),
-            float(MAX_DISTANCE),
-        )  # fmt: skip
+        """The field, exact over ``box`` (row0, row1, col0, col1) for ``belief`` now: the
+        walls that changed within ``box`` widened by the radius are found (numpy), and the
+        cells within the radius of one computed again (``_recompute``)."""
+        rows, cols = belief.shape
+        pad = self.radius
+        r0, r1 = max(box[0] - pad, 0), min(box[1] + pad, rows)
+        c0, c1 = max(box[2] - pad, 0), min(box[3] + pad, cols)
+        if r0 >= r1 or c0 >= c1:
+            return self.field
+        now = belief[r0:r1, c0:c1] == OCCUPIED
+        changed = np.flatnonzero(now != self.walls[r0:r1, c0:c1])
+        if len(changed):
+            self.walls[r0:r1, c0:c1] = now
+            at_rows, at_cols = np.divmod(changed, c1 - c0)
+            added = now.ravel()[changed]
+            _recompute(
+                belief, self.field, at_rows + r0, at_cols + c0, added, pad,
+                float(self.sigma), float(MAX_DISTANCE),
+            )  # fmt: skip
         return self.field
 
 
+def for_match(live: LiveField, belief: BeliefGrid, box: tuple[int, int, int, int]) -> FloatArray:
+    """The field a match over ``box`` reads: made exact over ``box`` widened by ``SLACK``
+    cells at every ``REFRESH_EVERY``-th match of the robot, or as soon as ``box`` leaves
+    the box it was last made exact over. In between, the walls its last few scans added
+    may be missing from it (a wall just seen at the frontier: the next scans' end points
+    on it score as if far from any wall, a bounded cost)."""
+    live.age += 1
+    last = live.box
+    if live.age < REFRESH_EVERY and last is not None and _within(box, last):
+        return live.field
+    wide = (box[0] - SLACK, box[1] + SLACK, box[2] - SLACK, box[3] + SLACK)
+    live.box, live.age = wide, 0
+    return live.refresh(belief, wide)
+
+
+def _within(box: tuple[int, int, int, int], outer: tuple[int, int, int, int]) -> bool:
+    """Whether ``box`` lies inside ``outer`` (both row0, row1, col0, col1)."""
+    return outer[0] <= box[0] and box[1] <= outer[1] and outer[2] <= box[2] and box[3] <= outer[3]
+
+
 @njit(cache=True, nogil=True)
-def _refresh(
-    belief: BeliefGrid, walls: np.ndarray, field: FloatArray, r0: int, r1: int, c0: int,
-    c1: int, radius: int, sigma: float, cap: float,
+def _recompute(
+    belief: BeliefGrid, field: FloatArray, at_rows: IntArray, at_cols: IntArray,
+    added: np.ndarray, radius: int, sigma: float, cap: float,
 ) -> None:  # fmt: skip
-    """Walls changed within the box are taken in; the cells within ``radius`` of one get
-    their field again from the walls within ``radius`` of them."""
+    """The field after walls changed at (``at_rows``, ``at_cols``): a wall that appeared
+    raises the field round it (each cell keeps its nearest wall); round a wall that went,
+    every cell is computed again from the walls within ``radius`` of it."""
     rows, cols = belief.shape
-    r0, r1, c0, c1 = max(r0, 0), min(r1, rows), max(c0, 0), min(c1, cols)
-    if r0 >= r1 or c0 >= c1:
-        return
-    dirty = np.zeros((r1 - r0 + 2 * radius, c1 - c0 + 2 * radius), dtype=np.bool_)
-    changed = False
-    for r in range(r0, r1):
-        for c in range(c0, c1):
-            wall = belief[r, c] == OCCUPIED
-            if wall != walls[r, c]:
-                walls[r, c] = wall
-                changed = True
-                dirty[r - r0 : r - r0 + 2 * radius + 1, c - c0 : c - c0 + 2 * radius + 1] = True
-    if not changed:
-        return
-    floor = cap * cap
-    for i in range(dirty.shape[0]):
-        r = r0 - radius + i
-        if r < 0 or r >= rows:
+    scale = 1.0 / (2.0 * sigma * sigma)
+    gone = 0
+    for k in range(len(at_rows)):
+        if not added[k]:
+            gone += 1
             continue
-        for j in range(dirty.shape[1]):
-            c = c0 - radius + j
-            if c < 0 or c >= cols or not dirty[i, j]:
-                continue
-            best = floor
-            for rr in range(max(r - radius, 0), min(r + radius + 1, rows)):
-                for cc in range(max(c - radius, 0), min(c + radius + 1, cols)):
-                    if belief[rr, cc] == OCCUPIED:
-                        d = ((rr - r) ** 2 + (cc - c) ** 2) / (sigma * sigma)
-                        if d < best:
-                            best = d
-            field[r, c] = -best / 2.0
+        r, c = at_rows[k], at_cols[k]
+        for rr in range(max(r - radius, 0), min(r + radius + 1, rows)):
+            for cc in range(max(c - radius, 0), min(c + radius + 1, cols)):
+                value = -min(((rr - r) ** 2 + (cc - c) ** 2) * scale, cap * cap / 2.0)
+                if value > field[rr, cc]:
+                    field[rr, cc] = value
+    if gone:
+        _recompute_round_gone(belief, field, at_rows, at_cols, added, radius, scale, cap)
+
+
+@njit(cache=True, nogil=True)
+def _recompute_round_gone(
+    belief: BeliefGrid, field: FloatArray, at_rows: IntArray, at_cols: IntArray,
+    added: np.ndarray, radius: int, scale: float, cap: float,
+) -> None:  # fmt: skip
+    """Every cell within ``radius`` of a wall that went, computed again."""
+    rows, cols = belief.shape
+    for k in range(len(at_rows)):
+        if added[k]:
+            continue
+        r, c = at_rows[k], at_cols[k]
+        for i in range(max(r - radius, 0), min(r + radius + 1, rows)):
+            for j in range(max(c - radius, 0), min(c + radius + 1, cols)):
+                best = cap * cap / 2.0
+                for rr in range(max(i - radius, 0), min(i + radius + 1, rows)):
+                    for cc in range(max(j - radius, 0), min(j + radius + 1, cols)):
+                        if belief[rr, cc] == OCCUPIED:
+                            best = min(best, ((rr - i) ** 2 + (cc - j) ** 2) * scale)
+                field[i, j] = -best
 
 
 def match(
