@@ -69,14 +69,15 @@ def table(runs: pd.DataFrame) -> pd.DataFrame:
 
 
 def draw(data: pd.DataFrame, out: Path) -> None:
-    """The three panels."""
+    """The three panels, one colour per strategy."""
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.6))
-    for strategy, rows in data.groupby("strategy"):
-        x = rows["drift"].to_numpy()
-        _milestone(axes[0], rows, str(strategy))
+    for n, (strategy, rows) in enumerate(data.groupby("strategy")):
+        colour, x = f"C{n}", rows["drift"].to_numpy()
+        _milestone(axes[0], rows, str(strategy), colour)
         for name, style in (("base_false_free", "-"), ("base_false_occupied", "--")):
-            _with_ci(axes[1], x, rows, name, f"{strategy}: {name[5:].replace('_', ' ')}", style)
-        _with_ci(axes[2], x, rows, "pose_error_mean", str(strategy), "-")
+            label = f"{strategy}: {name[5:].replace('_', ' ')}"
+            _with_ci(axes[1], x, rows, name, label, (style, colour))
+        _with_ci(axes[2], x, rows, "pose_error_mean", str(strategy), ("-", colour))
     axes[0].set(title="steps to 90 % explored (Kaplan-Meier median, 95 %)", ylabel="steps")
     axes[1].set(title="base map at the end: wrong cells", ylabel="fraction of reachable area")
     axes[2].set(title="team's mean position error", ylabel="cells")
@@ -90,32 +91,34 @@ def draw(data: pd.DataFrame, out: Path) -> None:
     plt.close(fig)
 
 
-def _milestone(ax: Axes, rows: pd.DataFrame, label: str) -> None:
-    """Medians with their intervals; an arrow up where the median is not reached."""
+def _milestone(ax: Axes, rows: pd.DataFrame, label: str, colour: str) -> None:
+    """Medians with their intervals (an open upper end drawn to the top of the interval
+    found); where the median is not reached, a triangle at the top of the panel."""
     shown = rows[np.isfinite(rows["median"])]
     low = shown["median"] - shown["low"].clip(upper=shown["median"])
     high = shown["high"].where(np.isfinite(shown["high"]), shown["median"]) - shown["median"]
-    line = ax.errorbar(shown["drift"], shown["median"], yerr=[low, high], marker="o",
-                       capsize=3, label=label)  # fmt: skip
-    top = max(float(rows["median"].replace(math.inf, np.nan).max() or 0), 1.0)
+    ax.errorbar(shown["drift"], shown["median"], yerr=[low, high], marker="o", capsize=3,
+                label=label, color=colour)  # fmt: skip
+    finite = pd.concat([rows["median"], rows["low"]]).replace(math.inf, np.nan)
+    top = float(finite.max()) * 1.08 if finite.notna().any() else 1.0
+    missing = rows[~np.isfinite(rows["median"])]
+    ax.plot(missing["drift"], [top] * len(missing), "^", color=colour, markersize=9,
+            label=f"{label}: median not reached" if len(missing) else None)  # fmt: skip
     for _, row in rows.iterrows():
-        y = row["median"] if math.isfinite(row["median"]) else top * 1.05
-        if not math.isfinite(row["median"]):
-            ax.annotate("", (row["drift"], y * 1.08), (row["drift"], y),
-                        arrowprops={"arrowstyle": "->", "color": line[0].get_color()})  # fmt: skip
+        y = row["median"] if math.isfinite(row["median"]) else top
         ax.annotate(f"{row['not_reached']}/{row['runs']} not reached", (row["drift"], y),
                     fontsize=7, xytext=(4, 4), textcoords="offset points")  # fmt: skip
 
 
 def _with_ci(
-    ax: Axes, x: np.ndarray, rows: pd.DataFrame, name: str, label: str, style: str
+    ax: Axes, x: np.ndarray, rows: pd.DataFrame, name: str, label: str, look: tuple[str, str]
 ) -> None:
-    """Means with their 95 % intervals."""
+    """Means with their 95 % intervals (``look``: line style and colour)."""
     ci = np.array([list(v) for v in rows[f"{name}_ci"]])
     mean = rows[name].to_numpy()
     err = np.abs(np.vstack([mean - ci[:, 0], ci[:, 1] - mean]))
-    ax.errorbar(x, mean, yerr=np.nan_to_num(err), marker="o", capsize=3, linestyle=style,
-                label=label)  # fmt: skip
+    ax.errorbar(x, mean, yerr=np.nan_to_num(err), marker="o", capsize=3, linestyle=look[0],
+                color=look[1], label=label)  # fmt: skip
 
 
 def main() -> None:
