@@ -30,6 +30,7 @@ from scipy import ndimage
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_scale import large_library
+from interleaved import step_medians as interleaved_medians
 
 from mresim_phys.output.bench import PRESETS, team_scenario
 from mresim_phys.scenario.load import validate_scenario
@@ -78,19 +79,7 @@ def step_medians(rounds: int, robots: int, steps: int) -> dict[str, list[float]]
         },
         "doors only": {**dynamic, "obstacles": []},
     }
-    medians: dict[str, list[float]] = {name: [] for name in runs}
-    for _ in range(rounds):
-        sims = {name: Simulation(validate_scenario(data)) for name, data in runs.items()}
-        times: dict[str, list[float]] = {name: [] for name in runs}
-        for step in range(PRESET.warmup + steps):
-            for name, sim in sims.items():
-                started = perf_counter()
-                sim.step()
-                if step >= PRESET.warmup:
-                    times[name].append(perf_counter() - started)
-        for name in runs:
-            medians[name].append(1e3 * statistics.median(times[name]))
-    return medians
+    return interleaved_medians(runs, rounds, PRESET.warmup, steps)
 
 
 def debris_ms(map_path: Path, repeats: int = 30) -> float:

@@ -19,12 +19,14 @@ from __future__ import annotations
 
 import argparse
 import statistics
-from time import perf_counter
+import sys
+from pathlib import Path
 from typing import Any
 
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from interleaved import step_medians
+
 from mresim_phys.output.bench import PRESETS, team_scenario
-from mresim_phys.scenario.load import validate_scenario
-from mresim_phys.sim import Simulation
 
 PRESET = PRESETS["original"]
 ALPHA = [0.0002, 0.000001, 0.0002, 0.000001]  # scenarios/27-29: the library with drift
@@ -56,31 +58,13 @@ def runs(steps: int) -> dict[str, dict[str, Any]]:
     }
 
 
-def step_medians(rounds: int, steps: int) -> dict[str, list[float]]:
-    """Per round, each configuration's median ms per step."""
-    configurations = runs(steps)
-    medians: dict[str, list[float]] = {name: [] for name in configurations}
-    for _ in range(rounds):
-        sims = {name: Simulation(validate_scenario(d)) for name, d in configurations.items()}
-        times: dict[str, list[float]] = {name: [] for name in configurations}
-        for step in range(PRESET.warmup + steps):
-            for name, sim in sims.items():
-                started = perf_counter()
-                sim.step()
-                if step >= PRESET.warmup:
-                    times[name].append(perf_counter() - started)
-        for name in configurations:
-            medians[name].append(1e3 * statistics.median(times[name]))
-    return medians
-
-
 def main() -> None:
     """Print the medians and the ratios."""
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--steps", type=int, default=100)
     args = parser.parse_args()
-    medians = step_medians(args.rounds, args.steps)
+    medians = step_medians(runs(args.steps), args.rounds, PRESET.warmup, args.steps)
     exact = statistics.median(medians["exact"])
     print(f"library, 8 robots, original settings, {args.rounds} interleaved rounds:")
     for name, values in medians.items():

@@ -38,22 +38,12 @@ def check_on_map(scenario: Scenario) -> LoadedMap:
 
 def check_beacons(occupied: BoolGrid, robots: list[RobotSpec]) -> None:
     """Every localisation beacon stands inside the map, on a free cell."""
-    rows, cols = occupied.shape
     for i, robot in enumerate(robots):
         corrections = robot.localization.corrections if robot.localization else []
         for k, fix in enumerate(corrections):
-            for j, (x, y) in enumerate(fix.positions if fix.kind == "beacons" else []):
+            for j, point in enumerate(fix.positions if fix.kind == "beacons" else []):
                 where = f"robots[{i}] ({robot.name}).localization.corrections[{k}].positions[{j}]"
-                if not (0 <= x < cols and 0 <= y < rows):
-                    raise ScenarioError(
-                        f"{where} {[x, y]} is outside the {cols}x{rows} map; give"
-                        " 0 <= x < columns and 0 <= y < rows."
-                    )
-                if occupied[int(y), int(x)]:
-                    raise ScenarioError(
-                        f"{where} {[x, y]} is inside a wall (cell column {int(x)}, row"
-                        f" {int(y)} is an obstacle); put the beacon in free space."
-                    )
+                check_free_cell(occupied, where, point, "put the beacon in free space")
 
 
 def load_map(spec: MapSpec) -> LoadedMap:
@@ -91,17 +81,24 @@ def overlapping(robot: RobotSpec) -> ScenarioError:
 
 def check_base(occupied: BoolGrid, base: BaseStationSpec) -> None:
     """The base station must stand inside the map, on a free cell."""
+    where, fix = "base_station.position", "move the base station into free space"
+    check_free_cell(occupied, where, base.position, fix)
+
+
+def check_free_cell(occupied: BoolGrid, where: str, point: tuple[float, float], fix: str) -> None:
+    """The point ``where`` names must lie inside the map, on a free cell (``fix``: what
+    the message tells the user to do about a wall)."""
     rows, cols = occupied.shape
-    x, y = base.position
+    x, y = point
     if not (0 <= x < cols and 0 <= y < rows):
         raise ScenarioError(
-            f"base_station.position {[x, y]} is outside the {cols}x{rows} map;"
+            f"{where} {[x, y]} is outside the {cols}x{rows} map;"
             " give 0 <= x < columns and 0 <= y < rows."
         )
     if occupied[int(y), int(x)]:
         raise ScenarioError(
-            f"base_station.position {[x, y]} is inside a wall (cell column {int(x)}, row"
-            f" {int(y)} is an obstacle); move the base station into free space."
+            f"{where} {[x, y]} is inside a wall (cell column {int(x)}, row"
+            f" {int(y)} is an obstacle); {fix}."
         )
 
 
