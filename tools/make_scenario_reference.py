@@ -78,8 +78,9 @@ NOTES = {
         " its map, plans, teammate record and strategy use the believed pose, its body,"
         " laser and radio the true one. A robot's own block merges into the team's key by"
         " key. Motion noise draws from the robot's stream `odometry`, correction noise from"
-        " its stream `pose-fix` (docs/seeds.md). Adds the metric columns `pose_error`, `heading_error`,"
-        " `pose_error_mean`, `pose_error_max` and summary.json's `localization` object;"
+        " its stream `pose-fix` (docs/seeds.md). Adds the metric columns `pose_error`,"
+        " `heading_error`, `pose_error_mean`, `pose_error_max` and summary.json's"
+        " `localization` object;"
         " see [localization.md](localization.md)."
     ),
     "obstacles[i]": (
