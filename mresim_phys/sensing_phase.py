@@ -32,7 +32,7 @@ from mresim_phys.knowledge.scanfold import (
 from mresim_phys.knowledge.terrain import TERRAIN, learn_terrain
 from mresim_phys.localization.faults import frozen
 from mresim_phys.localization.feature import LOCALIZATION
-from mresim_phys.localization.perceive import as_believed, match_scan, scan_matching_of
+from mresim_phys.localization.perceive import as_believed, match_scan
 from mresim_phys.motion import path_blocked
 from mresim_phys.parallel import Effects
 from mresim_phys.world.queries import QueryFilter
@@ -68,7 +68,7 @@ class Senses:
         laser, observed = robot.laser, LATEST.state_of(robot.features)
         loc = LOCALIZATION.state_of(robot.features)
         started = perf_counter()
-        matches = loc is not None and scan_matching_of(loc) is not None
+        matches = loc is not None and loc.matching is not None
         if not matches and folds_in_one_call(laser, observed):  # the fold is timed as sensing
             update = scan_into_map(
                 self.world, robot.position, robot.heading, laser, self.filter_of(robot),
@@ -113,7 +113,7 @@ class Senses:
         if not folds_in_one_call(robot.laser, observed) or PRIOR.key in robot.features:
             return None
         loc = LOCALIZATION.state_of(robot.features)
-        if loc is not None and scan_matching_of(loc) is not None:
+        if loc is not None and loc.matching is not None:
             return None
         if TERRAIN.key in robot.features and self.terrain is not None:
             return None

@@ -43,15 +43,10 @@ def as_believed(scan: Scan, loc: Localization) -> Scan:
     return replace(scan, origin=(bx, by), angles=scan.angles + turn, normals=normals)
 
 
-def scan_matching_of(loc: Localization) -> ScanMatchFix | None:
-    """The robot's scan matching correction, if it has one."""
-    return loc.matching
-
-
 def match_scan(loc: Localization, belief: BeliefGrid, scan: Scan) -> bool:
     """Align ``scan`` (true frame) to ``belief`` round the believed pose if this scan is
     due (``every``), and fuse the match into the estimate; True if it was fused."""
-    fix = scan_matching_of(loc)
+    fix = loc.matching
     if fix is None:
         return False
     loc.scans += 1
