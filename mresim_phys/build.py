@@ -24,6 +24,8 @@ from mresim_phys.build_world import build_prior, build_terrain, check_world_even
 from mresim_phys.comms import COMM_MODELS
 from mresim_phys.comms.ledger import Ledger
 from mresim_phys.comms.network import Channel, Network
+from mresim_phys.comms.radio import build_layer
+from mresim_phys.comms.radio_feature import RADIO, RadioCounters
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.faults.runtime import Faults, build_faults
 from mresim_phys.knowledge.coverage import Coverage
@@ -203,7 +205,9 @@ def build_network(
     spec = scenario.communication
     ranges, powers = radio_ranges(scenario)
     model = COMM_MODELS.make(spec.model, spec.params)
+    names = [BASE_NAME, *(r.name for r in scenario.robots)]
     main = Channel("main", model, ranges, powers, spec.dropout, streams.get("dropout-main"))
+    main.radio = build_layer(spec, "main", names, shape, streams.get)
     control = None
     if spec.control is not None:
         c = spec.control
@@ -215,6 +219,7 @@ def build_network(
             c.dropout,
             streams.get("dropout-control"),
         )
+        control.radio = build_layer(c, "control", names, shape, streams.get)
     return Network(
         main,
         Ledger(shape, len(ranges), latest),
@@ -337,12 +342,16 @@ def build_setup(scenario: Scenario) -> Setup:
             give_stamps(agent.features, world.shape)
     terrain = build_terrain(scenario.terrain, robots, world)
     prior = build_prior(scenario.prior, robots, world.shape, streams)
+    network = build_network(scenario, streams, world.shape, rules.latest)
+    if network.bounded:
+        for robot in robots:
+            robot.features[RADIO.key] = RadioCounters()
     return Setup(
         truth=truth,
         world=world,
         base=base,
         robots=robots,
-        network=build_network(scenario, streams, world.shape, rules.latest),
+        network=network,
         coverage=(
             LatestCoverage(explorable.mask, world.occupied, reachable.mask)
             if rules.latest

@@ -42,6 +42,14 @@ LOCALIZATION_COLUMNS = (
     "pose_error_mean",
     "pose_error_max",
 )  # what a run's layout may have
+RADIO_COLUMNS = (
+    "backlog",
+    "bytes_offered",
+    "bytes_sent",
+    "bytes_delivered",
+    "bytes_to_base",
+    "connected_to_base",
+)  # a run whose main channel has radio options (comms/radio_feature.py)
 
 
 class ColumnParams(PluginParams):
@@ -336,6 +344,7 @@ registered later (a plugin's) is never a default."""
 FEATURE_COLUMNS = {
     "robot_battery": "mresim_phys.faults.battery:robot_battery",
     **{n: f"mresim_phys.localization.feature:{n}" for n in LOCALIZATION_COLUMNS},
+    **{n: f"mresim_phys.comms.radio_feature:{n}" for n in RADIO_COLUMNS},
 }
 for _name, _reference in FEATURE_COLUMNS.items():
     COLUMNS.lazy(_name, _reference, ColumnParams)

@@ -174,6 +174,7 @@ FEATURES = FeatureList(
         "parts": "mresim_phys.broken_parts:PARTS",  # first: labels read "B [radio] 73%"
         "battery": "mresim_phys.faults.battery:BATTERY",
         "localization": "mresim_phys.localization.feature:LOCALIZATION",
+        "radio": "mresim_phys.comms.radio_feature:RADIO",
         "terrain": "mresim_phys.knowledge.terrain:TERRAIN",
         "prior": "mresim_phys.knowledge.prior:PRIOR",
         "payload": "mresim_phys.knowledge.teammates:PAYLOAD",

@@ -319,7 +319,7 @@ class Simulation:
         self.note_links()
         if isinstance(self.coverage, LatestCoverage):
             self.touch_merged(self.coverage)
-        if self.links[0].any() or self.t == 0:
+        if self.links[0].any() or self.t == 0 or self.network.base_received:
             self.known_at_base, self.known_at_base_connected = update_known_at_base(
                 (self.known_at_base, self.known_at_base_connected),
                 self.base.belief, self.coverage, not self.rules.latest,

@@ -53,6 +53,27 @@ def _seen_before(boxes: IntArray, k: int, r: int, c: int) -> bool:
     return False
 
 
+@njit(cache=True, nogil=True, inline="always")
+def is_news(
+    codes: np.ndarray,
+    receiver_codes: np.ndarray,
+    seen: np.ndarray | None,
+    observed: np.ndarray | None,
+    r: int,
+    c: int,
+) -> bool:
+    """Whether merging the sender's cell (r, c) would change the receiver's: its code, or
+    with 'latest' beliefs its observation step (the rule of :func:`merge_cells`)."""
+    old, theirs = receiver_codes[r, c], codes[r, c]
+    if seen is None or observed is None:
+        return bool(grown_code(old, theirs) != old)
+    if seen[r, c] > observed[r, c]:
+        return True
+    if seen[r, c] < observed[r, c]:
+        return bool(grown_code(old, theirs & 4) != old)
+    return bool(grown_code(old, theirs) != old)
+
+
 @njit(cache=True, nogil=True)
 def select_cells(
     boxes: IntArray,
@@ -64,13 +85,18 @@ def select_cells(
     codes: np.ndarray,
     receiver_codes: np.ndarray,
     only_lacking: bool,
+    news: bool = False,
+    seen: np.ndarray | None = None,
+    observed: np.ndarray | None = None,
 ) -> tuple[IntArray, np.ndarray]:
     """(flat indices, codes) of the sender's cells newer than ``since`` inside ``boxes``,
     in raster order box by box (the parts of a row in tiles no newer than ``since`` are
     skipped whole).
 
     Cells whose value came from ``receiver`` are skipped; with ``only_lacking``
-    so are cells whose code the receiver already holds.
+    so are cells whose code the receiver already holds; with ``news`` so are cells whose
+    merge would change nothing of the receiver's (:func:`is_news`; ``seen`` and
+    ``observed`` the sender's and the receiver's observation steps with 'latest' beliefs).
     """
     total = 0
     for k in range(len(boxes)):
@@ -87,6 +113,8 @@ def select_cells(
                     if stamps[r, c] <= since or origins[r, c] == receiver:
                         continue
                     if only_lacking and codes[r, c] == receiver_codes[r, c]:
+                        continue
+                    if news and not is_news(codes, receiver_codes, seen, observed, r, c):
                         continue
                     if k > 0 and _seen_before(boxes, k, r, c):
                         continue

@@ -33,6 +33,8 @@ from mresim_phys.comms.exchange import (
     stamp_base_contacts,
 )
 from mresim_phys.comms.ledger import Box, Ledger, box_around
+from mresim_phys.comms.queued import QueuedExchange
+from mresim_phys.comms.radio import LinkLayer
 from mresim_phys.types import FloatArray
 from mresim_phys.world.space import World
 
@@ -61,18 +63,25 @@ class Channel:
     powers: FloatArray
     dropout: float = 0.0
     rng: np.random.Generator = field(default_factory=lambda: np.random.default_rng(0))
+    radio: LinkLayer | None = None  # the radio options the scenario turned on
 
     def radios(self, agents: Sequence[Agent]) -> Radios:
         """The agents' radios on this channel at their current positions."""
         return Radios(np.array([a.position for a in agents], dtype=float), self.ranges, self.powers)
 
-    def links(self, agents: Sequence[Agent], world: World, silent: np.ndarray) -> np.ndarray:
-        """This step's links: the model's, among alive and unsilenced agents, minus dropouts."""
+    def links(
+        self, agents: Sequence[Agent], world: World, silent: np.ndarray, step: int = 0
+    ) -> np.ndarray:
+        """This step's links: the model's (with shadowing and fading), among alive and
+        unsilenced agents, minus dropouts, then the radio's losses and trace (:mod:`.radio`)."""
         speaking = np.array([a.speaking for a in agents]) & ~silent
-        links: np.ndarray = self.model.links(self.radios(agents), world) & np.outer(
-            speaking, speaking
-        )
+        radios = self.radios(agents)
+        found = None if self.radio is None else self.radio.model_links(self.model, radios, world)
+        model_links = self.model.links(radios, world) if found is None else found
+        links: np.ndarray = model_links & np.outer(speaking, speaking)
         kept: np.ndarray = links & ~self.dropped(len(agents))
+        if self.radio is not None:
+            kept = self.radio.apply(kept, radios, world, speaking, step)
         return kept
 
     def dropped(self, n: int) -> np.ndarray:
@@ -84,6 +93,16 @@ class Channel:
         draw = self.rng.random(len(rows)) < self.dropout
         lost[rows[draw], cols[draw]] = lost[cols[draw], rows[draw]] = True
         return lost
+
+
+def exchange_of(
+    channel: Channel | None, ledger: Ledger, *, full_maps: bool = False, maps: bool = True
+) -> Exchange | QueuedExchange:
+    """The exchange of ``channel``: queued when its radio bounds what a link carries."""
+    radio = None if channel is None else channel.radio
+    if radio is not None and radio.bounded:
+        return QueuedExchange(ledger, radio, maps=maps)
+    return Exchange(ledger, full_maps=full_maps, maps=maps)
 
 
 @dataclass(frozen=True)
@@ -112,8 +131,19 @@ class Network:
         self.ledger = ledger
         self.blackouts: tuple[Blackout, ...] = ()  # added by blackout events as they start
         self.multi_hop = multi_hop
-        self.maps = Exchange(ledger, full_maps=full_maps)
-        self.records = Exchange(ledger, maps=False)
+        self.maps = exchange_of(main, ledger, full_maps=full_maps)
+        self.records = exchange_of(control, ledger, maps=False)
+
+    @property
+    def bounded(self) -> bool:
+        """Whether the main channel's links are bounded (``comms/queued.py``)."""
+        return isinstance(self.maps, QueuedExchange)
+
+    @property
+    def base_received(self) -> bool:
+        """Whether a packet landed at the base in this step's exchange on bounded links
+        (the base's map may change while it is linked to no one)."""
+        return isinstance(self.maps, QueuedExchange) and self.maps.base_changed
 
     def idle(self, n: int) -> CommRecord:
         """The record of a step in which nothing was linked or sent."""
@@ -175,14 +205,14 @@ class Network:
             ]
         )
         n = len(agents)
-        links = self.main.links(agents, world, self.silent(n, step, "main"))
+        links = self.main.links(agents, world, self.silent(n, step, "main"), step)
         groups = hop_groups(links, self.multi_hop)
         traffic = self.maps.run(agents, links, step, groups, run_all)
         stamp_base_contacts(agents, links, step, groups)
         control_links = np.zeros_like(links)
         control_traffic = Traffic.empty(n)
         if self.control is not None:
-            control_links = self.control.links(agents, world, self.silent(n, step, "control"))
+            control_links = self.control.links(agents, world, self.silent(n, step, "control"), step)
             control_groups = hop_groups(control_links, self.multi_hop)
             control_traffic = self.records.run(agents, control_links, step, control_groups)
         return CommRecord(links, control_links, traffic, control_traffic)

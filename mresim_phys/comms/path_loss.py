@@ -69,10 +69,16 @@ class PathLossComm(Plugin):
         ratio = np.maximum(distance, 1e-9) / np.maximum(radios.ranges[sender], 1e-9)
         return powers - 10.0 * self.params.exponent * np.log10(ratio)
 
-    def links(self, radios: Radios, world: World) -> np.ndarray:
-        """Pairs that hear each other above the cut-off through the walls between them."""
-        reach = self.free_reach(radios)
-        rows, cols = candidate_pairs(radios.positions, np.minimum.outer(reach, reach))
+    @property
+    def cutoff_dbm(self) -> float:
+        """The weakest signal (dBm) that still links."""
+        return self.params.cutoff_dbm
+
+    def pair_signals(
+        self, radios: Radios, world: World, rows: IntArray, cols: IntArray
+    ) -> FloatArray:
+        """The weaker direction's signal (dBm) through the walls of each pair (rows[k],
+        cols[k]): what shadowing and fading add to (``comms/radio.py``)."""
         positions = radios.positions
         runs, inside = walls_between(world.radio_occupied, positions[rows], positions[cols])
         distance = pair_distances(positions)[rows, cols]
@@ -80,7 +86,14 @@ class PathLossComm(Plugin):
         weaker = np.minimum(
             self.signal(radios, rows, distance), self.signal(radios, cols, distance)
         )
-        keep = weaker - loss >= self.params.cutoff_dbm
+        signals: FloatArray = weaker - loss
+        return signals
+
+    def links(self, radios: Radios, world: World) -> np.ndarray:
+        """Pairs that hear each other above the cut-off through the walls between them."""
+        reach = self.free_reach(radios)
+        rows, cols = candidate_pairs(radios.positions, np.minimum.outer(reach, reach))
+        keep = self.pair_signals(radios, world, rows, cols) >= self.params.cutoff_dbm
         return symmetric_links(len(radios), rows[keep], cols[keep])
 
     def reach(self, radios: Radios, index: int, angles: FloatArray, world: World) -> FloatArray:

@@ -20,7 +20,7 @@ import numpy as np
 import yaml
 
 from mresim_phys.build import region_probe, run_rules
-from mresim_phys.columns import LOCALIZATION_COLUMNS, Layout
+from mresim_phys.columns import LOCALIZATION_COLUMNS, RADIO_COLUMNS, Layout
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.errors import ScenarioError
 from mresim_phys.metrics import StepRecord
@@ -83,12 +83,23 @@ def run_layout(scenario: Scenario) -> Layout:
 
 def extra_columns(scenario: Scenario) -> list[str]:
     """The optional columns of the run: those its scenario names, then the localisation
-    columns (``localization/feature.py``) if a robot has localisation and they are not
-    named already."""
+    columns (``localization/feature.py``) if a robot has localisation and the radio
+    columns (:func:`radio_columns`), those not named already."""
     named = list(scenario.metrics.columns)
     if has_localization(scenario):
         named += [c for c in LOCALIZATION_COLUMNS if c not in named]
+    named += [c for c in radio_columns(scenario) if c not in named]
     return named
+
+
+def radio_columns(scenario: Scenario) -> tuple[str, ...]:
+    """The radio columns of a run (``comms/radio_feature.py``): the byte counts when the
+    main channel's links are bounded (or replayed from a trace that may bound them), the
+    share connected to the base with any radio option."""
+    comm = scenario.communication
+    if comm.bounded or comm.trace is not None:
+        return RADIO_COLUMNS
+    return RADIO_COLUMNS[-1:] if comm.lossy else ()
 
 
 class RunWriter:

@@ -205,7 +205,7 @@ class Replay:
         self.failures = FailureWatch(log.robot_names)
         self.health = HealthWatch(log.robot_names)  # idle, stuck, state reasons, as live
         self.fault_columns = bool(log.meta.get("fault_columns", False))
-        self.known_at_base, self.first = 0.0, True
+        self.known_at_base, self.first, self.base_heard = 0.0, True, False
         self.known_at_base_connected: float | None = None if connected is None else 0.0
         self.version: int | None = None
 
@@ -232,6 +232,8 @@ class Replay:
         for i, row in enumerate(line["agents"]):
             agent, belief_changed = self.agent(i, row, chunk, j * n + i)
             agents.append(agent)
+            if i == 0:  # a delayed packet may change the base's map while it is unlinked
+                self.base_heard = belief_changed is not None and len(belief_changed) > 0
             if i > 0 and isinstance(self.coverage, LatestCoverage):
                 self.touch_changed(self.coverage, i, belief_changed)
             elif i > 0:  # robots: cells newly FREE in their maps count as explored
@@ -336,7 +338,8 @@ class Replay:
         """The step's metrics as live (``metrics.measure_step``), from cells newly FREE."""
         self.count_free(np.concatenate([np.zeros(0, np.int64), *free]))
         self.coverage.settle()
-        if self.first or links[0].any():  # the base's map changes only when it is linked
+        # the base's map changes only when it is linked or a delayed packet lands there
+        if self.first or links[0].any() or self.base_heard:
             base = self.tracks[0].grids["belief"].reshape(self.shape)
             known = (self.known_at_base, self.known_at_base_connected)
             known = update_known_at_base(known, base, self.coverage, not self.latest)

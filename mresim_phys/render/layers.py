@@ -30,6 +30,7 @@ ROBOT_LAYERS: tuple[str, ...] = ("location", "path", "free_space", "safe_space",
 ROBOT_LAYERS += ("comm_range", "goal", "skeleton", "rendezvous", "presumed_lost")
 ROBOT_LAYERS += ("rv_candidates", "rv_through_walls")  # multi-point rendezvous
 ROBOT_LAYERS += ("localization",)  # a robot's believed pose and its 95 % ellipse
+ROBOT_LAYERS += ("radio",)  # bytes queued on bounded links, beside the robot's name
 LAYERS = GLOBAL_LAYERS + ROBOT_LAYERS
 DEFAULT_GLOBAL = frozenset(GLOBAL_LAYERS)
 DEFAULT_ROBOT = frozenset(ROBOT_LAYERS) - {"free_space", "safe_space", "rv_candidates"}

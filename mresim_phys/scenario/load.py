@@ -25,6 +25,7 @@ from mresim_phys.render.layers import parse_layers
 from mresim_phys.scenario.faults import paired_problem
 from mresim_phys.scenario.maps import MapSpec
 from mresim_phys.scenario.overrides import apply_overrides
+from mresim_phys.scenario.radio_files import resolve_radio
 from mresim_phys.scenario.readers import read_yaml_mapping
 from mresim_phys.scenario.schema import (
     CommSpec,
@@ -58,6 +59,7 @@ def load_scenario(path: str | Path, **overrides: Any) -> Scenario:
     if not overriding:
         check_event_steps(scenario, str(source))
     scenario = resolve_map_path(scenario, folder, str(source))
+    scenario = resolve_radio(scenario, folder, str(source))
     return resolve_mask_paths(scenario, folder)
 
 

@@ -20,6 +20,7 @@ from pydantic import (
     model_validator,
 )
 
+from mresim_phys.comms.radio_params import RadioSpec
 from mresim_phys.faults.spec import FaultsSpec
 from mresim_phys.localization.spec import LocalizationSpec
 from mresim_phys.scenario.event_union import EventList
@@ -72,8 +73,9 @@ class PluginSpec(Strict):
         return shorthand("name", value)
 
 
-class ChannelSpec(Strict):
-    """A radio channel: its model chosen by registry name, with its params and link losses."""
+class ChannelSpec(RadioSpec):
+    """A radio channel: its model chosen by registry name, with its params, link losses and
+    the radio options of :class:`~mresim_phys.comms.radio_params.RadioSpec`."""
 
     model: str = Field("disk", description="Comm model name (or package.module:Class).")
     params: dict[str, Any] = Field(

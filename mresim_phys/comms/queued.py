@@ -1,0 +1,318 @@
+"""Bounded links (phase 6b): knowledge that queues behind a link's capacity and arrives late.
+
+With a ``capacity`` (bytes per step each way on a link), a ``radio_capacity`` (bytes per
+step an agent's radio sends over all its links) or a ``latency`` (steps per hop), a
+transmission no longer carries everything at once. Each step, along the same edges the
+unbounded exchange uses (the spanning tree of each linked group, children to parents then
+parents to children; with ``multi_hop: false`` every linked ordered pair), a sender offers:
+
+1. the teammate records the receiver holds in no newer version, its own first, then the
+   newest (records, payloads and the control channel go first);
+2. the map cells stamped since the pair last synchronised that would change the
+   receiver's map (an idealised acknowledgement: a cell the receiver holds is never sent
+   again), not from the receiver and not already in flight to it, in the channel's
+   ``priority`` order: ``base_first`` (cells the base lacks, as far as the sender's ledger
+   knows, then the rest; each nearest the sender first), ``nearest`` or ``newest``.
+
+It sends the longest prefix that fits the link's and the radio's bytes left this step;
+the rest stays queued (offered again next step, re-ordered; a transfer a broken link cut
+resumes at the next contact). A packet arrives ``latency`` steps after it was sent,
+whether or not the link still holds (it has left the radio), and is merged then; the
+ledger records a pair as synchronised only when a packet that carried the whole offer
+arrives, so it never counts as delivered a cell that has not arrived. With latency 0
+a packet arrives at once, so within a step knowledge crosses as many hops as the
+capacities allow; with latency d it crosses one hop per d steps (store and forward).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from mresim_phys.agents import Agent
+from mresim_phys.comms.deltas import Cells, select_cells
+from mresim_phys.comms.exchange import (
+    CELL_BYTES,
+    SEEN_BYTES,
+    Edge,
+    Groups,
+    RunAll,
+    Traffic,
+    learn_records,
+    run_in_turn,
+    spanning_tree,
+)
+from mresim_phys.comms.ledger import Ledger, sensed_tick
+from mresim_phys.comms.radio import LinkLayer
+from mresim_phys.comms.radio_feature import RADIO, RadioLoadValue
+from mresim_phys.knowledge.latest import LATEST
+from mresim_phys.knowledge.teammates import TeammateInfo
+from mresim_phys.types import IntArray
+
+
+@dataclass
+class Packet:
+    """One transmission on its way: what it carries, its size, when it lands and the sync
+    tick it completes (None: part of the offer stayed queued)."""
+
+    arrive: int
+    sender: int
+    receiver: int
+    cells: Cells | None
+    records: list[TeammateInfo]
+    nbytes: int
+    sync: int | None
+
+
+@dataclass
+class RadioLoad:
+    """Bytes per agent in one step: offered, sent, delivered (its packets that landed, by
+    sender), delivered to the base, and the backlog it could not send."""
+
+    offered: IntArray
+    sent: IntArray
+    delivered: IntArray
+    to_base: IntArray
+
+    @classmethod
+    def empty(cls, n: int) -> RadioLoad:
+        """No load among ``n`` agents."""
+        return cls(*(np.zeros(n, dtype=np.int64) for _ in range(4)))
+
+    @property
+    def backlog(self) -> IntArray:
+        """Bytes each agent offered and could not send this step."""
+        left: IntArray = self.offered - self.sent
+        return left
+
+
+@dataclass
+class QueuedExchange:
+    """Moves knowledge along bounded links (module docstring) and counts what it costs."""
+
+    ledger: Ledger
+    layer: LinkLayer
+    maps: bool = True
+    flight: list[Packet] = field(default_factory=list)
+    load: RadioLoad = field(default_factory=lambda: RadioLoad.empty(0))
+    base_changed: bool = False  # a packet landed at the base this step
+
+    @property
+    def cell_bytes(self) -> int:
+        """Bytes per map cell sent: index and state, and the observation step if 'latest'."""
+        return CELL_BYTES + (SEEN_BYTES if self.ledger.latest else 0)
+
+    def run(
+        self,
+        agents: Sequence[Agent],
+        links: np.ndarray,
+        step: int,
+        groups: Groups,
+        run_all: RunAll = run_in_turn,
+    ) -> Traffic:
+        """This step's transmissions along ``links``; return the traffic sent. One at a time
+        (``run_all`` is not used: each transmission reads what the one before delivered)."""
+        n = len(agents)
+        traffic, self.load = Traffic.empty(n), RadioLoad.empty(n)
+        self.base_changed = False
+        self.land(agents, step)
+        left = np.full(n, np.iinfo(np.int64).max, dtype=np.int64)
+        if self.layer.spec.radio_capacity is not None:
+            left[:] = self.layer.spec.radio_capacity
+        for sender, receiver in edges_of(links, groups):
+            packet = self.pack(agents, sender, receiver, step, left)
+            if packet is None:
+                continue
+            cells = 0 if packet.cells is None else len(packet.cells.flat)
+            traffic.add(sender, receiver, cells, packet.records, self.cell_bytes)
+            self.flight.append(packet)
+            if groups is not None:  # the tree: what lands now travels on at once
+                self.land(agents, step)
+        self.land(agents, step)
+        self.publish(agents)
+        return traffic
+
+    def publish(self, agents: Sequence[Agent]) -> None:
+        """Write this step's load into each robot's ``radio`` feature (if it has one)."""
+        load = self.load
+        for agent in agents:
+            counters = RADIO.state_of(agent.features)
+            if counters is not None:
+                i = agent.index
+                counters.value = RadioLoadValue(
+                    int(load.offered[i]), int(load.sent[i]), int(load.delivered[i]),
+                    int(load.to_base[i]),
+                )  # fmt: skip
+
+    def land(self, agents: Sequence[Agent], step: int) -> None:
+        """Merge every packet due by ``step``, in the order sent."""
+        due = [p for p in self.flight if p.arrive <= step]
+        if not due:
+            return
+        self.flight = [p for p in self.flight if p.arrive > step]
+        for packet in due:
+            receiver = agents[packet.receiver]
+            if not receiver.speaking:  # a receiver that failed or lost its radio meanwhile
+                continue
+            if packet.cells is not None and len(packet.cells.flat):
+                grids = (receiver.belief, receiver.safe)
+                observed = LATEST.state_of(receiver.features)
+                self.ledger.merge(
+                    receiver.index, packet.cells, grids, step, packet.sender, observed
+                )
+            learn_records(receiver, packet.records, step)
+            if packet.sync is not None:
+                synced = self.ledger.synced
+                pair = packet.sender, packet.receiver
+                synced[pair] = max(int(synced[pair]), packet.sync)
+            self.load.delivered[packet.sender] += packet.nbytes
+            if packet.receiver == 0:
+                self.load.to_base[packet.sender] += packet.nbytes
+                self.base_changed = True
+
+    def pack(
+        self, agents: Sequence[Agent], sender: int, receiver: int, step: int, left: IntArray
+    ) -> Packet | None:
+        """The packet ``sender`` sends ``receiver`` now: the offer's longest prefix that fits
+        the link's capacity and the radio's bytes ``left`` (updated); None: nothing to send."""
+        records = self.offered_records(agents, sender, receiver, step)
+        cells = self.offered_cells(agents, sender, receiver)
+        record_bytes = [r.nbytes() for r in records]
+        cell_count = 0 if cells is None else len(cells.flat)
+        offer = sum(record_bytes) + cell_count * self.cell_bytes
+        if offer == 0:
+            return None
+        capacity = self.layer.capacity(sender, receiver)
+        room = int(left[sender]) if capacity is None else min(int(left[sender]), capacity)
+        taken_records = fitting(record_bytes, room)
+        room -= sum(record_bytes[:taken_records])
+        taken_cells = min(cell_count, room // self.cell_bytes)
+        nbytes = sum(record_bytes[:taken_records]) + taken_cells * self.cell_bytes
+        whole = taken_records == len(records) and taken_cells == cell_count
+        self.load.offered[sender] += offer
+        self.load.sent[sender] += nbytes
+        left[sender] -= nbytes
+        if nbytes == 0:
+            return None
+        part = None if cells is None else Cells(*(a[:taken_cells] for a in _arrays(cells)))
+        sync = sensed_tick(step) if whole and self.maps else None
+        arrive = step + self.layer.spec.latency
+        return Packet(arrive, sender, receiver, part, records[:taken_records], nbytes, sync)
+
+    def offered_records(
+        self, agents: Sequence[Agent], sender: int, receiver: int, step: int
+    ) -> list[TeammateInfo]:
+        """The records the receiver holds in no newer version and that are not on their
+        way to it: the sender's own first, then the newest."""
+        held = sorted(agents[sender].teammates.values(), key=lambda r: (-r.step, r.name))
+        flying = {
+            (r.name, r.step)
+            for p in self.flight
+            if (p.sender, p.receiver) == (sender, receiver)
+            for r in p.records
+        }
+        known = agents[receiver].teammates
+        return [
+            r
+            for r in (agents[sender].own_record(step), *held)
+            if r.name != agents[receiver].name
+            and (r.name not in known or known[r.name].step < r.step)
+            and (r.name, r.step) not in flying
+        ]
+
+    def offered_cells(self, agents: Sequence[Agent], sender: int, receiver: int) -> Cells | None:
+        """The map cells on offer, in priority order (module docstring)."""
+        if not self.maps:
+            return None
+        ledger, since = self.ledger, int(self.ledger.synced[sender, receiver])
+        boxes = ledger.newer_boxes(sender, since)
+        if len(boxes) == 0:
+            return None
+        seen = LATEST.state_of(agents[sender].features)
+        observed = LATEST.state_of(agents[receiver].features)
+        index, codes = select_cells(
+            boxes,
+            since,
+            receiver,
+            ledger.stamps[sender],
+            ledger.tiles[sender],
+            ledger.origins[sender],
+            ledger.copies[sender],
+            ledger.copies[receiver],
+            False,
+            True,
+            seen,
+            observed,
+        )
+        keep = ~self.in_flight(sender, receiver, index)
+        index, codes = index[keep], codes[keep]
+        order = self.priority(agents[sender], sender, index)
+        index, codes = index[order], codes[order]
+        flat_seen = None if seen is None else seen.reshape(-1)[index]
+        return Cells(index, codes, flat_seen)
+
+    def in_flight(self, sender: int, receiver: int, index: IntArray) -> np.ndarray:
+        """Which of the cells ``index`` are on their way from ``sender`` to ``receiver``."""
+        flying = [
+            p.cells.flat
+            for p in self.flight
+            if (p.sender, p.receiver) == (sender, receiver) and p.cells is not None
+        ]
+        if not flying:
+            return np.zeros(len(index), dtype=bool)
+        hit: np.ndarray = np.isin(index, np.concatenate(flying))
+        return hit
+
+    def priority(self, agent: Agent, sender: int, index: IntArray) -> IntArray:
+        """The order in which cells ``index`` of ``sender`` are sent (``priority``)."""
+        cols = self.ledger.stamps[sender].shape[1]
+        x, y = believed_position(agent)
+        distance = (index % cols + 0.5 - x) ** 2 + (index // cols + 0.5 - y) ** 2
+        ticks = self.ledger.stamps[sender].reshape(-1)[index]
+        rule = self.layer.spec.priority
+        if rule == "nearest":
+            keys: tuple[np.ndarray, ...] = (index, distance)
+        elif rule == "newest":
+            keys = (index, distance, -ticks)
+        else:  # base_first: what the base lacks (as far as the sender knows) first
+            known = ticks <= self.ledger.synced[sender, 0] if sender != 0 else ticks < 0
+            keys = (index, distance, known)
+        order: IntArray = np.lexsort(keys)
+        return order
+
+
+def believed_position(agent: Agent) -> tuple[float, float]:
+    """Where ``agent`` believes it is (a robot's believed pose; the base's position)."""
+    believed = getattr(agent, "believed_position", None)
+    return believed if believed is not None else agent.position
+
+
+def fitting(sizes: Sequence[int], room: int) -> int:
+    """How many of ``sizes``, in order, fit in ``room`` bytes (the first that does not
+    fit ends the prefix)."""
+    total = 0
+    for count, size in enumerate(sizes):
+        if total + size > room:
+            return count
+        total += size
+    return len(sizes)
+
+
+def _arrays(cells: Cells) -> list[np.ndarray]:
+    """The arrays of ``cells`` (the observation steps only with 'latest' beliefs)."""
+    return [a for a in cells if a is not None]
+
+
+def edges_of(links: np.ndarray, groups: Groups) -> list[Edge]:
+    """The step's transmissions: each group's spanning tree up then down (multi-hop), or
+    every linked ordered pair (one hop)."""
+    if groups is None:
+        return [(int(i), int(j)) for i, j in np.argwhere(links)]
+    edges: list[Edge] = []
+    for group in groups:
+        tree = spanning_tree(links, group[0])
+        edges += [(child, parent) for parent, child in reversed(tree)]
+        edges += list(tree)
+    return edges
