@@ -19,16 +19,35 @@ def step_medians(
     configurations: dict[str, dict[str, Any]], rounds: int, warmup: int, steps: int
 ) -> dict[str, list[float]]:
     """Per configuration (scenario data by name), its median ms per step in each round."""
-    medians: dict[str, list[float]] = {name: [] for name in configurations}
+    return phase_medians(configurations, rounds, warmup, steps)["step"]
+
+
+def phase_medians(
+    configurations: dict[str, dict[str, Any]],
+    rounds: int,
+    warmup: int,
+    steps: int,
+    phases: tuple[str, ...] = (),
+) -> dict[str, dict[str, list[float]]]:
+    """Per measure ("step" and each of ``phases``, as ``Simulation.phase_times`` names
+    them) and configuration, its median ms per step in each round."""
+    measures = ("step", *phases)
+    medians = {m: {name: [] for name in configurations} for m in measures}
     for _ in range(rounds):
         sims = {name: Simulation(validate_scenario(d)) for name, d in configurations.items()}
-        times: dict[str, list[float]] = {name: [] for name in configurations}
+        times: dict[str, dict[str, list[float]]] = {
+            m: {name: [] for name in configurations} for m in measures
+        }
         for step in range(warmup + steps):
             for name, sim in sims.items():
+                before = {p: sim.phase_times.get(p, 0.0) for p in phases}
                 started = perf_counter()
                 sim.step()
                 if step >= warmup:
-                    times[name].append(perf_counter() - started)
-        for name in configurations:
-            medians[name].append(1e3 * statistics.median(times[name]))
+                    times["step"][name].append(perf_counter() - started)
+                    for p in phases:
+                        times[p][name].append(sim.phase_times.get(p, 0.0) - before[p])
+        for m in measures:
+            for name in configurations:
+                medians[m][name].append(1e3 * statistics.median(times[m][name]))
     return medians

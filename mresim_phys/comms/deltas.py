@@ -233,3 +233,29 @@ def merge_cells(
         changed += 1
         r0, r1, c0, c1 = min(r0, r), max(r1, r + 1), min(c0, c), max(c1, c + 1)
     return changed, r0, r1, c0, c1
+
+
+@njit(cache=True, nogil=True)
+def still_news(
+    flat: IntArray,
+    receiver: int,
+    origins: np.ndarray,
+    codes: np.ndarray,
+    receiver_codes: np.ndarray,
+    seen: np.ndarray | None = None,
+    observed: np.ndarray | None = None,
+) -> tuple[IntArray, np.ndarray]:
+    """(flat indices, codes) of the cells ``flat`` of a sender (a queue's remainder) that
+    are still news to ``receiver`` (:func:`is_news`) and whose value did not come from it."""
+    cols = codes.shape[1]
+    index = np.empty(len(flat), np.int64)
+    values = np.empty(len(flat), np.uint8)
+    n = 0
+    for k in range(len(flat)):
+        r, c = flat[k] // cols, flat[k] % cols
+        if origins[r, c] == receiver or not is_news(codes, receiver_codes, seen, observed, r, c):
+            continue
+        index[n] = flat[k]
+        values[n] = codes[r, c]
+        n += 1
+    return index[:n], values[:n]

@@ -32,7 +32,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mresim_phys.agents import Agent
-from mresim_phys.comms.deltas import Cells, select_cells
+from mresim_phys.comms.deltas import Cells
 from mresim_phys.comms.exchange import (
     CELL_BYTES,
     SEEN_BYTES,
@@ -44,7 +44,8 @@ from mresim_phys.comms.exchange import (
     run_in_turn,
     spanning_tree,
 )
-from mresim_phys.comms.ledger import Ledger, sensed_tick
+from mresim_phys.comms.ledger import Ledger, received_tick, sensed_tick
+from mresim_phys.comms.offers import Offers
 from mresim_phys.comms.radio import LinkLayer
 from mresim_phys.comms.radio_feature import RADIO, RadioLoadValue
 from mresim_phys.knowledge.latest import LATEST
@@ -96,8 +97,13 @@ class QueuedExchange:
     layer: LinkLayer
     maps: bool = True
     flight: list[Packet] = field(default_factory=list)
+    offers: Offers = field(init=False)
     load: RadioLoad = field(default_factory=lambda: RadioLoad.empty(0))
     base_changed: bool = False  # a packet landed at the base this step
+    tree: bool = True  # this step's edges are spanning trees (multi-hop)
+
+    def __post_init__(self) -> None:
+        self.offers = Offers(self.ledger, self.layer.spec.priority)
 
     @property
     def cell_bytes(self) -> int:
@@ -116,23 +122,34 @@ class QueuedExchange:
         (``run_all`` is not used: each transmission reads what the one before delivered)."""
         n = len(agents)
         traffic, self.load = Traffic.empty(n), RadioLoad.empty(n)
-        self.base_changed = False
+        self.base_changed, self.tree = False, groups is not None
         self.land(agents, step)
         left = np.full(n, np.iinfo(np.int64).max, dtype=np.int64)
         if self.layer.spec.radio_capacity is not None:
             left[:] = self.layer.spec.radio_capacity
-        for sender, receiver in edges_of(links, groups):
-            packet = self.pack(agents, sender, receiver, step, left)
-            if packet is None:
-                continue
-            cells = 0 if packet.cells is None else len(packet.cells.flat)
-            traffic.add(sender, receiver, cells, packet.records, self.cell_bytes)
-            self.flight.append(packet)
-            if groups is not None:  # the tree: what lands now travels on at once
-                self.land(agents, step)
+        for members, edges in edges_of(links, groups):
+            whole = [self.send(agents, edge, step, left, traffic) for edge in edges]
+            if members and self.layer.spec.latency == 0:
+                for part in whole_parts(members, edges, whole):
+                    self.offers.synced(part, self.sync_tick(step))
         self.land(agents, step)
         self.publish(agents)
         return traffic
+
+    def send(
+        self, agents: Sequence[Agent], edge: Edge, step: int, left: IntArray, traffic: Traffic
+    ) -> bool:
+        """One transmission along ``edge``; whether it carried the whole offer of cells. On
+        a tree what lands travels on at once (latency 0)."""
+        packet = self.pack(agents, edge[0], edge[1], step, left)
+        if packet is None:
+            return edge not in self.offers.remainder
+        cells = 0 if packet.cells is None else len(packet.cells.flat)
+        traffic.add(edge[0], edge[1], cells, packet.records, self.cell_bytes)
+        self.flight.append(packet)
+        if self.tree:
+            self.land(agents, step)
+        return packet.sync is not None or not self.maps
 
     def publish(self, agents: Sequence[Agent]) -> None:
         """Write this step's load into each robot's ``radio`` feature (if it has one)."""
@@ -178,7 +195,8 @@ class QueuedExchange:
         """The packet ``sender`` sends ``receiver`` now: the offer's longest prefix that fits
         the link's capacity and the radio's bytes ``left`` (updated); None: nothing to send."""
         records = self.offered_records(agents, sender, receiver, step)
-        cells = self.offered_cells(agents, sender, receiver)
+        edge = (sender, receiver)
+        cells = self.offers.cells(agents, edge, self.flying(edge), self.sync_tick(step))
         record_bytes = [r.nbytes() for r in records]
         cell_count = 0 if cells is None else len(cells.flat)
         offer = sum(record_bytes) + cell_count * self.cell_bytes
@@ -190,16 +208,38 @@ class QueuedExchange:
         room -= sum(record_bytes[:taken_records])
         taken_cells = min(cell_count, room // self.cell_bytes)
         nbytes = sum(record_bytes[:taken_records]) + taken_cells * self.cell_bytes
-        whole = taken_records == len(records) and taken_cells == cell_count
         self.load.offered[sender] += offer
         self.load.sent[sender] += nbytes
         left[sender] -= nbytes
+        part = (
+            None if cells is None else self.offers.split(agents[sender], edge, cells, taken_cells)
+        )
+        whole = self.maps and taken_cells == cell_count
+        sync = self.offers.scanned.get(edge) if whole else None
         if nbytes == 0:
             return None
-        part = None if cells is None else Cells(*(a[:taken_cells] for a in _arrays(cells)))
-        sync = sensed_tick(step) if whole and self.maps else None
         arrive = step + self.layer.spec.latency
         return Packet(arrive, sender, receiver, part, records[:taken_records], nbytes, sync)
+
+    def sync_tick(self, step: int) -> int:
+        """The tick a whole offer made now brings its pair up to. Everything the sender
+        holds is stamped at most ``received_tick(step)``; that tick is safe when nothing
+        the receiver lacks can reach the sender later in the step: on a spanning tree
+        with no latency the sender hears afterwards only from the receiver itself (values
+        that came from it are never sent back), and with a latency every packet of the
+        step has landed before the first is packed. With one hop and no latency (packets
+        land after all are packed) or 'latest' beliefs, the sensed tick."""
+        tree_or_late = self.tree or self.layer.spec.latency > 0
+        return received_tick(step) if tree_or_late and not self.ledger.latest else sensed_tick(step)
+
+    def flying(self, edge: Edge) -> IntArray:
+        """The map cells on their way along ``edge``."""
+        cells = [
+            p.cells.flat
+            for p in self.flight
+            if (p.sender, p.receiver) == edge and p.cells is not None
+        ]
+        return np.concatenate(cells) if cells else np.zeros(0, dtype=np.int64)
 
     def offered_records(
         self, agents: Sequence[Agent], sender: int, receiver: int, step: int
@@ -222,72 +262,6 @@ class QueuedExchange:
             and (r.name, r.step) not in flying
         ]
 
-    def offered_cells(self, agents: Sequence[Agent], sender: int, receiver: int) -> Cells | None:
-        """The map cells on offer, in priority order (module docstring)."""
-        if not self.maps:
-            return None
-        ledger, since = self.ledger, int(self.ledger.synced[sender, receiver])
-        boxes = ledger.newer_boxes(sender, since)
-        if len(boxes) == 0:
-            return None
-        seen = LATEST.state_of(agents[sender].features)
-        observed = LATEST.state_of(agents[receiver].features)
-        index, codes = select_cells(
-            boxes,
-            since,
-            receiver,
-            ledger.stamps[sender],
-            ledger.tiles[sender],
-            ledger.origins[sender],
-            ledger.copies[sender],
-            ledger.copies[receiver],
-            False,
-            True,
-            seen,
-            observed,
-        )
-        keep = ~self.in_flight(sender, receiver, index)
-        index, codes = index[keep], codes[keep]
-        order = self.priority(agents[sender], sender, index)
-        index, codes = index[order], codes[order]
-        flat_seen = None if seen is None else seen.reshape(-1)[index]
-        return Cells(index, codes, flat_seen)
-
-    def in_flight(self, sender: int, receiver: int, index: IntArray) -> np.ndarray:
-        """Which of the cells ``index`` are on their way from ``sender`` to ``receiver``."""
-        flying = [
-            p.cells.flat
-            for p in self.flight
-            if (p.sender, p.receiver) == (sender, receiver) and p.cells is not None
-        ]
-        if not flying:
-            return np.zeros(len(index), dtype=bool)
-        hit: np.ndarray = np.isin(index, np.concatenate(flying))
-        return hit
-
-    def priority(self, agent: Agent, sender: int, index: IntArray) -> IntArray:
-        """The order in which cells ``index`` of ``sender`` are sent (``priority``)."""
-        cols = self.ledger.stamps[sender].shape[1]
-        x, y = believed_position(agent)
-        distance = (index % cols + 0.5 - x) ** 2 + (index // cols + 0.5 - y) ** 2
-        ticks = self.ledger.stamps[sender].reshape(-1)[index]
-        rule = self.layer.spec.priority
-        if rule == "nearest":
-            keys: tuple[np.ndarray, ...] = (index, distance)
-        elif rule == "newest":
-            keys = (index, distance, -ticks)
-        else:  # base_first: what the base lacks (as far as the sender knows) first
-            known = ticks <= self.ledger.synced[sender, 0] if sender != 0 else ticks < 0
-            keys = (index, distance, known)
-        order: IntArray = np.lexsort(keys)
-        return order
-
-
-def believed_position(agent: Agent) -> tuple[float, float]:
-    """Where ``agent`` believes it is (a robot's believed pose; the base's position)."""
-    believed = getattr(agent, "believed_position", None)
-    return believed if believed is not None else agent.position
-
 
 def fitting(sizes: Sequence[int], room: int) -> int:
     """How many of ``sizes``, in order, fit in ``room`` bytes (the first that does not
@@ -300,19 +274,35 @@ def fitting(sizes: Sequence[int], room: int) -> int:
     return len(sizes)
 
 
-def _arrays(cells: Cells) -> list[np.ndarray]:
-    """The arrays of ``cells`` (the observation steps only with 'latest' beliefs)."""
-    return [a for a in cells if a is not None]
+def whole_parts(members: list[int], edges: list[Edge], whole: list[bool]) -> list[list[int]]:
+    """The parts of a group's tree joined by links that carried their whole offers both
+    ways this step. With no latency every member of a part then holds what any other
+    held (the part's top gathered it on the way up and gave it back on the way down), so
+    the whole part is synchronised, as the unbounded exchange synchronises a group."""
+    ok = {edge for edge, done in zip(edges, whole, strict=True) if done}
+    parent = {m: m for m in members}
+
+    def root(m: int) -> int:
+        while parent[m] != m:
+            m = parent[m]
+        return m
+
+    for a, b in ok:
+        if a < b and (b, a) in ok:
+            parent[root(a)] = root(b)
+    parts: dict[int, list[int]] = {}
+    for m in members:
+        parts.setdefault(root(m), []).append(m)
+    return [sorted(p) for p in parts.values() if len(p) > 1]
 
 
-def edges_of(links: np.ndarray, groups: Groups) -> list[Edge]:
-    """The step's transmissions: each group's spanning tree up then down (multi-hop), or
-    every linked ordered pair (one hop)."""
+def edges_of(links: np.ndarray, groups: Groups) -> list[tuple[list[int], list[Edge]]]:
+    """The step's transmissions by group: each group's members and its spanning tree's
+    edges up then down (multi-hop), or no members and every linked ordered pair (one hop)."""
     if groups is None:
-        return [(int(i), int(j)) for i, j in np.argwhere(links)]
-    edges: list[Edge] = []
+        return [([], [(int(i), int(j)) for i, j in np.argwhere(links)])]
+    out = []
     for group in groups:
         tree = spanning_tree(links, group[0])
-        edges += [(child, parent) for parent, child in reversed(tree)]
-        edges += list(tree)
-    return edges
+        out.append((group, [(child, parent) for parent, child in reversed(tree)] + tree))
+    return out
