@@ -225,3 +225,27 @@ def test_bounded_runs_log_their_load_and_replay_recomputes_the_columns(
     assert max(offered) > 400 and all(s <= o for s, o in zip(sent, offered, strict=True))
     assert main(["replay", str(tmp_path / "one"), "--metrics"]) == 0
     assert "metrics.csv: DIFFERENT" not in capsys.readouterr().out
+
+
+class SendsCornerFirst:
+    """A strategy hook only: the cells nearest a point below the map go first."""
+
+    def send_first(self) -> tuple[float, float] | None:
+        return (19.0, 25.0)
+
+
+def test_a_strategy_chosen_priority_sends_the_cells_nearest_its_point_first() -> None:
+    a, b = agents = make_agents(2)
+    a.position = (0.0, 0.0)
+    a.belief[0, :] = FREE
+    a.belief[19, :] = FREE
+    a.strategy = SendsCornerFirst()  # type: ignore[attr-defined]
+    capacity = 20 * CELL_BYTES + record_bytes(a, 0)
+    Bounded(agents, capacity=capacity, priority="strategy")(chain(2), 0)
+    assert (b.belief[19, :] == FREE).all() and (b.belief[0, :] == UNKNOWN).all()
+    c, d = plain = make_agents(2)  # no strategy: base_first, nearest the sender
+    c.position = (5.0, 0.0)
+    c.belief[0, :] = FREE
+    c.belief[19, :] = FREE
+    Bounded(plain, capacity=capacity, priority="strategy")(chain(2), 0)
+    assert (d.belief[0, :] == FREE).all() and (d.belief[19, :] == UNKNOWN).all()

@@ -21,6 +21,7 @@ from mresim_phys.comms.deltas import Cells, select_cells, still_news
 from mresim_phys.comms.exchange import Edge
 from mresim_phys.comms.ledger import Ledger
 from mresim_phys.knowledge.latest import LATEST
+from mresim_phys.strategies.base import ChoosesSendOrder
 from mresim_phys.types import IntArray
 
 NONE = np.zeros(0, dtype=np.int64)
@@ -111,6 +112,9 @@ class Offers:
             return first[:count]
         if self.priority == "nearest":
             return nearest(index, cols, where, count)
+        chosen = strategy_point(agent) if self.priority == "strategy" else None
+        if chosen is not None:
+            return nearest(index, cols, chosen, count)
         # base_first: what the base lacks (as far as the sender knows) first
         known = ticks <= self.ledger.synced[sender, 0] if sender != 0 else ticks < 0
         lacking, rest = np.flatnonzero(~known), np.flatnonzero(known)
@@ -145,6 +149,13 @@ def compact(boxes: np.ndarray) -> np.ndarray:
     bound = np.array([[boxes[:, 0].min(), boxes[:, 1].max(), boxes[:, 2].min(), boxes[:, 3].max()]])
     whole = (bound[0, 1] - bound[0, 0]) * (bound[0, 3] - bound[0, 2])
     return bound if whole <= areas.sum() else boxes
+
+
+def strategy_point(agent: Agent) -> tuple[float, float] | None:
+    """The point the agent's strategy sends the cells nearest to first (None: it names
+    none, or the agent has no strategy: the base)."""
+    strategy = getattr(agent, "strategy", None)
+    return strategy.send_first() if isinstance(strategy, ChoosesSendOrder) else None
 
 
 def believed_position(agent: Agent) -> tuple[float, float]:

@@ -102,10 +102,11 @@ class RadioSpec(Strict):
         description="Bytes per step an agent's radio sends over all its links (null: unlimited).",
     )
     latency: int = Field(0, ge=0, le=10_000, description="Steps from sending to delivery, per hop.")
-    priority: Literal["base_first", "nearest", "newest"] = Field(
+    priority: Literal["base_first", "nearest", "newest", "strategy"] = Field(
         "base_first",
         description="Order of queued map cells: base_first (cells the base lacks, nearest"
-        " first), nearest (nearest the sender first) or newest (most recent change first).",
+        " first), nearest (nearest the sender first), newest (most recent change first) or"
+        " strategy (nearest a point the robot's strategy chooses, else base_first).",
     )
 
     @property

@@ -156,6 +156,16 @@ class ReplansWhen(Protocol):
         ...
 
 
+@runtime_checkable
+class ChoosesSendOrder(Protocol):
+    """A strategy that chooses which of its map its robot's radio sends first when a link
+    cannot carry everything (``communication.priority: strategy``, docs/communication.md)."""
+
+    def send_first(self) -> tuple[float, float] | None:
+        """The point whose nearest cells go first (None: the channel's ``base_first``)."""
+        ...
+
+
 class PlanContext:
     """Configuration space and distance field of one robot, computed lazily once.
 
