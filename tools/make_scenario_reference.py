@@ -18,6 +18,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from mresim_phys import COMM_MODELS, STRATEGIES  # noqa: E402
+from mresim_phys.comms import radio_params as radio  # noqa: E402
 from mresim_phys.faults import spec as fault_spec  # noqa: E402
 from mresim_phys.localization import spec as localization  # noqa: E402
 from mresim_phys.planning import PLANNERS  # noqa: E402
@@ -37,6 +38,8 @@ SECTIONS: list[tuple[str, type[BaseModel]]] = [
     ("robots[i] (adds to the team fields)", schema.RobotSpec),
     ("sensor", schema.SensorSpec),
     ("communication", schema.CommSpec),
+    ("communication.shadowing (either channel)", radio.ShadowingSpec),
+    ("communication.bursts (either channel)", radio.BurstSpec),
     ("strategy and planner", schema.PluginSpec),
     ("stop", run_specs.StopSpec),
     ("simulation", run_specs.SimulationSpec),
@@ -73,6 +76,17 @@ SECTIONS: list[tuple[str, type[BaseModel]]] = [
     ("localization.corrections[i], kind: scan_matching", localization.ScanMatchFix),
 ]
 NOTES = {
+    "communication.shadowing (either channel)": (
+        "Added to the signal of a model that has one (path_loss): a seeded field with"
+        " correlation exp(-(h/length)^2), sigma_db per link, fast fading per step"
+        " (docs/communication.md, 'Radio links'). Streams `shadowing-<channel>` and"
+        " `fading-<channel>`."
+    ),
+    "communication.bursts (either channel)": (
+        "A Gilbert-Elliott chain per agent pair, from its stationary state; stream"
+        " `bursts-<channel>`. The long-run loss is pi_bad * loss_bad + (1 - pi_bad) *"
+        " loss_good with pi_bad = good_to_bad / (good_to_bad + bad_to_good)."
+    ),
     "localization (team or robots[i])": (
         "A robot with this block knows its pose only through its odometry and corrections:"
         " its map, plans, teammate record and strategy use the believed pose, its body,"
