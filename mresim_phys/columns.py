@@ -42,6 +42,12 @@ LOCALIZATION_COLUMNS = (
     "pose_error_mean",
     "pose_error_max",
 )  # what a run's layout may have
+MEETING_COLUMNS = (
+    "meetings_planned",
+    "meetings_kept",
+    "meetings_missed",
+    "meetings_pending",
+)  # a run whose strategies plan meetings (meetings/board.py)
 
 
 class ColumnParams(PluginParams):
@@ -336,6 +342,7 @@ registered later (a plugin's) is never a default."""
 FEATURE_COLUMNS = {
     "robot_battery": "mresim_phys.faults.battery:robot_battery",
     **{n: f"mresim_phys.localization.feature:{n}" for n in LOCALIZATION_COLUMNS},
+    **{n: f"mresim_phys.meetings.board:{n}" for n in MEETING_COLUMNS},
 }
 for _name, _reference in FEATURE_COLUMNS.items():
     COLUMNS.lazy(_name, _reference, ColumnParams)
