@@ -6,14 +6,18 @@ strategy for the meetings that bind it (``strategies/appointments.py``) and judg
 from the truth:
 
 * a meeting is the pair (the two parties, agent order) and its agreed step; each party
-  that reports it gives its own point (believed frame) and the last step it keeps it;
-  the meeting's window closes at the latest of those;
+  that reports it gives its own point (believed frame) and its window (by default from
+  the agreed step to the end of its wait; a return to the base or a step back opens when
+  the robot sets out); the meeting's window runs from the earliest opening to the latest
+  close;
 * it is **planned** at the first step its parties are not linked while one of them holds
   it (an agreement replaced while the pair is still together is a draft, not counted);
-* it is **kept** at the first step after that its parties are linked on the main channel
-  (before the agreed step too: an early reunion keeps it);
+* it is **kept** at the first step after it was planned at which its parties are linked
+  on the main channel, within its window or, before the window, while a party it binds
+  stands at its point (it came early and found the other there);
 * it is **superseded** when no party holds it any more before its window closed (a new
-  agreement replaced it, or the strategy withdrew it);
+  agreement replaced it, as when the pair met by chance elsewhere before the window, or
+  the strategy withdrew it);
 * otherwise it is **missed** when its window closes, for the first of these reasons:
   ``partner_failed`` (a party was failed at some step since it was planned), ``link_failed``
   (at some step every party it binds was at its point, and they were not linked: drift
@@ -60,6 +64,7 @@ class Open:
     key: Key
     points: dict[str, tuple[float, float]] = field(default_factory=dict)
     closes: dict[str, int] = field(default_factory=dict)
+    opens: dict[str, int] = field(default_factory=dict)
     planned: int | None = None
     waited: dict[str, int] = field(default_factory=dict)
     failed: bool = False  # a party was failed at some step since it was planned
@@ -98,7 +103,7 @@ class MeetingWatch:
                 meeting = self.open.setdefault(key, Open(key))
                 for holder, appointment in mine.items():
                     meeting.points[holder] = appointment.point
-                    meeting.closes[holder] = appointment.closes
+                    meeting.opens[holder], meeting.closes[holder] = appointment.window
         for key, meeting in list(self.open.items()):
             linked = bool(links[index[key[0]], index[key[1]]])
             outcome = self._judge(meeting, step, held.get(key, {}), linked, by_name)
@@ -133,35 +138,41 @@ class MeetingWatch:
                 return None  # a draft: the pair is still together, or dropped it
             meeting.planned = step
             self.tally = replace(self.tally, planned=self.tally.planned + 1)
-        if linked:
+        there = self._there(meeting, robots)
+        if linked and (step >= min(meeting.opens.values()) or any(there.values())):
             return meeting.outcome(step, "kept")
-        self._observe(meeting, robots)
         closes = max(meeting.closes.values())
         if not holders and step < closes:
             return meeting.outcome(step, "superseded")
+        if linked:
+            return None  # together before the window, away from the point: a chance encounter
+        self._observe(meeting, robots, there)
         if step < closes:
             return None
         reason = "partner_failed" if meeting.failed else None
         reason = reason or ("link_failed" if meeting.unlinked_there else "late")
         return meeting.outcome(step, "missed", reason)
 
-    def _observe(self, meeting: Open, robots: dict[str, Robot]) -> None:
-        """Failures and who stands at its point this step (the pair is not linked)."""
-        there = []
+    def _there(self, meeting: Open, robots: dict[str, Robot]) -> dict[str, bool]:
+        """Whether each robot the meeting binds stands at its point (alive, believed
+        position within its speed plus :data:`AT_POINT` cells)."""
+        out = {}
+        for party, point in meeting.points.items():
+            robot = robots.get(party)
+            if robot is not None:
+                reach = robot.body.speed + AT_POINT
+                out[party] = robot.alive and math.dist(robot.believed_position, point) <= reach
+        return out
+
+    def _observe(self, meeting: Open, robots: dict[str, Robot], there: dict[str, bool]) -> None:
+        """Failures, waiting and a missing link at the points, on a step the pair is not
+        linked."""
         for party in meeting.key[:2]:
             robot = robots.get(party)
-            if robot is None:  # the base: always there
-                there.append(True)
-                continue
-            meeting.failed |= not robot.alive
-            point = meeting.points.get(party)
-            reach = robot.body.speed + AT_POINT
-            at = point is None or math.dist(robot.believed_position, point) <= reach
-            at = at and robot.alive
-            there.append(at)
-            if point is not None:
-                meeting.waited[party] = meeting.waited.get(party, 0) + int(at)
-        if all(there):
+            meeting.failed |= robot is not None and not robot.alive
+            if party in there:
+                meeting.waited[party] = meeting.waited.get(party, 0) + int(there[party])
+        if all(there.values()):
             meeting.unlinked_there = True
 
     def _count(self, outcome: Outcome) -> None:

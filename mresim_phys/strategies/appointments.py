@@ -23,12 +23,19 @@ BASE = "base"  # the partner of a return to the base (utility_return)
 @dataclass(frozen=True)
 class Appointment:
     """A meeting that binds a robot: with ``partner`` at ``point`` (the robot's own point,
-    believed frame) at step ``step``, kept until step ``closes`` (inclusive)."""
+    believed frame) at step ``step``; a link from step ``opens`` (None: ``step``) to step
+    ``closes`` (inclusive) keeps it."""
 
     partner: str
     point: tuple[float, float]
     step: int
     closes: int
+    opens: int | None = None
+
+    @property
+    def window(self) -> tuple[int, int]:
+        """(first, last) step at which a link keeps the meeting."""
+        return (self.step if self.opens is None else self.opens), self.closes
 
 
 @runtime_checkable

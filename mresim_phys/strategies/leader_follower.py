@@ -65,7 +65,8 @@ class LeaderFollower(FrontierExploration):
 
     def appointments(self) -> tuple[Appointment, ...]:
         """A step back under way: a meeting with its parent where the link last held, at
-        its expected arrival (straight line over speed), kept :data:`STEP_BACK_WAIT` more."""
+        its expected arrival (straight line over speed); any link with the parent from
+        setting out to :data:`STEP_BACK_WAIT` steps past the arrival keeps it."""
         return () if self._back is None else (self._back,)
 
     def decide(self, view: RobotView) -> Decision:
@@ -126,7 +127,8 @@ class LeaderFollower(FrontierExploration):
         if self._back is None:
             step = view.step + math.ceil(math.dist(view.position, target) / view.speed)
             point = (float(target[0]), float(target[1]))
-            self._back = Appointment(view.parent or "", point, step, step + STEP_BACK_WAIT)
+            closes = step + STEP_BACK_WAIT
+            self._back = Appointment(view.parent or "", point, step, closes, opens=view.step)
         return heading_for(context, target, info={"stepping_back": True})
 
     def _parent_position(self, view: RobotView) -> tuple[float, float]:

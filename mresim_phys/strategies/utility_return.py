@@ -71,7 +71,8 @@ class UtilityReturn(FrontierExploration):
 
     def appointments(self) -> tuple[Appointment, ...]:
         """The return under way: a meeting with the base at the end of its path home, at
-        its expected arrival (path length over speed), kept :data:`RETURN_GRACE` steps more."""
+        its expected arrival (path length over speed); any link with the base from setting
+        out to :data:`RETURN_GRACE` steps past the arrival keeps it."""
         return () if self.trip is None else (self.trip,)
 
     def decide(self, view: RobotView) -> Decision:
@@ -138,4 +139,5 @@ def return_trip(view: RobotView, path: FloatArray, goal: tuple[float, float] | N
     length = float(np.hypot(*np.diff(points, axis=0).T).sum()) if len(path) else 0.0
     step = view.step + math.ceil(length / view.speed)
     end = goal if goal is not None else view.position
-    return Appointment(BASE, (float(end[0]), float(end[1])), step, step + RETURN_GRACE)
+    point = (float(end[0]), float(end[1]))
+    return Appointment(BASE, point, step, step + RETURN_GRACE, opens=view.step)
