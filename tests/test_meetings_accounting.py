@@ -11,7 +11,7 @@ from typing import Any
 from mresim_phys import Simulation
 from mresim_phys.cli import main
 from mresim_phys.columns import MEETING_COLUMNS
-from mresim_phys.meetings.board import MeetingBoard, Outcome, decode, encode
+from mresim_phys.meetings.board import Meeting, MeetingBoard, Outcome, Tally, decode, encode
 
 SPEED, REACH = 2.0, 2.0 + 2.0  # the team's speed; at its point: within speed + AT_POINT cells
 A_POINT, B_POINT = (20.0, 30.0), (24.0, 30.0)  # 4 cells apart: linked when both are there
@@ -142,9 +142,23 @@ def test_frontier_runs_have_no_meeting_columns(scenario_file: Callable[..., Path
 
 
 def test_the_board_round_trips_through_the_log_codec():
-    from mresim_phys.meetings.board import Meeting, Tally
-
     meeting = Meeting(("base", "C"), (None, (1.5, 2.25)), 40, 60, 12)
     outcome = Outcome(meeting, 61, "missed", "late", (None, 7))
     board = MeetingBoard(Tally(3, 1, (0, 1, 0), 1), (meeting,), (outcome,))
     assert decode(json.loads(json.dumps(encode(board)))) == board
+
+
+def test_the_sweep_table_has_the_meeting_columns():
+    from mresim_phys.output.meetings import summarise_meetings
+    from mresim_phys.sweeps.tables import flatten_summary
+
+    meeting = Meeting(("A", "B"), ((1.0, 1.0), (2.0, 2.0)), 10, 20, 0)
+    outcomes = [
+        Outcome(meeting, 12, "kept", None, (3, 0)),
+        Outcome(meeting, 20, "missed", "link_failed", (5, 4)),
+        Outcome(meeting, 5, "superseded"),
+    ]
+    row = flatten_summary({"meetings": summarise_meetings(outcomes, [meeting])})
+    assert (row["meetings_planned"], row["meetings_kept"], row["meetings_missed"]) == (4, 1, 1)
+    assert row["meetings_missed_link_failed"] == 1 and row["meetings_superseded"] == 1
+    assert row["meeting_keep_rate"] == 0.5 and row["meeting_wait_mean"] == 3.0
