@@ -50,6 +50,12 @@ RADIO_COLUMNS = (
     "bytes_to_base",
     "connected_to_base",
 )  # a run whose main channel has radio options (comms/radio_feature.py)
+MEETING_COLUMNS = (
+    "meetings_planned",
+    "meetings_kept",
+    "meetings_missed",
+    "meetings_pending",
+)  # a run whose strategies plan meetings (meetings/board.py)
 
 
 class ColumnParams(PluginParams):
@@ -345,6 +351,7 @@ FEATURE_COLUMNS = {
     "robot_battery": "mresim_phys.faults.battery:robot_battery",
     **{n: f"mresim_phys.localization.feature:{n}" for n in LOCALIZATION_COLUMNS},
     **{n: f"mresim_phys.comms.radio_feature:{n}" for n in RADIO_COLUMNS},
+    **{n: f"mresim_phys.meetings.board:{n}" for n in MEETING_COLUMNS},
 }
 for _name, _reference in FEATURE_COLUMNS.items():
     COLUMNS.lazy(_name, _reference, ColumnParams)

@@ -22,12 +22,15 @@ from __future__ import annotations
 
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from mresim_phys.knowledge.coverage import Coverage
 from mresim_phys.types import FREE, BeliefGrid, BoolGrid
+
+if TYPE_CHECKING:
+    from mresim_phys.meetings.board import MeetingBoard
 
 THRESHOLDS = (0.5, 0.9, 0.95)
 
@@ -69,6 +72,8 @@ class StepRecord:
     known_at_base_connected: float | None = None
     # the (n, n) main-channel links (index 0 = the base) the ``links`` count comes from
     link_matrix: BoolGrid | None = field(default=None, compare=False, repr=False)
+    # the rendezvous accounting (meetings/): None in a run whose strategies plan no meetings
+    meetings: MeetingBoard | None = None
 
 
 def measure_step(
@@ -84,6 +89,7 @@ def measure_step(
     latency: tuple[float, float],
     robustness: tuple[int, int, int] | None = None,
     known_at_base_connected: float | None = None,
+    meetings: MeetingBoard | None = None,
 ) -> StepRecord:
     """The step's row of metrics, for a live run and a replay alike.
 
@@ -99,6 +105,7 @@ def measure_step(
         latency: (max, mean) age of the robots' newest reports at the base.
         robustness: (failures, knowledge_lost, lost_unrecovered) in a run with faults.
         known_at_base_connected: The same share over the coverage's connected cells.
+        meetings: The rendezvous accounting's board (``meetings/``), if the run has one.
     """
     connected = coverage.fraction_connected
     return StepRecord(
@@ -119,6 +126,7 @@ def measure_step(
         explored_connected=None if connected is None else min(connected, 1.0),
         known_at_base_connected=None if connected is None else known_at_base_connected,
         link_matrix=np.array(links, dtype=bool),  # the live array changes in place
+        meetings=meetings,
     )
 
 

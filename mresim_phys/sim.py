@@ -46,6 +46,7 @@ from mresim_phys.knowledge.teammates import presumed_lost
 from mresim_phys.localization.corrections import landmark_fixes, teammate_fixes
 from mresim_phys.localization.faults import frozen
 from mresim_phys.localization.feature import LOCALIZATION
+from mresim_phys.meetings.watch import meeting_watch
 from mresim_phys.memory import keep_freed_memory
 from mresim_phys.metrics import (
     RobotRecord,
@@ -113,6 +114,7 @@ class Simulation:
             self.sense_in_place(robot)
         self.communicate()
         self.drain_batteries()
+        self.meetings = meeting_watch([a.name for a in self.agents], self.robots)  # or None
         self.record = self.measure()
 
     @classmethod
@@ -380,6 +382,7 @@ class Simulation:
             lost_knowledge=self.failures.lost_view(),
             failures=self.failures.notes(),
             sights=tuple(self.setup.explorable.robots),
+            meetings=self.record.meetings,
         )
 
     def measure(self) -> StepRecord:
@@ -402,6 +405,8 @@ class Simulation:
                      coverage.total)  # fmt: skip
         self.health.update(self.t, robot_steps(self.robots, self.health, self.t, self.events_now))
         latency = base_latency(self.t, heard, [r.name for r in self.robots if r.alive])
+        judge = self.meetings  # the rendezvous accounting (meetings/), if the run has one
+        meetings = None if judge is None else judge.update(self.t, self.links, self.robots)
         record = measure_step(
             self.t,
             self.coverage,
@@ -414,6 +419,7 @@ class Simulation:
             latency=latency,
             robustness=watch.columns() if self.fault_columns else None,
             known_at_base_connected=self.known_at_base_connected,
+            meetings=meetings,
         )
         self.milestones.update(record)
         self.curves.update(record)

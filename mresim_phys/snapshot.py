@@ -13,12 +13,15 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray, RobotSight
+
+if TYPE_CHECKING:
+    from mresim_phys.meetings.board import MeetingBoard
 
 
 def read_only(array: np.ndarray) -> np.ndarray:
@@ -152,6 +155,9 @@ class Snapshot:
     # what the explorable area was computed from (static): each robot's start, radius,
     # laser range and seeds (world.explorable); (): unknown (a log older than it)
     sights: tuple[RobotSight, ...] = ()
+    # the rendezvous accounting at the end of the step (meetings/board.py); None: the run's
+    # strategies plan no meetings
+    meetings: MeetingBoard | None = None
 
     @property
     def base(self) -> AgentSnapshot:

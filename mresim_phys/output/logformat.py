@@ -7,7 +7,8 @@ Each field of :class:`~mresim_phys.snapshot.Snapshot` and of its
   ``comm_range`` (:data:`STATIC_AGENT`) and what the explorable area was computed from
   (``sights``, ``output.logmeta``);
 * ``steps.jsonl``, one JSON line per step (:class:`LineField`): ``step``, ``events``,
-  ``links``, ``comm``, ``world_version`` (:data:`SNAPSHOT_LINE`) and per agent
+  ``links``, ``comm``, ``world_version``, ``meetings`` (the rendezvous accounting's
+  board, ``meetings/board.py``; left out without one) (:data:`SNAPSHOT_LINE`) and per agent
   ``position``, ``heading``, ``state``, ``role``, ``goal``, ``distance``, ``parent``,
   ``base_contact``, each recorded per-robot feature's value under its key (``parts``,
   ``battery``, ``health``: the reason of a change of state, ``lost``; :class:`SpreadField`;
@@ -39,11 +40,12 @@ from typing import Any
 import numpy as np
 
 from mresim_phys.features import FEATURES
+from mresim_phys.meetings import board as meetings_board
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
 from mresim_phys.types import FloatArray, IntArray
 
-FORMAT, VERSION = "mresim-runlog", 7
-READABLE = (1, 2, 3, 4, 5, 6, 7)  # versions the reader reads (how each differs: run-log-format.md)
+FORMAT, VERSION = "mresim-runlog", 8
+READABLE = (1, 2, 3, 4, 5, 6, 7, 8)  # versions it reads (how each differs: run-log-format.md)
 OLD_KEYS = {"parts": "broken", "lost": "presumed_lost", "health": "state_reason"}  # version <= 6
 NEW, NONE = -1, -2  # PointsField codes: the points are stored; the field is None
 Parts = dict[str, list[np.ndarray]]
@@ -160,6 +162,8 @@ SNAPSHOT_LINE = {
     "links": LineField(flat_true, to_links),
     "comm": LineField(CommSummary.to_json, to_comm),
     "world_version": LineField(int, to_int),
+    # the rendezvous accounting's board, whole (version 8; a run without meetings: none)
+    "meetings": LineField(meetings_board.encode, meetings_board.decode, omit_none=True),
 }
 # meta.json, the truth codec, per agent; then output.logworld and WORLD_GRIDS
 SNAPSHOT_ELSEWHERE: tuple[str, ...] = ("resolution", "truth", "agents")

@@ -20,9 +20,10 @@ import numpy as np
 import yaml
 
 from mresim_phys.build import region_probe, run_rules
-from mresim_phys.columns import LOCALIZATION_COLUMNS, RADIO_COLUMNS, Layout
+from mresim_phys.columns import LOCALIZATION_COLUMNS, MEETING_COLUMNS, RADIO_COLUMNS, Layout
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.errors import ScenarioError
+from mresim_phys.meetings.watch import strategies_plan_meetings
 from mresim_phys.metrics import StepRecord
 from mresim_phys.output.files import PendingFile, write_json_atomic, write_text_atomic
 from mresim_phys.output.localization import PoseRecorder
@@ -83,13 +84,21 @@ def run_layout(scenario: Scenario) -> Layout:
 
 def extra_columns(scenario: Scenario) -> list[str]:
     """The optional columns of the run: those its scenario names, then the localisation
-    columns (``localization/feature.py``) if a robot has localisation and the radio
-    columns (:func:`radio_columns`), those not named already."""
+    columns (``localization/feature.py``) if a robot has localisation, then the meeting
+    columns (``meetings/board.py``) if a robot's strategy plans meetings, then the radio
+    columns (:func:`radio_columns`), each unless named already."""
     named = list(scenario.metrics.columns)
     if has_localization(scenario):
         named += [c for c in LOCALIZATION_COLUMNS if c not in named]
+    if plans_meetings(scenario):
+        named += [c for c in MEETING_COLUMNS if c not in named]
     named += [c for c in radio_columns(scenario) if c not in named]
     return named
+
+
+def plans_meetings(scenario: Scenario) -> bool:
+    """Whether a robot of ``scenario`` runs a strategy that plans meetings."""
+    return strategies_plan_meetings(r.strategy.name for r in scenario.robots)
 
 
 def radio_columns(scenario: Scenario) -> tuple[str, ...]:

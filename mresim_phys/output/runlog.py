@@ -239,6 +239,7 @@ class Replay:
             elif i > 0:  # robots: cells newly FREE in their maps count as explored
                 free.append(self.newly_free(i, belief_changed))
         record = self.measure(fields["step"], free, fields["links"], agents, fields["comm"])
+        record = replace(record, meetings=fields["meetings"])  # logged whole (meetings/)
         self.health.update(fields["step"], [step_of(a) for a in agents[1:]])
         self.health.note_progress(fields["step"], record.explored, record.known_at_base)
         agents[1:] = [

@@ -30,6 +30,7 @@ from mresim_phys.metrics import StepRecord
 from mresim_phys.output.files import WriteError
 from mresim_phys.output.health import run_health
 from mresim_phys.output.localization import PoseRecorder, localization_summary
+from mresim_phys.output.meetings import meetings_summary
 from mresim_phys.output.physical import physical_summary
 from mresim_phys.output.recorders import Recorder, SnapshotSource, make_recorders, summarise
 from mresim_phys.output.robustness import check_paired, run_robustness, write_robustness
@@ -143,6 +144,7 @@ def record_run(
     summary |= physical_summary(sim)  # seconds and metres, when the scenario gives dt
     poses = next((r for r in recorders if isinstance(r, PoseRecorder)), None)
     summary |= localization_summary(sim, poses)
+    summary |= meetings_summary(sim)  # a run whose strategies plan meetings
     interrupted = reason == INTERRUPTED
     if interrupted:
         summary["signal"] = stop.name

@@ -28,6 +28,7 @@ from mresim_phys.render.labels import Label, place_labels
 from mresim_phys.render.layers import LayerSpec
 from mresim_phys.render.legend import BELIEVED, legend_band
 from mresim_phys.render.legend import world_legend as world_legend
+from mresim_phys.render.meetings import draw_meetings, meeting_marks
 from mresim_phys.render.pose import draw_beliefs, path_start, shows_beliefs
 from mresim_phys.render.scale_bar import draw_scale_bar
 from mresim_phys.render.style import AA, BGR, FONT, ONE, SHIFT, Style
@@ -81,6 +82,8 @@ class Overlay:
         self._draw_network(image, snap, centres, colours, layers, regions)
         for i, robot in enumerate(snap.robots, start=1):
             self._draw_plans(image, robot, paths[i], goals[i], colours[i], layers[i])
+        if "meetings" in on and snap.meetings is not None:
+            draw_meetings(image, snap.meetings, self.px, style)
         sizes = [max(style.robot_px, robot.radius * self.scale) for robot in snap.robots]
         draw_beliefs(
             image, snap.robots, centres[1:], colours[1:], layers[1:], self.px, self.to_px, sizes
@@ -102,7 +105,8 @@ class Overlay:
             draw_header(image, snap, style, snap.dt)
         legend = 0
         if "legend" in on:
-            marks = (BELIEVED,) if shows_beliefs(snap.robots, layers[1:]) else ()
+            believed = (BELIEVED,) if shows_beliefs(snap.robots, layers[1:]) else ()
+            marks = (*believed, *meeting_marks(snap.meetings, on))
             legend = self._paste_legend(image, tuple(r.name for r in snap.robots),
                                         world_legend(snap, on), marks)  # fmt: skip
         if "scale_bar" in on and snap.resolution is not None:

@@ -2,10 +2,10 @@
 
 Global layers (map classes; moving obstacles, doors and debris of a changing world;
 links, hierarchy, legend, header, terrain shading, a prior map's walls, the knowledge lost
-at failures, hazard zones, a scale bar) and per-robot layers (location, path, goal, free and safe
-space, frontiers, comm range, skeleton, rendezvous: the agreed points, the potential ones
-and those linked through walls, the teammates it presumes lost, its believed pose with
-localisation);
+at failures, hazard zones, a scale bar, meetings kept and missed) and per-robot layers
+(location, path, goal, free and safe space, frontiers, comm range, skeleton, rendezvous:
+the agreed points, the potential ones and those linked through walls, the teammates it
+presumes lost, its believed pose with localisation);
 a :class:`LayerSpec` says which are on, for all robots and for named ones;
 :func:`parse_layers` reads the ``--layers`` / ``render.layers`` text.
 
@@ -26,6 +26,7 @@ GLOBAL_LAYERS += ("links", "hierarchy", "legend", "header", "terrain", "prior")
 GLOBAL_LAYERS += ("lost_knowledge",)  # cells only a robot that fell silent knew
 GLOBAL_LAYERS += ("hazards",)  # hazard zones of a faults: block
 GLOBAL_LAYERS += ("scale_bar",)  # metres on the frame, when the map's resolution is known
+GLOBAL_LAYERS += ("meetings",)  # meetings kept and missed (the rendezvous accounting)
 ROBOT_LAYERS: tuple[str, ...] = ("location", "path", "free_space", "safe_space", "frontiers")
 ROBOT_LAYERS += ("comm_range", "goal", "skeleton", "rendezvous", "presumed_lost")
 ROBOT_LAYERS += ("rv_candidates", "rv_through_walls")  # multi-point rendezvous

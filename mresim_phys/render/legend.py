@@ -5,7 +5,8 @@ Colour swatches for the map classes shown, the changing world's parts a frame ho
 robots are drawn, the glyphs of a robot that is done, idle, stuck or fruitless (the run-health
 record's activity, ``knowledge/health.py``), as ``render.draw`` draws them on the map; then
 the marks a frame holds (``believed pose``: the hollow circle ``render.pose`` draws where a
-robot with localisation believes it is).
+robot with localisation believes it is; ``meeting kept`` and ``meeting missed``:
+``render.meetings``).
 
 Typical use: ``legend_band(width, names, layers, style, world_legend(snap, on))``.
 """
@@ -19,6 +20,7 @@ import cv2
 import numpy as np
 
 from mresim_phys.render.layers import LayerSpec
+from mresim_phys.render.meetings import KEPT, MISSED, legend_mark
 from mresim_phys.render.style import AA, BGR, FONT, ONE, SHIFT, Style
 
 if TYPE_CHECKING:
@@ -87,6 +89,9 @@ def legend_glyph(
     that is ``kind`` (done, idle, stuck or fruitless) is drawn on a frame, or the believed
     pose mark (:data:`BELIEVED`: a hollow circle), in :data:`GLYPH_COLOUR`."""
     x, y = corner
+    if kind in (KEPT, MISSED):
+        legend_mark(band, kind, corner, side, style)
+        return
     if kind == BELIEVED:
         centre = ((2 * x + side) * ONE // 2, (2 * y + side) * ONE // 2)
         cv2.circle(band, centre, (side * ONE) // 2 - ONE // 2, GLYPH_COLOUR, 2, AA, SHIFT)

@@ -67,6 +67,8 @@ class Style:
     obstacle: BGR = (30, 30, 200)  # moving obstacles: deep red
     door: BGR = (0, 190, 255)  # doors: amber (closed: filled cells; open: dashed line)
     rubble: BGR = (50, 90, 130)  # rubble that fell during the run: brown
+    meeting_kept: BGR = (0, 170, 0)  # green ring: a meeting kept (render.meetings)
+    meeting_missed: BGR = (0, 0, 220)  # red cross: a meeting missed
     palette: tuple[BGR, ...] = PALETTE
     free_alpha: float = 0.3
     safe_alpha: float = 0.55

@@ -33,6 +33,7 @@ from typing import ClassVar
 import numpy as np
 
 from mresim_phys.knowledge.frontiers import Frontiers
+from mresim_phys.strategies.appointments import Appointment
 from mresim_phys.strategies.base import Decision, PlanContext, RobotView, heading_for, plan_context
 from mresim_phys.strategies.catalog import STRATEGIES
 from mresim_phys.strategies.frontier import FrontierExploration, default_parts
@@ -40,6 +41,7 @@ from mresim_phys.strategies.params import LeaderFollowerParams, StrategyParams
 from mresim_phys.types import FloatArray
 
 LEADER_MARGIN = 5.0  # cells: the original's frontier radius is comm_range * hops - 5
+STEP_BACK_WAIT = 10  # steps past its expected arrival that a step back is kept (rendezvous.md)
 
 
 @STRATEGIES.register
@@ -59,13 +61,20 @@ class LeaderFollower(FrontierExploration):
         self._linked_at: tuple[float, float] | None = None  # where its parent was last linked
         self._goal: tuple[int, int] | None = None  # the leader's frontier target (row, col)
         self._searched = -(10**9)  # step of the leader's last frontier search
+        self._back: Appointment | None = None  # a step back under way: meeting its parent
+
+    def appointments(self) -> tuple[Appointment, ...]:
+        """A step back under way: a meeting with its parent where the link last held, at
+        its expected arrival (straight line over speed); any link with the parent from
+        setting out to :data:`STEP_BACK_WAIT` steps past the arrival keeps it."""
+        return () if self._back is None else (self._back,)
 
     def decide(self, view: RobotView) -> Decision:
         """Step back to the parent's range, follow the child, or explore within the chain."""
         context = plan_context(view)
         if view.parent is not None and view.parent not in view.links and view.step > 0:
             return self._step_back(view, context)
-        self._linked_at = view.position
+        self._linked_at, self._back = view.position, None
         follows = bool(view.children)
         decision = self._follow(view, context) if follows else self._lead(view, context)
         path = self._within_parent_range(view, decision.path)
@@ -115,6 +124,11 @@ class LeaderFollower(FrontierExploration):
         """Out of the parent's reach: back to where the link last held (else towards the
         parent's last known position)."""
         target = self._linked_at or self._parent_position(view)
+        if self._back is None:
+            step = view.step + math.ceil(math.dist(view.position, target) / view.speed)
+            point = (float(target[0]), float(target[1]))
+            closes = step + STEP_BACK_WAIT
+            self._back = Appointment(view.parent or "", point, step, closes, opens=view.step)
         return heading_for(context, target, info={"stepping_back": True})
 
     def _parent_position(self, view: RobotView) -> tuple[float, float]:

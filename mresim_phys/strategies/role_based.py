@@ -39,6 +39,7 @@ from dataclasses import replace
 from typing import ClassVar
 
 from mresim_phys.knowledge.teammates import Payload, TeammateInfo
+from mresim_phys.strategies.appointments import Appointment
 from mresim_phys.strategies.base import Decision, RobotView, heading_for, plan_context
 from mresim_phys.strategies.catalog import STRATEGIES
 from mresim_phys.strategies.frontier import FrontierExploration
@@ -110,6 +111,16 @@ class RoleBased(FrontierExploration):
         else:
             decision = super().decide(view)
         return replace(decision, info={**decision.info, "rv_state": self.state, **self._views()})
+
+    def appointments(self) -> tuple[Appointment, ...]:
+        """The meeting that binds it: with its partner at its own point, kept until its
+        patience runs out (``wait`` past the agreed time; a relay without a backup meeting
+        ``backup_wait`` more)."""
+        meeting, partner = self.meeting, self.partner
+        if meeting is None or partner is None:
+            return ()
+        closes = meeting.step + self._patience(meeting)
+        return (Appointment(partner, self._my_point(meeting), meeting.step, closes),)
 
     def _views(self) -> dict[str, FloatArray]:
         """What the rendezvous layers draw: the agreed points, and (multi-point) the

@@ -35,6 +35,7 @@ import numpy as np
 
 from mresim_phys.knowledge.frontiers import Frontiers
 from mresim_phys.knowledge.teammates import Payload
+from mresim_phys.strategies.appointments import Appointment
 from mresim_phys.strategies.base import Decision, PlanContext, RobotView, heading_for, plan_context
 from mresim_phys.strategies.catalog import STRATEGIES
 from mresim_phys.strategies.frontier import FrontierExploration, default_parts
@@ -174,6 +175,14 @@ class SectorRendezvous(FrontierExploration):
         if self.state == "wait":
             return step > meeting.step + self.params.wait
         return step % self.params.check_interval == 0 and self._late(step, position, meeting)
+
+    def appointments(self) -> tuple[Appointment, ...]:
+        """Its meetings with its neighbours, each kept until ``wait`` steps past its time."""
+        wait = self.params.wait
+        return tuple(
+            Appointment(partner, m.point, m.step, m.step + wait)
+            for partner, m in sorted(self.meetings.items())
+        )
 
     def decide(self, view: RobotView) -> Decision:
         """Keep or fix meetings, go to one that is due, else explore its sector."""

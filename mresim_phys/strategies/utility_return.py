@@ -33,12 +33,15 @@ from typing import ClassVar
 import numpy as np
 
 from mresim_phys.knowledge.teammates import Payload, TeammateInfo
+from mresim_phys.strategies.appointments import BASE, Appointment
 from mresim_phys.strategies.base import Decision, RobotView, heading_for
 from mresim_phys.strategies.base import plan_context as make_context
 from mresim_phys.strategies.catalog import STRATEGIES
 from mresim_phys.strategies.frontier import FrontierExploration
 from mresim_phys.strategies.params import StrategyParams, UtilityReturnParams
-from mresim_phys.types import FREE
+from mresim_phys.types import FREE, FloatArray
+
+RETURN_GRACE = 20  # steps past its expected arrival that a return is kept (docs/rendezvous.md)
 
 
 @dataclass(frozen=True)
@@ -64,6 +67,13 @@ class UtilityReturn(FrontierExploration):
         self.delivered = 0  # B: map cells held when its data last reached the base
         self.handed = 0  # cells a teammate took over (no longer its to deliver)
         self.returning = False
+        self.trip: Appointment | None = None  # the return it set out on (its meeting with the base)
+
+    def appointments(self) -> tuple[Appointment, ...]:
+        """The return under way: a meeting with the base at the end of its path home, at
+        its expected arrival (path length over speed); any link with the base from setting
+        out to :data:`RETURN_GRACE` steps past the arrival keeps it."""
+        return () if self.trip is None else (self.trip,)
 
     def decide(self, view: RobotView) -> Decision:
         """Explore, or head home while the ratio is below target and the base is out of reach."""
@@ -77,7 +87,11 @@ class UtilityReturn(FrontierExploration):
             self.returning = self.ratio(known) < self.params.target_ratio
         payload = DeliveryPayload(self.undelivered(known), to_base, view.step)
         if self.returning:
-            return self._go_home(view, payload)
+            home = self._go_home(view, payload)
+            if self.trip is None:
+                self.trip = return_trip(view, home.path, home.goal)
+            return home
+        self.trip = None
         return replace(super().decide(view), payload=payload)
 
     def undelivered(self, known: int) -> int:
@@ -117,3 +131,13 @@ class UtilityReturn(FrontierExploration):
         context = make_context(view)
         info = {"returning": True, **context.planner_info()}
         return heading_for(context, view.base_position, info=info, payload=payload)
+
+
+def return_trip(view: RobotView, path: FloatArray, goal: tuple[float, float] | None) -> Appointment:
+    """A return setting out now along ``path`` to ``goal``: the meeting with the base."""
+    points = np.vstack((np.asarray(view.position, dtype=float).reshape(1, 2), path))
+    length = float(np.hypot(*np.diff(points, axis=0).T).sum()) if len(path) else 0.0
+    step = view.step + math.ceil(length / view.speed)
+    end = goal if goal is not None else view.position
+    point = (float(end[0]), float(end[1]))
+    return Appointment(BASE, point, step, step + RETURN_GRACE, opens=view.step)

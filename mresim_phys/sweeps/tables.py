@@ -28,6 +28,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from mresim_phys.knowledge.health import TOTALS
+from mresim_phys.meetings.board import REASONS
 from mresim_phys.output.files import atomic_path
 from mresim_phys.sweeps.expand import RunSpec
 from mresim_phys.sweeps.worker import DONE, run_folder
@@ -63,6 +64,8 @@ def flatten_summary(summary: dict[str, Any]) -> dict[str, Any]:
             row |= {name: value.get(name) for name in TOTALS}
         elif key == "localization" and isinstance(value, dict):
             row |= localization_columns(value)
+        elif key == "meetings" and isinstance(value, dict):
+            row |= meeting_columns(value)
         elif not isinstance(value, (dict, list)):
             row[key] = value
     return row
@@ -80,6 +83,21 @@ def localization_columns(block: dict[str, Any]) -> dict[str, Any]:
         "base_false_occupied": base["false_occupied"],
         "robots_false_free": sum(r["false_free"] for r in robots) / len(robots),
         "robots_false_occupied": sum(r["false_occupied"] for r in robots) / len(robots),
+    }
+
+
+def meeting_columns(block: dict[str, Any]) -> dict[str, Any]:
+    """summary.json's ``meetings`` object as columns: kept, missed (and per reason),
+    superseded, the keep rate and the mean waiting time (docs/rendezvous.md)."""
+    missed = block["missed"]
+    return {
+        "meetings_planned": block["planned"],
+        "meetings_kept": block["kept"],
+        "meetings_missed": missed["total"],
+        **{f"meetings_missed_{reason}": missed[reason] for reason in REASONS},
+        "meetings_superseded": block["superseded"],
+        "meeting_keep_rate": block["keep_rate"],
+        "meeting_wait_mean": block["waiting"]["mean"],
     }
 
 

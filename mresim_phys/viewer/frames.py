@@ -6,7 +6,8 @@ run's video, and encodes it as PNG (lossless: the page's pixels are the renderer
 :func:`agent_rows` gives what hovering a robot shows (state, activity: working, waiting,
 idle or stuck, role, distance travelled, path left: from the believed position with
 localisation, battery, last contact with the base, each feature's hover entry: the
-believed pose with localisation) and where the robot is in frame pixels. Typical use:
+believed pose with localisation; in a run whose strategies plan meetings, the meetings
+pending for it) and where the robot is in frame pixels. Typical use:
 ``FrameMaker(shape, scale).png(snapshot, layers)``.
 """
 
@@ -22,6 +23,7 @@ import numpy as np
 
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.features import FEATURES
+from mresim_phys.meetings.board import pending_of
 from mresim_phys.render import LayerSpec, Renderer, frame_scale
 from mresim_phys.render.pose import path_start
 from mresim_phys.snapshot import AgentSnapshot, Snapshot
@@ -107,8 +109,15 @@ def agent_rows(snapshot: Snapshot, renderer: Renderer) -> list[dict[str, Any]]:
     per_cell = renderer.map_size[0] / renderer.cols
     return [
         agent_row(agent, (float(x), float(y)), agent.radius * per_cell)
+        | meetings_entry(snapshot, agent)
         for agent, (x, y) in zip(snapshot.agents, centres, strict=True)
     ]
+
+
+def meetings_entry(snapshot: Snapshot, agent: AgentSnapshot) -> dict[str, Any]:
+    """The meetings pending for ``agent`` (``meetings/board.py``), in a run with meetings."""
+    board = snapshot.meetings
+    return {} if board is None else {"meetings": pending_of(board, agent.name)}
 
 
 def feature_entries(agent: AgentSnapshot) -> dict[str, Any]:

@@ -265,6 +265,7 @@ function onHover(ev) {
     `battery    ${battery}`, `base heard ${contact}`,
     `presumes lost ${hit.lost ? hit.lost.join(", ") : "-"}`,
     ...(hit.localization ? [believedLine(hit.localization)] : []),
+    ...(hit.meetings ? hit.meetings.map(meetingLine) : []),
   ].join("\n");
   tip.style.left = `${ev.clientX - rect.left + 12}px`;
   tip.style.top = `${ev.clientY - rect.top + 12}px`;
@@ -274,6 +275,12 @@ function onHover(ev) {
 function believedLine(b) {
   // the localization feature's hover entry: believed position, heading, error and sigma (cells)
   return `believed   ${b.believed.join(", ")} at ${b.heading_deg} deg, error ${b.error}, sigma ${b.sigma} cells`;
+}
+
+function meetingLine(m) {
+  // a pending meeting (rendezvous accounting): partner, this agent's point, agreed step, window end
+  const at = m.at ? ` at ${m.at.join(", ")}` : "";
+  return `meeting    with ${m.with}${at}, step ${m.step} (window to ${m.closes})`;
 }
 
 function onKey(ev) {
