@@ -93,7 +93,7 @@ class Simulation:
         self.known_at_base = 0.0
         self.known_at_base_connected: float | None = 0.0  # over the connected free cells
         self.milestones = Milestones()
-        self.comm_totals = CommTotals()
+        self.comm_totals = CommTotals(radio=self.scenario.communication.columns)
         self.stall = StallWatch(s.rules.stalled_for, s.rules.stalled_gain)
         self.curves = Curves()
         self.failures = FailureWatch([r.name for r in self.robots])

@@ -132,6 +132,10 @@ class CommTotals:
     latency_max: float = 0.0
     latency_sum: float = 0.0
     steps: int = 0
+    # the radio columns the run writes (``comms/radio_feature.py``), totalled: their sums,
+    # the backlog's peak and the mean share connected to the base
+    radio: tuple[str, ...] = ()
+    radio_sums: dict[str, float] = field(default_factory=dict)
 
     def update(self, record: StepRecord) -> None:
         """Add one step."""
@@ -141,16 +145,33 @@ class CommTotals:
         self.latency_max = max(self.latency_max, fraction("latency_max", record))
         self.latency_sum += fraction("latency_mean", record)
         self.steps += 1
+        for name in self.radio:
+            self.add_radio(name, value_of(name, record))
+
+    def add_radio(self, name: str, value: object) -> None:
+        """Add one step's value of radio column ``name`` (a per-robot column: its peak)."""
+        sums = self.radio_sums
+        if isinstance(value, (list, tuple)):
+            peak = max((v for v in value if isinstance(v, (int, float))), default=0)
+            sums[f"{name}_max"] = max(sums.get(f"{name}_max", 0), peak)
+        elif isinstance(value, (int, float)):
+            sums[name] = sums.get(name, 0) + value
 
     def summary(self) -> dict[str, float | int]:
-        """The totals as JSON-ready numbers."""
-        return {
+        """The totals as JSON-ready numbers (and the radio's, when the run has them:
+        bytes summed over the run, ``backlog_max``, ``connected_to_base_mean``)."""
+        totals: dict[str, float | int] = {
             "comm_bytes": self.comm_bytes,
             "control_bytes": self.control_bytes,
             "mean_links": self.link_steps / self.steps if self.steps else 0.0,
             "latency_max": self.latency_max,
             "latency_mean": self.latency_sum / self.steps if self.steps else 0.0,
         }
+        radio = dict(self.radio_sums)
+        if "connected_to_base" in radio:
+            radio["connected_to_base_mean"] = radio.pop("connected_to_base") / max(self.steps, 1)
+        return totals | {k: int(v) if k.startswith(("bytes", "backlog")) else v
+                         for k, v in sorted(radio.items())}  # fmt: skip
 
 
 @dataclass

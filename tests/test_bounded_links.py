@@ -3,6 +3,7 @@ a ledger that never counts a cell as delivered before it arrives."""
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 from typing import Any
@@ -223,6 +224,9 @@ def test_bounded_runs_log_their_load_and_replay_recomputes_the_columns(
     offered = [int(line.split(",")[header.index("bytes_offered")]) for line in lines[1:]]
     sent = [int(line.split(",")[header.index("bytes_sent")]) for line in lines[1:]]
     assert max(offered) > 400 and all(s <= o for s, o in zip(sent, offered, strict=True))
+    totals = json.loads((tmp_path / "one" / "summary.json").read_text())["communication"]
+    assert totals["bytes_sent"] == sum(sent) and totals["backlog_max"] > 0
+    assert 0 <= totals["connected_to_base_mean"] <= 1
     assert main(["replay", str(tmp_path / "one"), "--metrics"]) == 0
     assert "metrics.csv: DIFFERENT" not in capsys.readouterr().out
 

@@ -20,7 +20,7 @@ import numpy as np
 import yaml
 
 from mresim_phys.build import region_probe, run_rules
-from mresim_phys.columns import LOCALIZATION_COLUMNS, MEETING_COLUMNS, RADIO_COLUMNS, Layout
+from mresim_phys.columns import LOCALIZATION_COLUMNS, MEETING_COLUMNS, Layout
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.errors import ScenarioError
 from mresim_phys.meetings.watch import strategies_plan_meetings
@@ -86,29 +86,19 @@ def extra_columns(scenario: Scenario) -> list[str]:
     """The optional columns of the run: those its scenario names, then the localisation
     columns (``localization/feature.py``) if a robot has localisation, then the meeting
     columns (``meetings/board.py``) if a robot's strategy plans meetings, then the radio
-    columns (:func:`radio_columns`), each unless named already."""
+    columns (``RadioSpec.columns``), each unless named already."""
     named = list(scenario.metrics.columns)
     if has_localization(scenario):
         named += [c for c in LOCALIZATION_COLUMNS if c not in named]
     if plans_meetings(scenario):
         named += [c for c in MEETING_COLUMNS if c not in named]
-    named += [c for c in radio_columns(scenario) if c not in named]
+    named += [c for c in scenario.communication.columns if c not in named]
     return named
 
 
 def plans_meetings(scenario: Scenario) -> bool:
     """Whether a robot of ``scenario`` runs a strategy that plans meetings."""
     return strategies_plan_meetings(r.strategy.name for r in scenario.robots)
-
-
-def radio_columns(scenario: Scenario) -> tuple[str, ...]:
-    """The radio columns of a run (``comms/radio_feature.py``): the byte counts when the
-    main channel's links are bounded (or replayed from a trace that may bound them), the
-    share connected to the base with any radio option."""
-    comm = scenario.communication
-    if comm.bounded or comm.trace is not None:
-        return RADIO_COLUMNS
-    return RADIO_COLUMNS[-1:] if comm.lossy else ()
 
 
 class RunWriter:
