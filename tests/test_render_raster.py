@@ -2,12 +2,17 @@
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from pathlib import Path
+
 import numpy as np
 import pytest
 
+from mresim_phys import Simulation
 from mresim_phys.knowledge.frontiers import frontier_mask
-from mresim_phys.render import ROBOT_LAYERS, LayerSpec, Renderer, Style
+from mresim_phys.render import ROBOT_LAYERS, LayerSpec, Renderer, Style, parse_layers
 from mresim_phys.render.raster import LabelGrids, colour_labels, known_box, packed_colours
+from mresim_phys.render.style import DEFAULT_STYLE
 from mresim_phys.snapshot import AgentSnapshot, Snapshot, read_only
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 
@@ -126,3 +131,20 @@ def test_colouring_pads_with_the_blank_colour() -> None:
     colour_labels(label, table, image)
     assert np.array_equal(image[:3, :5], renderer._lut[label, 0])
     assert (image[3] == renderer._lut[0, 0]).all() and (image[:, 5] == renderer._lut[0, 0]).all()
+
+
+def test_the_ghost_walls_layer_paints_walls_a_map_holds_where_the_truth_is_free(
+    scenario_file: Callable[..., Path],
+) -> None:
+    sim = Simulation.from_yaml(scenario_file())
+    robot = sim.robots[0]
+    robot.belief[10:20, 20:22] = OCCUPIED  # free in the truth: a ghost wall
+    robot.belief[0:2, 0:10] = OCCUPIED  # the outer wall: a true wall, no ghost
+    snap = sim.snapshot()
+    shaded = Renderer(snap.truth.shape, parse_layers("default,ghost_walls"), 8).render(snap)
+    plain = Renderer(snap.truth.shape, parse_layers("default"), 8).render(snap)
+    ghost, wall = np.s_[84:156, 162:174], np.s_[2:14, 8:72]  # 8 px per cell
+    assert np.array_equal(shaded[wall], plain[wall])
+    colour = np.array(DEFAULT_STYLE.ghost_wall)
+    assert (np.abs(shaded[ghost].astype(int) - colour).sum(axis=-1) < 10).mean() > 0.9
+    assert not (np.abs(plain[ghost].astype(int) - colour).sum(axis=-1) < 10).any()

@@ -31,6 +31,7 @@ from mresim_phys.render.raster import (
     LabelGrids,
     colour_labels,
     packed_colours,
+    shade_ghosts,
     shade_hazards,
     shade_lost,
     shade_prior,
@@ -102,6 +103,7 @@ class Renderer:
             shade_prior(image, snapshot.prior, snapshot.truth, self.map_size, self.style)
         if snapshot.lost_knowledge is not None and "lost_knowledge" in self.layers.global_layers:
             shade_lost(image, snapshot.lost_knowledge, self.map_size, self.style)
+        shade_ghosts(image, snapshot, self.layers, self.map_size, self.style)
         if snapshot.hazards is not None and "hazards" in self.layers.global_layers:
             shade_hazards(image, snapshot.hazards, snapshot.truth, self.map_size, self.style)
         self._overlay.draw(image, snapshot, self._regions(snapshot))

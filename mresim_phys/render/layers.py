@@ -32,9 +32,15 @@ ROBOT_LAYERS += ("comm_range", "goal", "skeleton", "rendezvous", "presumed_lost"
 ROBOT_LAYERS += ("rv_candidates", "rv_through_walls")  # multi-point rendezvous
 ROBOT_LAYERS += ("localization",)  # a robot's believed pose and its 95 % ellipse
 ROBOT_LAYERS += ("radio",)  # bytes queued on bounded links, beside the robot's name
+ROBOT_LAYERS += ("ghost_walls",)  # cells an agent's map holds as walls that are free
 LAYERS = GLOBAL_LAYERS + ROBOT_LAYERS
 DEFAULT_GLOBAL = frozenset(GLOBAL_LAYERS)
-DEFAULT_ROBOT = frozenset(ROBOT_LAYERS) - {"free_space", "safe_space", "rv_candidates"}
+DEFAULT_ROBOT = frozenset(ROBOT_LAYERS) - {
+    "free_space",
+    "safe_space",
+    "rv_candidates",
+    "ghost_walls",
+}
 DEFAULTS = DEFAULT_GLOBAL | DEFAULT_ROBOT
 _KINDS = f"global layers: {', '.join(GLOBAL_LAYERS)}; robot layers: {', '.join(ROBOT_LAYERS)}"
 

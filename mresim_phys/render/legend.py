@@ -60,6 +60,8 @@ def legend_band(
     ]
     if "frontiers" in robot_layers:
         items.append(("frontier", style.frontier))
+    if "ghost_walls" in robot_layers:
+        items.append(("ghost wall", style.ghost_wall))
     items += [(name, getattr(style, name)) for name in extras]
     items += [(name, style.robot_colour(i)) for i, name in enumerate(names)]
     glyphs = (*(STATE_GLYPHS if "location" in robot_layers else ()), *marks)

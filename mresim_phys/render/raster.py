@@ -275,6 +275,24 @@ def shade_lost(image: np.ndarray, lost: BoolGrid, map_size: tuple[int, int], sty
                style.lost_knowledge, map_size)  # fmt: skip
 
 
+def shade_ghosts(
+    image: np.ndarray, snapshot: Snapshot, layers: LayerSpec, map_size: tuple[int, int],
+    style: Style,
+) -> None:  # fmt: skip
+    """Paint ``style.ghost_wall`` over the ghost walls of the agents that show the
+    ``ghost_walls`` layer: cells their maps hold as walls where the truth is free (drift
+    smearing a scan, a bump marked where the robot believed it was). In place."""
+    shown = [a for a in snapshot.agents if "ghost_walls" in layers.for_agent(a.name)]
+    if not shown:
+        return
+    truth = as_bool(snapshot.truth)
+    ghost = np.zeros(truth.shape, dtype=bool)
+    for agent in shown:
+        ghost |= as_cells(agent.belief) == OCCUPIED
+    ghost &= ~truth
+    tint_cells(image, ghost.astype(np.float32), style.ghost_wall, map_size)
+
+
 def shade_hazards(
     image: np.ndarray, hazards: NDArray[np.float32], truth: BoolGrid, map_size: tuple[int, int],
     style: Style,

@@ -49,6 +49,7 @@ class Style:
     prior: BGR = (200, 110, 40)  # blue: walls of the prior map where the truth is free
     prior_alpha: float = 0.5
     lost_knowledge: BGR = (60, 20, 220)  # crimson: cells only a failed robot knew
+    ghost_wall: BGR = (20, 180, 210)  # dark yellow: walls an agent believes where it is free
     lost_alpha: float = 0.6
     banner: BGR = (40, 40, 200)  # the header's failure line
     hazard: BGR = (0, 80, 255)  # orange-red: hazard zones (fire, water)
