@@ -253,3 +253,15 @@ def test_a_strategy_chosen_priority_sends_the_cells_nearest_its_point_first() ->
     c.belief[19, :] = FREE
     Bounded(plain, capacity=capacity, priority="strategy")(chain(2), 0)
     assert (d.belief[0, :] == FREE).all() and (d.belief[19, :] == UNKNOWN).all()
+
+
+def test_a_bounded_control_channel_carries_records_only(scenario_file: Any) -> None:
+    control = {"model": "disk", "range": 500, "capacity": 100, "latency": 2}
+    sim = Simulation.from_yaml(bounded_scenario(scenario_file, dropout=1.0, control=control))
+    base = sim.agents[0]
+    for _ in range(12):
+        sim.step()
+        assert sim.comm.control_traffic.cells == 0
+        assert (sim.comm.control_traffic.sent <= 100).all()
+    assert (base.belief == UNKNOWN).all()  # no map on the control channel
+    assert {"A", "B"} <= set(base.teammates)

@@ -196,7 +196,11 @@ class QueuedExchange:
         the link's capacity and the radio's bytes ``left`` (updated); None: nothing to send."""
         records = self.offered_records(agents, sender, receiver, step)
         edge = (sender, receiver)
-        cells = self.offers.cells(agents, edge, self.flying(edge), self.sync_tick(step))
+        cells = (
+            self.offers.cells(agents, edge, self.flying(edge), self.sync_tick(step))
+            if self.maps
+            else None
+        )
         record_bytes = [r.nbytes() for r in records]
         cell_count = 0 if cells is None else len(cells.flat)
         offer = sum(record_bytes) + cell_count * self.cell_bytes
