@@ -17,10 +17,7 @@ it prints the table it draws.
 
 from __future__ import annotations
 
-import argparse
 import json
-import math
-import sys
 from pathlib import Path
 
 import matplotlib
@@ -29,18 +26,13 @@ matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import numpy as np
 import pandas as pd
-from matplotlib.axes import Axes
-
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
-
-from mresim_phys.sweeps.stats import mean_ci  # noqa: E402
-from mresim_phys.sweeps.survival import censored, km_median  # noqa: E402
+from study_figures import arm_figures, draw_mean, draw_milestone, run_tool, save
 
 ALPHA = "team.localization.odometry.alpha"
 STRATEGY = "team.strategy"
 REFERENCE_A1 = 0.0002  # the shipped scenarios' a1
 MILESTONE = "steps_to_explored_90"
+MEANS = ("base_false_free", "base_false_occupied", "pose_error_mean")
 
 
 def drift_of(value: object) -> float:
@@ -55,15 +47,8 @@ def table(runs: pd.DataFrame) -> pd.DataFrame:
     runs["drift"] = runs[ALPHA].map(drift_of)
     rows = []
     for (strategy, drift), group in runs.groupby([STRATEGY, "drift"]):
-        median, low, high = km_median(censored(group, MILESTONE))
-        row = {"strategy": strategy, "drift": drift, "runs": len(group)}
-        row |= {"median": median, "low": low, "high": high}
-        row["not_reached"] = int(group[MILESTONE].isna().sum())
-        for name in ("base_false_free", "base_false_occupied", "pose_error_mean"):
-            values = pd.to_numeric(group[name], errors="coerce").dropna().to_numpy()
-            row[name] = float(np.mean(values)) if len(values) else math.nan
-            row[f"{name}_ci"] = mean_ci(values)
-        rows.append(row)
+        row = {"strategy": strategy, "drift": drift}
+        rows.append(row | arm_figures(group, MILESTONE, MEANS))
     out: pd.DataFrame = pd.DataFrame(rows).sort_values(["strategy", "drift"])
     return out
 
@@ -72,67 +57,23 @@ def draw(data: pd.DataFrame, out: Path) -> None:
     """The three panels, one colour per strategy."""
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.6))
     for n, (strategy, rows) in enumerate(data.groupby("strategy")):
-        colour, x = f"C{n}", rows["drift"].to_numpy()
-        _milestone(axes[0], rows, str(strategy), colour)
+        colour, x = f"C{n}", rows["drift"]
+        draw_milestone(axes[0], x, rows, str(strategy), ("-", colour), top_of(data))
         for name, style in (("base_false_free", "-"), ("base_false_occupied", "--")):
             label = f"{strategy}: {name[5:].replace('_', ' ')}"
-            _with_ci(axes[1], x, rows, name, label, (style, colour))
-        _with_ci(axes[2], x, rows, "pose_error_mean", str(strategy), ("-", colour))
+            draw_mean(axes[1], x, rows, name, label, (style, colour))
+        draw_mean(axes[2], x, rows, "pose_error_mean", str(strategy), ("-", colour))
     axes[0].set(title="steps to 90 % explored (Kaplan-Meier median, 95 %)", ylabel="steps")
     axes[1].set(title="base map at the end: wrong cells", ylabel="fraction of reachable area")
     axes[2].set(title="team's mean position error", ylabel="cells")
-    for ax in axes:
-        ax.set_xlabel("drift (alphas / the shipped scenarios')")
-        ax.legend(fontsize=8)
-        ax.grid(alpha=0.3)
-    fig.tight_layout()
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
+    save(fig, axes, "drift (alphas / the shipped scenarios')", out)
 
 
-def _milestone(ax: Axes, rows: pd.DataFrame, label: str, colour: str) -> None:
-    """Medians with their intervals (an open upper end drawn to the top of the interval
-    found); where the median is not reached, a triangle at the top of the panel."""
-    shown = rows[np.isfinite(rows["median"])]
-    low = shown["median"] - shown["low"].clip(upper=shown["median"])
-    high = shown["high"].where(np.isfinite(shown["high"]), shown["median"]) - shown["median"]
-    ax.errorbar(shown["drift"], shown["median"], yerr=[low, high], marker="o", capsize=3,
-                label=label, color=colour)  # fmt: skip
-    finite = pd.concat([rows["median"], rows["low"]]).replace(math.inf, np.nan)
-    top = float(finite.max()) * 1.08 if finite.notna().any() else 1.0
-    missing = rows[~np.isfinite(rows["median"])]
-    ax.plot(missing["drift"], [top] * len(missing), "^", color=colour, markersize=9,
-            label=f"{label}: median not reached" if len(missing) else None)  # fmt: skip
-    for _, row in rows.iterrows():
-        y = row["median"] if math.isfinite(row["median"]) else top
-        ax.annotate(f"{row['not_reached']}/{row['runs']} not reached", (row["drift"], y),
-                    fontsize=7, xytext=(4, 4), textcoords="offset points")  # fmt: skip
-
-
-def _with_ci(
-    ax: Axes, x: np.ndarray, rows: pd.DataFrame, name: str, label: str, look: tuple[str, str]
-) -> None:
-    """Means with their 95 % intervals (``look``: line style and colour)."""
-    ci = np.array([list(v) for v in rows[f"{name}_ci"]])
-    mean = rows[name].to_numpy()
-    err = np.abs(np.vstack([mean - ci[:, 0], ci[:, 1] - mean]))
-    ax.errorbar(x, mean, yerr=np.nan_to_num(err), marker="o", capsize=3, linestyle=look[0],
-                color=look[1], label=label)  # fmt: skip
-
-
-def main() -> None:
-    """Read the sweep, print the table, draw the figure."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("sweep", type=Path)
-    parser.add_argument("--out", type=Path, default=ROOT / "docs/images/drift_alpha.png")
-    args = parser.parse_args()
-    data = table(pd.read_parquet(args.sweep / "runs.parquet"))
-    with pd.option_context("display.width", 200, "display.max_columns", 20):
-        print(data.drop(columns=[c for c in data.columns if c.endswith("_ci")]).to_string())
-    draw(data, args.out)
-    print(f"wrote {args.out}")
+def top_of(data: pd.DataFrame) -> float:
+    """Where a median not reached is drawn: above every finite median and bound."""
+    finite = pd.concat([data["median"], data["low"]]).replace(np.inf, np.nan)
+    return float(finite.max()) * 1.08 if finite.notna().any() else 1.0
 
 
 if __name__ == "__main__":
-    main()
+    run_tool(__doc__, "drift_alpha.png", table, draw)

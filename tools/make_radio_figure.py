@@ -18,30 +18,23 @@ it prints the table it draws.
 
 from __future__ import annotations
 
-import argparse
 import math
-import sys
 from pathlib import Path
 
 import matplotlib
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
-import numpy as np
 import pandas as pd
-from matplotlib.axes import Axes
-
-ROOT = Path(__file__).resolve().parent.parent
-sys.path.insert(0, str(ROOT))
-
-from mresim_phys.sweeps.stats import mean_ci  # noqa: E402
-from mresim_phys.sweeps.survival import censored, km_median  # noqa: E402
+from study_figures import arm_figures, draw_mean, draw_milestone, run_tool, save
 
 STRATEGY = "team.strategy"
 CAPACITY = "communication.capacity"
 BURSTS = "communication.bursts"
 MILESTONE = "steps_to_known_at_base_90"
+MEANS = ("final_known_at_base", "meeting_keep_rate")
 CAPACITIES = [None, 20000, 5000, 2000]  # the study's axis, left to right
+TOP = 620.0  # steps: where a median not reached is drawn (the study's cap is 600)
 
 
 def capacity_label(value: object) -> str:
@@ -64,16 +57,9 @@ def table(runs: pd.DataFrame) -> pd.DataFrame:
     order = [capacity_label(c) for c in CAPACITIES]
     rows = []
     for (strategy, bursts, capacity), group in runs.groupby([STRATEGY, "bursts", "capacity"]):
-        median, low, high = km_median(censored(group, MILESTONE))
         row = {"strategy": strategy, "bursts": bursts, "capacity": capacity}
-        row |= {"x": order.index(str(capacity)), "runs": len(group)}
-        row |= {"median": median, "low": low, "high": high}
-        row["not_reached"] = int(group[MILESTONE].isna().sum())
-        for name in ("final_known_at_base", "meeting_keep_rate"):
-            values = pd.to_numeric(group.get(name), errors="coerce").dropna().to_numpy()
-            row[name] = float(np.mean(values)) if len(values) else math.nan
-            row[f"{name}_ci"] = mean_ci(values) if len(values) > 1 else (math.nan, math.nan)
-        rows.append(row)
+        row["x"] = order.index(str(capacity))
+        rows.append(row | arm_figures(group, MILESTONE, MEANS))
     out: pd.DataFrame = pd.DataFrame(rows).sort_values(["strategy", "bursts", "x"])
     return out
 
@@ -83,14 +69,14 @@ def draw(data: pd.DataFrame, out: Path) -> None:
     fig, axes = plt.subplots(1, 3, figsize=(16, 4.8))
     strategies = sorted(data["strategy"].unique())
     for (strategy, bursts), rows in data.groupby(["strategy", "bursts"]):
-        colour = f"C{strategies.index(strategy)}"
-        style = "--" if bursts else "-"
+        n = strategies.index(strategy)
+        look = ("--" if bursts else "-", f"C{n}")
         label = f"{strategy}{', bursts' if bursts else ''}"
-        shift = 0.06 * (strategies.index(strategy) - 1) + (0.02 if bursts else -0.02)
-        _milestone(axes[0], rows, label, (style, colour), shift)
-        _with_ci(axes[1], rows, "final_known_at_base", label, (style, colour), shift)
+        x = rows["x"] + 0.06 * (n - 1) + (0.02 if bursts else -0.02)
+        draw_milestone(axes[0], x, rows, label, look, TOP)
+        draw_mean(axes[1], x, rows, "final_known_at_base", label, look)
         if rows["meeting_keep_rate"].notna().any():
-            _with_ci(axes[2], rows, "meeting_keep_rate", label, (style, colour), shift)
+            draw_mean(axes[2], x, rows, "meeting_keep_rate", label, look)
     axes[0].set(title="steps to 90 % known at the base (Kaplan-Meier median, 95 %)",
                 ylabel="steps")  # fmt: skip
     axes[1].set(title="known at the base at the end", ylabel="fraction of explorable area")
@@ -98,59 +84,8 @@ def draw(data: pd.DataFrame, out: Path) -> None:
     ticks = [capacity_label(c) for c in CAPACITIES]
     for ax in axes:
         ax.set_xticks(range(len(ticks)), ticks)
-        ax.set_xlabel("capacity per link and step")
-        ax.legend(fontsize=7)
-        ax.grid(alpha=0.3)
-    fig.tight_layout()
-    out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(out, dpi=110)
-    plt.close(fig)
-
-
-def _milestone(
-    ax: Axes, rows: pd.DataFrame, label: str, look: tuple[str, str], shift: float
-) -> None:
-    """Medians with their intervals; a triangle at the top where the median is not
-    reached; "k/n" not reached beside each point."""
-    x = rows["x"] + shift
-    finite = np.isfinite(rows["median"])
-    shown = rows[finite]
-    low = shown["median"] - shown["low"].clip(upper=shown["median"])
-    high = shown["high"].where(np.isfinite(shown["high"]), shown["median"]) - shown["median"]
-    ax.errorbar(x[finite], shown["median"], yerr=[low, high], marker="o", capsize=3,
-                linestyle=look[0], color=look[1], label=label)  # fmt: skip
-    top = 620.0
-    ax.plot(x[~finite], [top] * int((~finite).sum()), "^", color=look[1], markersize=8)
-    for xi, (_, row) in zip(x, rows.iterrows(), strict=True):
-        if row["not_reached"]:
-            y = row["median"] if math.isfinite(row["median"]) else top
-            ax.annotate(f"{row['not_reached']}/{row['runs']}", (xi, y), fontsize=6,
-                        xytext=(3, 3), textcoords="offset points", color=look[1])  # fmt: skip
-
-
-def _with_ci(
-    ax: Axes, rows: pd.DataFrame, name: str, label: str, look: tuple[str, str], shift: float
-) -> None:
-    """Means with their 95 % intervals (``look``: line style and colour)."""
-    ci = np.array([list(v) for v in rows[f"{name}_ci"]], dtype=float)
-    mean = rows[name].to_numpy(dtype=float)
-    err = np.abs(np.vstack([mean - ci[:, 0], ci[:, 1] - mean]))
-    ax.errorbar(rows["x"] + shift, mean, yerr=np.nan_to_num(err), marker="o", capsize=3,
-                linestyle=look[0], color=look[1], label=label)  # fmt: skip
-
-
-def main() -> None:
-    """Read the sweep, print the table, draw the figure."""
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("sweep", type=Path)
-    parser.add_argument("--out", type=Path, default=ROOT / "docs/images/radio_capacity.png")
-    args = parser.parse_args()
-    data = table(pd.read_parquet(args.sweep / "runs.parquet"))
-    with pd.option_context("display.width", 220, "display.max_columns", 20):
-        print(data.drop(columns=[c for c in data.columns if c.endswith("_ci")]).to_string())
-    draw(data, args.out)
-    print(f"wrote {args.out}")
+    save(fig, axes, "capacity per link and step", out, 7)
 
 
 if __name__ == "__main__":
-    main()
+    run_tool(__doc__, "radio_capacity.png", table, draw)
