@@ -284,3 +284,18 @@ def test_radio_options_show_in_metrics_and_replay_recomputes_them(
     assert "connected_to_base" in header and "bytes_sent" not in header
     assert main(["replay", str(out), "--metrics"]) == 0
     assert "identical" in capsys.readouterr().out
+
+
+def test_a_trace_capacity_bounds_its_pair_from_its_step_on(
+    scenario_file: Any, tmp_path: Path
+) -> None:
+    (tmp_path / "links.csv").write_text("step,a,b,capacity\n5,base,A,300\n", encoding="utf-8")
+    path = scenario_file(communication={"model": "disk", "trace": "links.csv"}, steps=20)
+    sim = Simulation.from_yaml(path)
+    assert sim.network.bounded  # a trace that sets capacities queues what links carry
+    sent = []
+    for _ in range(20):
+        sim.step()
+        sent.append((int(sim.comm.traffic.sent[0, 1]), int(sim.comm.traffic.sent[1, 0])))
+    assert max(max(pair) for pair in sent[:5]) > 300
+    assert max(max(pair) for pair in sent[5:]) <= 300  # each way, from step 5 on
