@@ -61,9 +61,11 @@ def draw_milestone(
     ax.plot(missing, [top] * len(missing), "^", color=look[1], markersize=8)
     for xi, (_, row) in zip(x, rows.iterrows(), strict=True):
         if row["not_reached"]:
-            y = row["median"] if math.isfinite(row["median"]) else top
-            ax.annotate(f"{row['not_reached']}/{row['runs']} not reached", (xi, y), fontsize=6,
-                        xytext=(3, 3), textcoords="offset points", color=look[1])  # fmt: skip
+            short = not math.isfinite(row["median"])  # beside a triangle: the count alone
+            y = top if short else row["median"]
+            text = f"{row['not_reached']}/{row['runs']}{'' if short else ' not reached'}"
+            ax.annotate(text, (xi, y), fontsize=6, xytext=(5, -3), textcoords="offset points",
+                        color=look[1])  # fmt: skip
 
 
 def draw_mean(
