@@ -19,6 +19,7 @@ from conftest import csv_row
 from test_runlog import assert_same_snapshot, kept
 
 from mresim_phys.cli import main
+from mresim_phys.output.logformat import VERSION
 from mresim_phys.output.runlog import RunLog, RunLogWriter, recompute_metrics
 from mresim_phys.render import DEFAULT_STYLE, Renderer, frame_scale, parse_layers
 from mresim_phys.render.draw import world_legend
@@ -216,7 +217,7 @@ def test_the_log_stores_footprints_once_and_moves_only_when_they_change(
 ) -> None:
     assert main(["run", str(scenario), "--out", str(tmp_path), "--quiet", "--no-plots"]) == 0
     meta = json.loads((tmp_path / "log" / "meta.json").read_text())
-    assert meta["version"] == 7
+    assert meta["version"] == VERSION
     assert [(m["name"], m["kind"], m["shape"]) for m in meta["movables"]] == [
         ("cart", "obstacle", [4, 4]),
         ("gate", "door", [16, 2]),
