@@ -164,15 +164,24 @@ def localize(
     return Localization(spec, noise, odometry, fixes, jumps, estimate, pose, bounds)
 
 
+FIX_NOTES = ("base", "beacon", "teammate", "scan_matching")  # the corrections, as counted
+
+
 @dataclass(frozen=True)
 class PoseBelief:
     """What a robot believes of its pose: the believed pose, the covariance's six distinct
-    entries (xx, xy, yy, xt, yt, tt) and its error against the truth (cells, rad)."""
+    entries (xx, xy, yy, xt, yt, tt), its error against the truth (cells, rad) and the
+    corrections it fused so far, per kind of :data:`FIX_NOTES`."""
 
     pose: Pose
     cov: tuple[float, float, float, float, float, float]
     error: float
     heading_error: float
+    fixes: tuple[int, int, int, int] = (0, 0, 0, 0)
+
+    def corrections(self) -> dict[str, int]:
+        """The corrections fused so far, by kind (those fused at least once)."""
+        return {note: n for note, n in sorted(zip(FIX_NOTES, self.fixes, strict=True)) if n}
 
     @property
     def sigma(self) -> float:
@@ -198,16 +207,20 @@ class LocalizationFeature(RobotFeature[Localization, PoseBelief]):
         c = state.estimate.cov
         cov = (c[0, 0], c[0, 1], c[1, 1], c[0, 2], c[1, 2], c[2, 2])
         error, heading = state.error()
-        return PoseBelief(state.believed, tuple(float(v) for v in cov), error, heading)  # type: ignore[arg-type]
+        fixes = tuple(state.corrected.get(note, 0) for note in FIX_NOTES)
+        return PoseBelief(state.believed, tuple(float(v) for v in cov), error, heading, fixes)  # type: ignore[arg-type]
 
     def encode(self, value: PoseBelief) -> Any:
-        """[x, y, theta, six covariance entries, error, heading error], full precision."""
-        return [*value.pose, *value.cov, value.error, value.heading_error]
+        """[x, y, theta, six covariance entries, error, heading error, the four counts of
+        corrections], full precision."""
+        return [*value.pose, *value.cov, value.error, value.heading_error, *value.fixes]
 
     def decode(self, raw: Any) -> PoseBelief:
-        """The logged list."""
-        v = [float(x) for x in raw]
-        return PoseBelief((v[0], v[1], v[2]), (v[3], v[4], v[5], v[6], v[7], v[8]), v[9], v[10])
+        """The logged list (a log before the counts of corrections: none counted)."""
+        v = [float(x) for x in raw[:11]]
+        n = tuple(int(x) for x in raw[11:15]) if len(raw) >= 15 else (0, 0, 0, 0)
+        cov = (v[3], v[4], v[5], v[6], v[7], v[8])
+        return PoseBelief((v[0], v[1], v[2]), cov, v[9], v[10], n)  # type: ignore[arg-type]
 
     def label(self, value: PoseBelief) -> str:
         """`` ~1.4`` (the position error, cells)."""

@@ -57,13 +57,19 @@ def replayed_health(log: RunLog) -> dict[str, Any]:
 
 def compare_health(health: dict[str, Any], run_dir: Path) -> tuple[list[str], bool]:
     """Compare a recomputed ``health`` object with the one in the run's summary.json."""
+    return compare_object(HEALTH, health, run_dir, "health record")
+
+
+def compare_object(key: str, recomputed: Any, run_dir: Path, what: str) -> tuple[list[str], bool]:
+    """Compare a recomputed summary.json object (``key``) with the run's own: a line for
+    ``mresim replay --metrics``, and whether they are equal (none to compare: equal)."""
     path = run_dir / "summary.json"
     try:
-        live = json.loads(path.read_text(encoding="utf-8")).get(HEALTH)
+        live = json.loads(path.read_text(encoding="utf-8")).get(key)
     except (OSError, ValueError, AttributeError):
         live = None
     if live is None:
-        return ["health record recomputed (no health record in summary.json to compare)"], True
-    same = live == json.loads(json.dumps(health))
+        return [f"{what} recomputed (no {key} object in summary.json to compare)"], True
+    same = live == json.loads(json.dumps(recomputed))
     verdict = "identical to" if same else "DIFFERENT from"
-    return [f"health record recomputed: {verdict} the one in {path}"], same
+    return [f"{what} recomputed: {verdict} the one in {path}"], same

@@ -27,7 +27,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from mresim_phys.localization.feature import LOCALIZATION, Localization
+from mresim_phys.localization.feature import LOCALIZATION, PoseBelief
 from mresim_phys.metrics import StepRecord
 from mresim_phys.snapshot import Snapshot
 from mresim_phys.types import FREE, OCCUPIED, BeliefGrid, BoolGrid
@@ -44,6 +44,10 @@ class PoseRecorder:
 
     def on_step(self, record: StepRecord, snapshot: Callable[[], Snapshot]) -> None:
         """Note each robot's error at this step (robots without localisation: none)."""
+        self.note(record)
+
+    def note(self, record: StepRecord) -> None:
+        """Note each robot's error at the step of ``record`` (a live run's or a replay's)."""
         for robot in record.robots:
             belief = LOCALIZATION.of(robot)
             if belief is not None and robot.state != "failed":
@@ -68,14 +72,38 @@ def consistency(belief: BeliefGrid, truth: BoolGrid, reachable: BoolGrid) -> dic
 def localization_summary(sim: Simulation, poses: PoseRecorder | None) -> dict[str, Any]:
     """summary.json's ``localization`` object (module docstring); {} for a run without
     localisation."""
-    states = {r.name: LOCALIZATION.state_of(r.features) for r in sim.robots}
-    if poses is None or not any(s is not None for s in states.values()):
-        return {}
+    beliefs = {r.name: LOCALIZATION.value_in(r.features) for r in sim.robots}
+    maps = {r.name: r.belief for r in sim.robots}
     truth, reachable = sim.world.occupied, sim.setup.reachable.mask
+    return localization_object(beliefs, maps, sim.base.belief, (truth, reachable), poses)
+
+
+def replayed_localization(
+    snap: Snapshot, reachable: BoolGrid, poses: PoseRecorder | None
+) -> dict[str, Any]:
+    """The ``localization`` object recomputed from a replay's last step (``reachable``: the
+    free cells 4-connected to the starts, as the replay keeps them)."""
+    beliefs = {r.name: LOCALIZATION.of(r) for r in snap.robots}
+    maps = {r.name: r.belief for r in snap.robots}
+    return localization_object(beliefs, maps, snap.base.belief, (snap.truth, reachable), poses)
+
+
+def localization_object(
+    beliefs: dict[str, PoseBelief | None],
+    maps: dict[str, BeliefGrid],
+    base: BeliefGrid,
+    world: tuple[BoolGrid, BoolGrid],
+    poses: PoseRecorder | None,
+) -> dict[str, Any]:
+    """The object from each robot's last belief (None: no localisation) and map, the
+    base's map, the truth and its reachable cells, and the errors step by step."""
+    if poses is None or not any(b is not None for b in beliefs.values()):
+        return {}
+    truth, reachable = world
     robots = {
-        r.name: _robot(state, poses.errors.get(r.name, []), consistency(r.belief, truth, reachable))
-        for r in sim.robots
-        if (state := states[r.name]) is not None
+        name: _robot(belief, poses.errors.get(name, []), consistency(maps[name], truth, reachable))
+        for name, belief in beliefs.items()
+        if belief is not None
     }
     every = [e for errors in poses.errors.values() for e in errors]
     finals = [v["final_error"] for v in robots.values()]
@@ -87,19 +115,18 @@ def localization_summary(sim: Simulation, poses: PoseRecorder | None) -> dict[st
                 "max_error": max(every, default=0.0),
                 "mean_error": float(np.mean(every)) if every else 0.0,
             },
-            "base": consistency(sim.base.belief, truth, reachable),
+            "base": consistency(base, truth, reachable),
         }
     }
 
 
-def _robot(state: Localization, errors: list[float], maps: dict[str, float]) -> dict[str, Any]:
+def _robot(belief: PoseBelief, errors: list[float], maps: dict[str, float]) -> dict[str, Any]:
     """One robot's entry."""
-    error, heading = state.error()
     return {
-        "final_error": error,
-        "max_error": max(errors, default=error),
-        "mean_error": float(np.mean(errors)) if errors else error,
-        "final_heading_error_deg": float(np.degrees(heading)),
-        "corrections": dict(sorted(state.corrected.items())),
+        "final_error": belief.error,
+        "max_error": max(errors, default=belief.error),
+        "mean_error": float(np.mean(errors)) if errors else belief.error,
+        "final_heading_error_deg": float(np.degrees(belief.heading_error)),
+        "corrections": belief.corrections(),
         **maps,
     }
