@@ -55,7 +55,7 @@ MEETING_COLUMNS = (
     "meetings_kept",
     "meetings_missed",
     "meetings_pending",
-)  # a run whose strategies plan meetings (meetings/board.py)
+)  # a run whose strategies plan meetings (meetings/columns.py)
 
 
 class ColumnParams(PluginParams):
@@ -351,7 +351,7 @@ FEATURE_COLUMNS = {
     "robot_battery": "mresim_phys.faults.battery:robot_battery",
     **{n: f"mresim_phys.localization.feature:{n}" for n in LOCALIZATION_COLUMNS},
     **{n: f"mresim_phys.comms.radio_feature:{n}" for n in RADIO_COLUMNS},
-    **{n: f"mresim_phys.meetings.board:{n}" for n in MEETING_COLUMNS},
+    **{n: f"mresim_phys.meetings.columns:{n}" for n in MEETING_COLUMNS},
 }
 for _name, _reference in FEATURE_COLUMNS.items():
     COLUMNS.lazy(_name, _reference, ColumnParams)

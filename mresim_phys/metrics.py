@@ -30,7 +30,7 @@ from mresim_phys.knowledge.coverage import Coverage
 from mresim_phys.types import FREE, BeliefGrid, BoolGrid
 
 if TYPE_CHECKING:
-    from mresim_phys.meetings.board import MeetingBoard
+    from mresim_phys.meeting_board import MeetingBoard
 
 THRESHOLDS = (0.5, 0.9, 0.95)
 

@@ -21,7 +21,7 @@ from numpy.typing import NDArray
 from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray, RobotSight
 
 if TYPE_CHECKING:
-    from mresim_phys.meetings.board import MeetingBoard
+    from mresim_phys.meeting_board import MeetingBoard
 
 
 def read_only(array: np.ndarray) -> np.ndarray:
@@ -155,7 +155,7 @@ class Snapshot:
     # what the explorable area was computed from (static): each robot's start, radius,
     # laser range and seeds (world.explorable); (): unknown (a log older than it)
     sights: tuple[RobotSight, ...] = ()
-    # the rendezvous accounting at the end of the step (meetings/board.py); None: the run's
+    # the rendezvous accounting at the end of the step (meeting_board.py); None: the run's
     # strategies plan no meetings
     meetings: MeetingBoard | None = None
 

@@ -11,7 +11,7 @@ from typing import Any
 from mresim_phys import Simulation
 from mresim_phys.cli import main
 from mresim_phys.columns import MEETING_COLUMNS
-from mresim_phys.meetings.board import Meeting, MeetingBoard, Outcome, Tally, decode, encode
+from mresim_phys.meeting_board import Meeting, MeetingBoard, Outcome, Tally, decode, encode
 
 SPEED, REACH = 2.0, 2.0 + 2.0  # the team's speed; at its point: within speed + AT_POINT cells
 A_POINT, B_POINT = (20.0, 30.0), (24.0, 30.0)  # 4 cells apart: linked when both are there

@@ -41,7 +41,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
-from mresim_phys.meetings.board import MARK_STEPS, REASONS, Meeting, MeetingBoard, Outcome, Tally
+from mresim_phys.meeting_board import MARK_STEPS, REASONS, Meeting, MeetingBoard, Outcome, Tally
 from mresim_phys.strategies.appointments import (
     Appointment,
     PlansMeetings,

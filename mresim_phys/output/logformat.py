@@ -8,7 +8,7 @@ Each field of :class:`~mresim_phys.snapshot.Snapshot` and of its
   (``sights``, ``output.logmeta``);
 * ``steps.jsonl``, one JSON line per step (:class:`LineField`): ``step``, ``events``,
   ``links``, ``comm``, ``world_version``, ``meetings`` (the rendezvous accounting's
-  board, ``meetings/board.py``; left out without one) (:data:`SNAPSHOT_LINE`) and per agent
+  board, ``meeting_board.py``; left out without one) (:data:`SNAPSHOT_LINE`) and per agent
   ``position``, ``heading``, ``state``, ``role``, ``goal``, ``distance``, ``parent``,
   ``base_contact``, each recorded per-robot feature's value under its key (``parts``,
   ``battery``, ``health``: the reason of a change of state, ``lost``; :class:`SpreadField`;
@@ -39,8 +39,8 @@ from typing import Any
 
 import numpy as np
 
+from mresim_phys import meeting_board as meetings_board
 from mresim_phys.features import FEATURES
-from mresim_phys.meetings import board as meetings_board
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
 from mresim_phys.types import FloatArray, IntArray
 

@@ -20,7 +20,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from mresim_phys.meetings.board import REASONS, Meeting, Outcome
+from mresim_phys.meeting_board import REASONS, Meeting, Outcome
 
 if TYPE_CHECKING:
     from mresim_phys.sim import Simulation

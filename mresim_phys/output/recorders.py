@@ -85,7 +85,7 @@ def run_layout(scenario: Scenario) -> Layout:
 def extra_columns(scenario: Scenario) -> list[str]:
     """The optional columns of the run: those its scenario names, then the localisation
     columns (``localization/feature.py``) if a robot has localisation, then the meeting
-    columns (``meetings/board.py``) if a robot's strategy plans meetings, then the radio
+    columns (``meeting_board.py``) if a robot's strategy plans meetings, then the radio
     columns (``RadioSpec.columns``), each unless named already."""
     named = list(scenario.metrics.columns)
     if has_localization(scenario):

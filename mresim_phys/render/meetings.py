@@ -1,7 +1,7 @@
 """Views (phase 8), meeting marks: the rendezvous accounting's judgements on a frame.
 
 With the global layer ``meetings`` on, a frame of a run whose strategies plan meetings
-marks each meeting judged in the last ``MARK_STEPS`` steps (``meetings/board.py``) at
+marks each meeting judged in the last ``MARK_STEPS`` steps (``meeting_board.py``) at
 the points of the parties it bound: a kept one with a green ring, a missed one with a red
 cross and the letter of its reason (``F`` partner failed, ``L`` late, ``N`` no link: the
 link failed at the point). The legend shows both marks while the run has meetings.
@@ -16,7 +16,7 @@ from collections.abc import Callable
 import cv2
 import numpy as np
 
-from mresim_phys.meetings.board import LETTERS, MeetingBoard
+from mresim_phys.meeting_board import LETTERS, MeetingBoard
 from mresim_phys.render.style import AA, BGR, FONT, ONE, SHIFT, Style
 
 KEPT, MISSED = "meeting kept", "meeting missed"  # legend marks

@@ -28,7 +28,7 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 
 from mresim_phys.knowledge.health import TOTALS
-from mresim_phys.meetings.board import REASONS
+from mresim_phys.meeting_board import REASONS
 from mresim_phys.output.files import atomic_path
 from mresim_phys.sweeps.expand import RunSpec
 from mresim_phys.sweeps.worker import DONE, run_folder

@@ -23,7 +23,7 @@ import numpy as np
 
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.features import FEATURES
-from mresim_phys.meetings.board import pending_of
+from mresim_phys.meeting_board import pending_of
 from mresim_phys.render import LayerSpec, Renderer, frame_scale
 from mresim_phys.render.pose import path_start
 from mresim_phys.snapshot import AgentSnapshot, Snapshot
@@ -115,7 +115,7 @@ def agent_rows(snapshot: Snapshot, renderer: Renderer) -> list[dict[str, Any]]:
 
 
 def meetings_entry(snapshot: Snapshot, agent: AgentSnapshot) -> dict[str, Any]:
-    """The meetings pending for ``agent`` (``meetings/board.py``), in a run with meetings."""
+    """The meetings pending for ``agent`` (``meeting_board.py``), in a run with meetings."""
     board = snapshot.meetings
     return {} if board is None else {"meetings": pending_of(board, agent.name)}
 

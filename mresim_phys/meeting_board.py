@@ -8,19 +8,14 @@ marks frames draw). ``StepRecord.meetings`` and ``Snapshot.meetings`` hold it (N
 run whose strategies plan no meetings); the run log stores it whole in each step's line
 (:func:`encode` / :func:`decode`, full-precision floats), so a replay has the same
 columns, marks and hover rows. The columns ``meetings_planned``, ``meetings_kept``,
-``meetings_missed`` (cumulative) and ``meetings_pending`` read it. Rules:
-``docs/rendezvous.md``.
+``meetings_missed`` (cumulative) and ``meetings_pending`` read it
+(``meetings/columns.py``). Rules: ``docs/rendezvous.md``.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
-
-from mresim_phys.columns import column
-
-if TYPE_CHECKING:
-    from mresim_phys.metrics import StepRecord
+from typing import Any
 
 REASONS = ("partner_failed", "late", "link_failed")  # a miss's reasons (the tally's order)
 LETTERS = {"partner_failed": "F", "late": "L", "link_failed": "N"}  # on frames: F, L, N(o link)
@@ -137,35 +132,3 @@ def pending_of(board: MeetingBoard | None, name: str) -> list[dict[str, Any]]:
                 "closes": m.closes,
             })  # fmt: skip
     return out
-
-
-def _tally(r: StepRecord) -> Tally | None:
-    return None if r.meetings is None else r.meetings.tally
-
-
-@column("meetings_planned", optional=True)
-def meetings_planned(r: StepRecord) -> int | None:
-    """Meetings planned so far (their parties parted holding them)."""
-    t = _tally(r)
-    return None if t is None else t.planned
-
-
-@column("meetings_kept", optional=True)
-def meetings_kept(r: StepRecord) -> int | None:
-    """Meetings kept so far (the parties linked on the main channel within the window)."""
-    t = _tally(r)
-    return None if t is None else t.kept
-
-
-@column("meetings_missed", optional=True)
-def meetings_missed(r: StepRecord) -> int | None:
-    """Meetings missed so far, whatever the reason."""
-    t = _tally(r)
-    return None if t is None else t.missed_total
-
-
-@column("meetings_pending", optional=True)
-def meetings_pending(r: StepRecord) -> int | None:
-    """Planned meetings not judged yet."""
-    t = _tally(r)
-    return None if t is None else t.pending()
