@@ -299,3 +299,22 @@ def test_a_trace_capacity_bounds_its_pair_from_its_step_on(
         sent.append((int(sim.comm.traffic.sent[0, 1]), int(sim.comm.traffic.sent[1, 0])))
     assert max(max(pair) for pair in sent[:5]) > 300
     assert max(max(pair) for pair in sent[5:]) <= 300  # each way, from step 5 on
+
+
+def test_a_trace_saved_by_a_spreadsheet_with_a_byte_order_mark_reads(
+    scenario_file: Any, tmp_path: Path
+) -> None:
+    (tmp_path / "links.csv").write_bytes("\ufeffstep,a,b,up\r\n0,A,B,1\r\n".encode())
+    path = scenario_file(communication={"model": "disk", "trace": "links.csv"}, steps=3)
+    sim = Simulation.from_yaml(path)
+    sim.step()
+    assert sim.links[1, 2]
+
+
+def test_a_trace_path_that_is_a_folder_is_one_paragraph_and_exit_2(
+    scenario_file: Any, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    (tmp_path / "traces").mkdir()
+    assert run_validate(scenario_file, trace="traces") == 2
+    err = capsys.readouterr().err
+    assert "communication.trace" in err and "Traceback" not in err

@@ -56,7 +56,7 @@ def read_text(path: Path) -> str:
     try:
         if path.stat().st_size > MAX_FILE:
             raise TraceError(f"{path} is larger than {MAX_FILE // 2**20} MiB")
-        return path.read_text(encoding="utf-8")
+        return path.read_text(encoding="utf-8-sig")  # a spreadsheet's byte-order mark too
     except (OSError, UnicodeDecodeError) as exc:
         raise TraceError(f"{path} cannot be read ({exc})") from None
 
