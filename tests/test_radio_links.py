@@ -318,3 +318,17 @@ def test_a_trace_path_that_is_a_folder_is_one_paragraph_and_exit_2(
     assert run_validate(scenario_file, trace="traces") == 2
     err = capsys.readouterr().err
     assert "communication.trace" in err and "Traceback" not in err
+
+
+def test_a_long_correlation_length_is_drawn_coarse_with_the_same_statistics() -> None:
+    length = 64.0  # nodes 8 cells apart
+    fields = [shadow_field((400, 400), length, np.random.default_rng(s)) for s in range(6)]
+    assert np.mean([f.var() for f in fields]) == pytest.approx(1.0, abs=0.12)
+    for lag in (16, 32, 64):
+        measured = np.mean([lag_correlation(f, lag) for f in fields])
+        assert 1 - measured == pytest.approx(1 - correlation(lag, length), abs=0.08)
+
+
+def test_a_correlation_length_far_beyond_the_map_costs_next_to_nothing() -> None:
+    field = shadow_field((300, 500), 100_000.0, np.random.default_rng(1))
+    assert field.shape == (300, 500) and np.ptp(field) < 0.05  # one value, nearly

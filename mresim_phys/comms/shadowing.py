@@ -6,7 +6,8 @@ variance, with the Gaussian correlation ``rho(h) = exp(-(h / L)^2)`` at distance
 stream, drawn once when the run is built) smoothed by a Gaussian kernel of standard
 deviation ``L / 2`` (``scipy.ndimage.gaussian_filter``) and scaled by the kernel's norm, on
 a grid padded beyond the kernel's reach so that the field is as stationary at the map's
-edge as in its middle. A link between agents at ``p_i`` and ``p_j`` (distance ``d``) gets
+edge as in its middle; beyond 8 cells of length, on nodes ``L // 8`` cells apart,
+interpolated linearly. A link between agents at ``p_i`` and ``p_j`` (distance ``d``) gets
 
     X_ij = sigma * (f(p_i) + f(p_j)) / sqrt(2 * (1 + rho(d)))
 
@@ -29,6 +30,7 @@ from mresim_phys.comms.radio_params import ShadowingSpec
 from mresim_phys.types import FloatArray, IntArray
 
 TRUNCATE = 4.0  # kernel standard deviations: where scipy's Gaussian kernel ends
+NODES = 8  # field nodes per correlation length, at most: a longer length is drawn coarser
 
 
 def correlation(h: FloatArray | float, length: float) -> FloatArray:
@@ -38,13 +40,34 @@ def correlation(h: FloatArray | float, length: float) -> FloatArray:
 
 def shadow_field(shape: tuple[int, int], length: float, rng: np.random.Generator) -> FloatArray:
     """A unit-variance Gaussian field over a grid of ``shape`` with correlation
-    :func:`correlation` (float32, one value per cell)."""
-    sigma = length / 2.0
+    :func:`correlation` (float32, one value per cell).
+
+    A correlation length of :data:`NODES` cells or more is drawn on a coarser grid, one
+    node every ``length // NODES`` cells, and interpolated linearly between nodes: the
+    field barely changes between nodes that close (neighbours correlate at
+    ``exp(-1/64)``), and the work and memory stay those of a map of a few hundred cells
+    whatever the length (a length of the whole map, or beyond, is cheap)."""
+    step = max(1, int(length // NODES))
+    rows, cols = -(-shape[0] // step) + 1, -(-shape[1] // step) + 1
+    sigma = length / 2.0 / step
     pad = int(np.ceil(TRUNCATE * sigma)) + 1
-    noise = rng.standard_normal((shape[0] + 2 * pad, shape[1] + 2 * pad))
+    noise = rng.standard_normal((rows + 2 * pad, cols + 2 * pad))
     smooth = gaussian_filter(noise, sigma, mode="constant", truncate=TRUNCATE)
-    field = smooth[pad : pad + shape[0], pad : pad + shape[1]] / kernel_norm(sigma)
+    nodes = smooth[pad : pad + rows, pad : pad + cols] / kernel_norm(sigma)
+    field = nodes[: shape[0], : shape[1]] if step == 1 else between(nodes, shape, step)
     return np.ascontiguousarray(field, dtype=np.float32)
+
+
+def between(nodes: FloatArray, shape: tuple[int, int], step: int) -> FloatArray:
+    """The field on every cell of ``shape`` from its ``nodes`` one every ``step`` cells,
+    interpolated linearly along rows, then along columns."""
+    for axis, size in enumerate(shape):
+        at = np.arange(size) / step
+        low = at.astype(np.int64)
+        weight = (at - low).reshape((-1, 1) if axis == 0 else (1, -1))
+        first = np.take(nodes, low, axis=axis)
+        nodes = first + weight * (np.take(nodes, low + 1, axis=axis) - first)
+    return nodes
 
 
 def kernel_norm(sigma: float) -> float:
