@@ -34,6 +34,7 @@ from mresim_phys.agent_views import agent_snapshot, robot_view
 from mresim_phys.agents import Agent, Robot
 from mresim_phys.build import Scenario, Setup, build_setup, load_scenario
 from mresim_phys.comms.ledger import box_around, sensed_tick
+from mresim_phys.comms.radio_feature import radio_columns
 from mresim_phys.errors import ScenarioError, UnknownRobotError
 from mresim_phys.event_context import RunEventContext
 from mresim_phys.faults.runtime import hazard_grid
@@ -93,7 +94,7 @@ class Simulation:
         self.known_at_base = 0.0
         self.known_at_base_connected: float | None = 0.0  # over the connected free cells
         self.milestones = Milestones()
-        self.comm_totals = CommTotals(radio=self.scenario.communication.columns)
+        self.comm_totals = CommTotals(radio=radio_columns(self.scenario.communication))
         self.stall = StallWatch(s.rules.stalled_for, s.rules.stalled_gain)
         self.curves = Curves()
         self.failures = FailureWatch([r.name for r in self.robots])

@@ -294,8 +294,9 @@ def test_static_frames_are_unchanged(
     grazing a wall corner stopped marking the free cell beyond it as wall; when maps
     of known resolution gained a scale bar; and when frontiers were weighed by the
     seen-but-unvisited region they border, which moved the runs; when the legend gained
-    the fruitless glyph; and when candidate_power 2 became the default, which moved the
-    runs)."""
+    the fruitless glyph; when candidate_power 2 became the default, which moved the
+    runs; and when the `all` layers gained `ghost_walls`, walls a map holds where the
+    truth is free)."""
     sim = Simulation.from_yaml(ROOT / "scenarios" / f"{name}.yaml", steps=steps)
     for _ in range(steps):
         sim.step()

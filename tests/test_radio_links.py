@@ -332,3 +332,11 @@ def test_a_long_correlation_length_is_drawn_coarse_with_the_same_statistics() ->
 def test_a_correlation_length_far_beyond_the_map_costs_next_to_nothing() -> None:
     field = shadow_field((300, 500), 100_000.0, np.random.default_rng(1))
     assert field.shape == (300, 500) and np.ptp(field) < 0.05  # one value, nearly
+
+
+def test_the_built_in_models_with_a_signal_are_the_ones_named_so() -> None:
+    from mresim_phys.comms import BUILT_IN, COMM_MODELS
+    from mresim_phys.scenario.radio_files import SIGNAL_MODELS
+
+    for name in BUILT_IN:
+        assert (name in SIGNAL_MODELS) == hasattr(COMM_MODELS.get(name), "pair_signals")

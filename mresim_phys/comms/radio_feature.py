@@ -24,13 +24,21 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
-from mresim_phys.columns import column
+from mresim_phys.columns import RADIO_COLUMNS, column
+from mresim_phys.comms.radio_params import RadioSpec
 from mresim_phys.features import RobotFeature
 
 if TYPE_CHECKING:
     from mresim_phys.metrics import StepRecord
 
-RADIO_BYTE_COLUMNS = ("backlog", "bytes_offered", "bytes_sent", "bytes_delivered", "bytes_to_base")
+
+def radio_columns(spec: RadioSpec) -> tuple[str, ...]:
+    """The radio metric columns of a run whose main channel has these options: the byte
+    counts when its links are bounded (or replayed from a trace that may bound them), the
+    share connected to the base with any option."""
+    if spec.bounded or spec.trace is not None:
+        return RADIO_COLUMNS
+    return RADIO_COLUMNS[-1:] if spec.lossy else ()
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,6 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from mresim_phys.columns import RADIO_COLUMNS
 from mresim_phys.strict import Strict
 
 MAX_LENGTH = 100_000.0  # cells
@@ -115,16 +114,6 @@ class RadioSpec(Strict):
         """Whether what a link carries is limited or delayed (the queued exchange runs)."""
         limits = (self.capacity, self.radio_capacity)
         return any(c is not None for c in limits) or self.latency > 0
-
-    @property
-    def columns(self) -> tuple[str, ...]:
-        """The radio metric columns of a main channel with these options
-        (``comms/radio_feature.py``): the byte counts when its links are bounded (or
-        replayed from a trace that may bound them), the share connected to the base with
-        any option."""
-        if self.bounded or self.trace is not None:
-            return RADIO_COLUMNS
-        return RADIO_COLUMNS[-1:] if self.lossy else ()
 
     @property
     def lossy(self) -> bool:

@@ -21,6 +21,7 @@ import yaml
 
 from mresim_phys.build import region_probe, run_rules
 from mresim_phys.columns import LOCALIZATION_COLUMNS, MEETING_COLUMNS, Layout
+from mresim_phys.comms.radio_feature import radio_columns
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.errors import ScenarioError
 from mresim_phys.meetings.watch import strategies_plan_meetings
@@ -86,13 +87,13 @@ def extra_columns(scenario: Scenario) -> list[str]:
     """The optional columns of the run: those its scenario names, then the localisation
     columns (``localization/feature.py``) if a robot has localisation, then the meeting
     columns (``meeting_board.py``) if a robot's strategy plans meetings, then the radio
-    columns (``RadioSpec.columns``), each unless named already."""
+    columns (``comms/radio_feature.py``), each unless named already."""
     named = list(scenario.metrics.columns)
     if has_localization(scenario):
         named += [c for c in LOCALIZATION_COLUMNS if c not in named]
     if plans_meetings(scenario):
         named += [c for c in MEETING_COLUMNS if c not in named]
-    named += [c for c in scenario.communication.columns if c not in named]
+    named += [c for c in radio_columns(scenario.communication) if c not in named]
     return named
 
 

@@ -13,13 +13,14 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import TypeVar
 
-from mresim_phys.comms import COMM_MODELS
+from mresim_phys.comms import BUILT_IN, COMM_MODELS
 from mresim_phys.comms.traces import TraceError, check_loss_table, loss_rows, trace_rows
 from mresim_phys.errors import ScenarioError
 from mresim_phys.knowledge.teammates import BASE_NAME
 from mresim_phys.scenario.schema import ChannelSpec, Scenario
 
 C = TypeVar("C", bound=ChannelSpec)
+SIGNAL_MODELS = ("path_loss",)  # the built-in comm models with a signal in dB
 
 
 def resolve_radio(scenario: Scenario, folder: Path, source: str) -> Scenario:
@@ -42,8 +43,7 @@ def resolve_radio(scenario: Scenario, folder: Path, source: str) -> Scenario:
 
 def resolve_channel(channel: C, folder: Path, source: str, where: str, names: list[str]) -> C:
     """``channel`` with its trace and loss-table paths absolute, both read and checked."""
-    signal = hasattr(COMM_MODELS.get(channel.model), "pair_signals")
-    if channel.shadowing is not None and not signal:
+    if channel.shadowing is not None and not has_signal(channel.model):
         raise ScenarioError(
             f"{source}: {where}.shadowing: the comm model {channel.model!r} has no signal in dB"
             " for shadowing to add to; use model: path_loss (or a model with pair_signals)."
@@ -61,6 +61,14 @@ def resolve_channel(channel: C, folder: Path, source: str, where: str, names: li
         if path is not None:
             update["loss_table"] = str(path)
     return channel.model_copy(update=update)
+
+
+def has_signal(model: str) -> bool:
+    """Whether comm model ``model`` gives a signal in dB (``pair_signals``): the built-ins
+    are known by name (validating imports no comm model); a plugin's class is asked."""
+    if model in BUILT_IN:
+        return model in SIGNAL_MODELS
+    return hasattr(COMM_MODELS.get(model), "pair_signals")
 
 
 def _absolute(value: str, folder: Path) -> Path:
