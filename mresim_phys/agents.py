@@ -89,6 +89,12 @@ class Agent:
         """The state reported in metrics and to teammates."""
         return "active"
 
+    @property
+    def believed_position(self) -> tuple[float, float]:
+        """Where the agent believes it is: the base station knows its place (a robot with
+        localisation overrides this with its believed pose)."""
+        return self.position
+
     def own_record(self, step: int) -> TeammateInfo:
         """The record this agent sends about itself."""
         return TeammateInfo(self.name, self.position, None, self.state, self.role, step)

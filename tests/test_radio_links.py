@@ -340,3 +340,13 @@ def test_the_built_in_models_with_a_signal_are_the_ones_named_so() -> None:
 
     for name in BUILT_IN:
         assert (name in SIGNAL_MODELS) == hasattr(COMM_MODELS.get(name), "pair_signals")
+
+
+def test_a_trace_the_csv_module_refuses_is_one_paragraph_and_exit_2(
+    scenario_file: Any, tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    huge = "x" * 200_000  # beyond the csv module's field limit
+    (tmp_path / "links.csv").write_text(f'step,a,b,up\n0,A,B,"{huge}"\n', encoding="utf-8")
+    assert run_validate(scenario_file, trace="links.csv") == 2
+    err = capsys.readouterr().err
+    assert "communication.trace" in err and "not a CSV" in err and "Traceback" not in err

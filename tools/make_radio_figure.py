@@ -13,12 +13,14 @@ strategy, against each link's capacity (unlimited, then bytes per step), without
    (``connected_to_base``; mean and 95 % interval).
 
 Run: ``python tools/make_radio_figure.py SWEEP_DIR [--out docs/images/radio_capacity.png]``;
-it prints the table it draws.
+it prints the table it draws, then every pair of strategies' paired difference in the
+base's share at the end with its interval.
 """
 
 from __future__ import annotations
 
 import math
+from itertools import combinations
 from pathlib import Path
 
 import matplotlib
@@ -26,6 +28,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt
 import pandas as pd
+from scipy import stats
 from study_figures import arm_figures, draw_mean, draw_milestone, run_tool, save
 
 STRATEGY = "team.strategy"
@@ -86,5 +89,26 @@ def draw(data: pd.DataFrame, out: Path) -> None:
     save(fig, axes, "capacity per link and step", out, 7)
 
 
+def paired_contrasts(runs: pd.DataFrame) -> None:
+    """Print, per capacity and bursts, each pair of strategies' paired difference in the
+    base's share at the end (runs paired on seed: the same radio draws), with its 95 %
+    Student-t interval (``scipy.stats.ttest_rel``): the claims docs/communication.md makes."""
+    done = runs[runs["status"] == "done"].copy()
+    done["capacity"] = done[CAPACITY].map(capacity_label)
+    done["bursts"] = done[BURSTS].map(bursty)
+    print("\npaired on seed, final_known_at_base: A - B, mean [95 % interval] (seeds)")
+    for (capacity, bursts), arm in done.groupby(["capacity", "bursts"], sort=False):
+        by_seed = arm.pivot_table(index="seed", columns=STRATEGY, values="final_known_at_base")
+        for a, b in combinations(sorted(by_seed.columns), 2):
+            pair = by_seed[[a, b]].dropna()
+            if len(pair) < 2:
+                continue
+            interval = stats.ttest_rel(pair[a], pair[b]).confidence_interval()
+            mean = float((pair[a] - pair[b]).mean())
+            where = f"{capacity:>9}{' bursts' if bursts else '       '}"
+            low, high = interval.low, interval.high
+            print(f"  {where}  {a} - {b}: {mean:+.3f} [{low:+.3f}, {high:+.3f}] ({len(pair)})")
+
+
 if __name__ == "__main__":
-    run_tool(__doc__, "radio_capacity.png", table, draw)
+    run_tool(__doc__, "radio_capacity.png", table, draw, paired_contrasts)

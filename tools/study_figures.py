@@ -90,15 +90,20 @@ def run_tool(
     image: str,
     table: Callable[[pd.DataFrame], pd.DataFrame],
     draw: Callable[[pd.DataFrame, Path], None],
+    report: Callable[[pd.DataFrame], None] | None = None,
 ) -> None:
-    """A figure tool's command line: read ``SWEEP_DIR/runs.parquet``, print the table,
-    draw the figure (``--out``, default ``docs/images/<image>``)."""
+    """A figure tool's command line: read ``SWEEP_DIR/runs.parquet``, print the table
+    (and ``report`` of the runs, if given), draw the figure (``--out``, default
+    ``docs/images/<image>``)."""
     parser = argparse.ArgumentParser(description=doc.splitlines()[0])
     parser.add_argument("sweep", type=Path)
     parser.add_argument("--out", type=Path, default=ROOT / "docs" / "images" / image)
     args = parser.parse_args()
-    data = table(pd.read_parquet(args.sweep / "runs.parquet"))
+    runs = pd.read_parquet(args.sweep / "runs.parquet")
+    data = table(runs)
     print_table(data)
+    if report is not None:
+        report(runs)
     draw(data, args.out)
     print(f"wrote {args.out}")
 

@@ -358,10 +358,16 @@ class Exchange:
 
     def deliver(self, receiver: Agent, cells: Cells | None, step: int, sender: int) -> None:
         """Merge a transmission's cells into ``receiver``'s grids."""
-        if cells is not None and len(cells[0]):
-            grids = (receiver.belief, receiver.safe)
-            observed = LATEST.state_of(receiver.features)
-            self.ledger.merge(receiver.index, cells, grids, step, sender, observed)
+        deliver(self.ledger, receiver, cells, step, sender)
+
+
+def deliver(ledger: Ledger, receiver: Agent, cells: Cells | None, step: int, sender: int) -> None:
+    """Merge the cells ``sender`` sent into ``receiver``'s grids (and its observation steps,
+    with 'latest' beliefs), stamped as received in ``step``: every exchange's last act."""
+    if cells is not None and len(cells[0]):
+        grids = (receiver.belief, receiver.safe)
+        observed = LATEST.state_of(receiver.features)
+        ledger.merge(receiver.index, cells, grids, step, sender, observed)
 
 
 def seen_of(sender: Agent, index: np.ndarray) -> np.ndarray | None:

@@ -105,7 +105,7 @@ class Offers:
         if count == 0:
             return NONE
         cols = self.ledger.stamps[sender].shape[1]
-        where = believed_position(agent)
+        where = agent.believed_position
         ticks = self.ledger.stamps[sender].reshape(-1)[index]
         if self.priority == "newest":
             first: IntArray = np.lexsort((index, squared_distance(index, cols, where), -ticks))
@@ -156,9 +156,3 @@ def strategy_point(agent: Agent) -> tuple[float, float] | None:
     none, or the agent has no strategy: the base)."""
     strategy = getattr(agent, "strategy", None)
     return strategy.send_first() if isinstance(strategy, ChoosesSendOrder) else None
-
-
-def believed_position(agent: Agent) -> tuple[float, float]:
-    """Where ``agent`` believes it is (a robot's believed pose; the base's position)."""
-    believed = getattr(agent, "believed_position", None)
-    return believed if believed is not None else agent.position

@@ -40,6 +40,7 @@ from mresim_phys.comms.exchange import (
     Groups,
     RunAll,
     Traffic,
+    deliver,
     learn_records,
     run_in_turn,
     spanning_tree,
@@ -48,7 +49,6 @@ from mresim_phys.comms.ledger import Ledger, received_tick, sensed_tick
 from mresim_phys.comms.offers import Offers
 from mresim_phys.comms.radio import LinkLayer
 from mresim_phys.comms.radio_feature import RADIO, RadioLoadValue
-from mresim_phys.knowledge.latest import LATEST
 from mresim_phys.knowledge.teammates import TeammateInfo
 from mresim_phys.types import IntArray
 
@@ -70,7 +70,7 @@ class Packet:
 @dataclass
 class RadioLoad:
     """Bytes per agent in one step: offered, sent, delivered (its packets that landed, by
-    sender), delivered to the base, and the backlog it could not send."""
+    sender) and delivered to the base."""
 
     offered: IntArray
     sent: IntArray
@@ -81,12 +81,6 @@ class RadioLoad:
     def empty(cls, n: int) -> RadioLoad:
         """No load among ``n`` agents."""
         return cls(*(np.zeros(n, dtype=np.int64) for _ in range(4)))
-
-    @property
-    def backlog(self) -> IntArray:
-        """Bytes each agent offered and could not send this step."""
-        left: IntArray = self.offered - self.sent
-        return left
 
 
 @dataclass
@@ -173,12 +167,7 @@ class QueuedExchange:
             receiver = agents[packet.receiver]
             if not receiver.speaking:  # a receiver that failed or lost its radio meanwhile
                 continue
-            if packet.cells is not None and len(packet.cells.flat):
-                grids = (receiver.belief, receiver.safe)
-                observed = LATEST.state_of(receiver.features)
-                self.ledger.merge(
-                    receiver.index, packet.cells, grids, step, packet.sender, observed
-                )
+            deliver(self.ledger, receiver, packet.cells, step, packet.sender)
             learn_records(receiver, packet.records, step)
             if packet.sync is not None:
                 synced = self.ledger.synced

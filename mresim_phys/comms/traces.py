@@ -61,10 +61,24 @@ def read_text(path: Path) -> str:
         raise TraceError(f"{path} cannot be read ({exc})") from None
 
 
+def csv_rows(text: str) -> tuple[list[str], list[tuple[int, dict[str, str]]]]:
+    """A CSV's header and its rows (line number, values by column, stripped); a file the
+    csv module refuses (a field beyond its limit, a stray NUL) is a TraceError."""
+    try:
+        reader = csv.DictReader(io.StringIO(text))
+        header = [h.strip() for h in reader.fieldnames or []]
+        rows = [
+            (line, {k.strip(): (v or "").strip() for k, v in raw.items() if k is not None})
+            for line, raw in enumerate(reader, start=2)
+        ]
+    except csv.Error as exc:
+        raise TraceError(f"it is not a CSV file the csv module can read ({exc})") from None
+    return header, rows
+
+
 def parse_trace(text: str, names: Sequence[str]) -> list[TraceRow]:
     """The rows of a trace CSV whose agents are ``names`` (index 0 the base)."""
-    reader = csv.DictReader(io.StringIO(text))
-    header = [h.strip() for h in reader.fieldnames or []]
+    header, lines = csv_rows(text)
     missing = [k for k in ("step", "a", "b") if k not in header]
     unknown = [k for k in header if k not in ("step", "a", "b", *FIELDS)]
     if missing or unknown or not any(k in header for k in FIELDS):
@@ -73,8 +87,7 @@ def parse_trace(text: str, names: Sequence[str]) -> list[TraceRow]:
             f" capacity, and nothing else{f' (unknown: {unknown})' if unknown else ''}"
         )
     rows, last = [], 0
-    for line, raw in enumerate(reader, start=2):
-        values = {k.strip(): (v or "").strip() for k, v in raw.items() if k is not None}
+    for line, values in lines:
         row = _row(values, names, line)
         if row.step < last:
             raise TraceError(f"line {line}: step {row.step} comes after step {last}; sort by step")
@@ -167,21 +180,17 @@ class LinkTrace:
 
 def parse_loss_table(text: str) -> list[tuple[int, float, float]]:
     """The rows of a loss-table CSV (header ``walls,distance,loss``)."""
-    reader = csv.DictReader(io.StringIO(text))
-    header = [h.strip() for h in reader.fieldnames or []]
+    header, lines = csv_rows(text)
     if sorted(header) != ["distance", "loss", "walls"]:
         raise TraceError(f"the header is {header}; a loss table has walls, distance, loss")
-    rows = []
-    for line, raw in enumerate(reader, start=2):
-        values = {k.strip(): (v or "").strip() for k, v in raw.items() if k is not None}
-        rows.append(
-            (
-                int(_number(values["walls"], int, line, "walls", 0, 1000)),
-                _number(values["distance"], float, line, "distance", 0, 1e5),
-                _number(values["loss"], float, line, "loss", 0, 1),
-            )
+    return [
+        (
+            int(_number(values["walls"], int, line, "walls", 0, 1000)),
+            _number(values["distance"], float, line, "distance", 0, 1e5),
+            _number(values["loss"], float, line, "loss", 0, 1),
         )
-    return rows
+        for line, values in lines
+    ]
 
 
 class LossTable:
