@@ -156,9 +156,11 @@ def stamp_changes(
     tiles: np.ndarray,
     origins: np.ndarray,
     tick: int,
+    log: IntArray | None = None,
 ) -> tuple[int, int, int, int, int]:
     """Stamp the cells of ``box`` an agent changed itself (and their tiles); return (count,
-    r0, r1, c0, c1)."""
+    r0, r1, c0, c1). With a ``log`` (room for the box's cells) the changed cells' flat
+    indices are written into its first ``count`` places."""
     changed, r0, r1, c0, c1 = 0, box[1], box[0], box[3], box[2]
     for r in range(box[0], box[1]):
         for c in range(box[2], box[3]):
@@ -167,6 +169,8 @@ def stamp_changes(
                 continue
             codes[r, c], stamps[r, c], origins[r, c] = code, tick, -1
             tiles[r // TILE, c // TILE] = max(tiles[r // TILE, c // TILE], tick)
+            if log is not None:
+                log[changed] = r * belief.shape[1] + c
             changed += 1
             r0, r1, c0, c1 = min(r0, r), max(r1, r + 1), min(c0, c), max(c1, c + 1)
     return changed, r0, r1, c0, c1
@@ -206,9 +210,11 @@ def merge_cells(
     origins: np.ndarray,
     tick: int,
     sender: int,
+    log: IntArray | None = None,
 ) -> tuple[int, int, int, int, int]:
     """Merge received cells (flat ``index``, codes ``values``); return (cells changed, r0, r1,
-    c0, c1 of the changed ones).
+    c0, c1 of the changed ones; with a ``log`` as long as ``index``, their flat indices in
+    its first places).
 
     With 'latest' beliefs ``seen`` holds each value's observation step and ``observed`` the
     receiver's, and the rule is :func:`latest_code`; when either is None it is
@@ -230,32 +236,8 @@ def merge_cells(
         # safe flag) is news to the sender too: it counts as the receiver's own
         origin = sender if new == theirs else -1
         store(belief, safe, codes, stamps, tiles, origins, r, c, new, origin, tick)
+        if log is not None:
+            log[changed] = index[k]
         changed += 1
         r0, r1, c0, c1 = min(r0, r), max(r1, r + 1), min(c0, c), max(c1, c + 1)
     return changed, r0, r1, c0, c1
-
-
-@njit(cache=True, nogil=True)
-def still_news(
-    flat: IntArray,
-    receiver: int,
-    origins: np.ndarray,
-    codes: np.ndarray,
-    receiver_codes: np.ndarray,
-    seen: np.ndarray | None = None,
-    observed: np.ndarray | None = None,
-) -> tuple[IntArray, np.ndarray]:
-    """(flat indices, codes) of the cells ``flat`` of a sender (a queue's remainder) that
-    are still news to ``receiver`` (:func:`is_news`) and whose value did not come from it."""
-    cols = codes.shape[1]
-    index = np.empty(len(flat), np.int64)
-    values = np.empty(len(flat), np.uint8)
-    n = 0
-    for k in range(len(flat)):
-        r, c = flat[k] // cols, flat[k] % cols
-        if origins[r, c] == receiver or not is_news(codes, receiver_codes, seen, observed, r, c):
-            continue
-        index[n] = flat[k]
-        values[n] = codes[r, c]
-        n += 1
-    return index[:n], values[:n]

@@ -23,6 +23,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
+from mresim_phys.comms.changelog import ChangeLog
 from mresim_phys.comms.deltas import Cells, merge_cells, stamp_changes, tile_shape
 from mresim_phys.types import BeliefGrid, BoolGrid
 
@@ -63,6 +64,13 @@ class Ledger:
         self.box_count = np.zeros(n, dtype=np.int64)
         self.pending: list[Box | None] = [None] * n
         self.synced = np.full((n, n), -1, dtype=np.int64)
+        self.log: ChangeLog | None = None  # kept for bounded links (:meth:`keep_log`)
+
+    def keep_log(self) -> None:
+        """From now on, list every cell each agent changes (:mod:`.changelog`)."""
+        if self.log is None:
+            shape = self.stamps[0].shape
+            self.log = ChangeLog(len(self.stamps), shape[0] * shape[1])
 
     def note(self, index: int, box: Box) -> None:
         """Agent ``index``'s own map may have changed inside ``box`` (a scan window)."""
@@ -75,7 +83,14 @@ class Ledger:
             return
         tick = sensed_tick(step)
         grid = (self.copies[index], self.stamps[index], self.tiles[index], self.origins[index])
-        changed, *tight = stamp_changes(np.array(box, np.int64), belief, safe, *grid, tick)
+        out = (
+            None
+            if self.log is None
+            else self.log.room(index, (box[1] - box[0]) * (box[3] - box[2]))
+        )
+        changed, *tight = stamp_changes(np.array(box, np.int64), belief, safe, *grid, tick, out)
+        if self.log is not None:
+            self.log.commit(index, tick, changed)
         if changed:
             self.add_box(index, tick, (tight[0], tight[1], tight[2], tight[3]))
 
@@ -109,9 +124,12 @@ class Ledger:
         ``index``'s grids (and its ``observed`` steps, with 'latest' beliefs)."""
         tick = received_tick(step)
         grid = (self.copies[index], self.stamps[index], self.tiles[index], self.origins[index])
+        out = None if self.log is None else self.log.room(index, len(cells.flat))
         changed, *tight = merge_cells(
-            cells.flat, cells.codes, cells.seen, *grids, observed, *grid, tick, sender
+            cells.flat, cells.codes, cells.seen, *grids, observed, *grid, tick, sender, out
         )
+        if self.log is not None:
+            self.log.commit(index, tick, changed)
         if changed:
             self.add_box(index, tick, (tight[0], tight[1], tight[2], tight[3]))
         return changed

@@ -3,7 +3,7 @@
 Each ordered pair keeps a queue: the tick up to which the sender's cells have been looked
 at for this receiver (``scanned``) and the cells found then that did not fit (the
 remainder). An offer is the remainder's cells that are still news to the receiver (a
-merge would change its map: :func:`~.deltas.still_news`), with every cell stamped since
+merge would change its map: :func:`~.changelog.still_news`), with every cell stamped since
 ``scanned`` that is news (:func:`~.deltas.select_cells`), less the cells already in flight
 to it, in the channel's ``priority`` order (``comms/queued.py``). So a long transfer looks
 at each cell once, not at the whole backlog every step.
@@ -17,9 +17,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mresim_phys.agents import Agent
-from mresim_phys.comms.deltas import Cells, select_cells, still_news
+from mresim_phys.comms.changelog import PairGrids, as_row, select_listed, still_news
+from mresim_phys.comms.deltas import Cells, select_cells
 from mresim_phys.comms.exchange import Edge
 from mresim_phys.comms.ledger import Ledger
+from mresim_phys.comms.send_order import NO_TIER, cut_nearest
 from mresim_phys.knowledge.latest import LATEST
 from mresim_phys.strategies.base import ChoosesSendOrder
 from mresim_phys.types import IntArray
@@ -45,20 +47,19 @@ class Offers:
         sender, receiver = edge
         ledger = self.ledger
         since = max(self.scanned.get(edge, -1), int(ledger.synced[sender, receiver]))
-        seen = LATEST.state_of(agents[sender].features)
-        observed = LATEST.state_of(agents[receiver].features)
-        grids = (ledger.origins[sender], ledger.copies[sender], ledger.copies[receiver])
-        index, codes = still_news(self.remainder.get(edge, NONE), receiver, *grids, seen, observed)
-        boxes = compact(ledger.newer_boxes(sender, since))
-        if len(boxes):
-            fresh, fresh_codes = select_cells(
-                boxes, since, receiver, ledger.stamps[sender], ledger.tiles[sender],
-                grids[0], grids[1], grids[2], False, True, seen, observed,
-            )  # fmt: skip
-            if len(index):  # the remainder may hold cells stamped again since
+        grids = PairGrids(
+            ledger.stamps[sender], ledger.origins[sender], ledger.copies[sender],
+            ledger.copies[receiver], LATEST.state_of(agents[sender].features),
+            LATEST.state_of(agents[receiver].features),
+        )  # fmt: skip
+        rows = grids.rows()
+        queued = self.remainder.get(edge, NONE)
+        index, codes = still_news(queued, receiver, since, *rows)
+        found = self.fresh(edge, since, grids, rows)
+        if found is not None:
+            fresh, fresh_codes = found
+            if len(index):  # disjoint: the queue's cells stamped since are left to these
                 index, codes = np.concatenate([index, fresh]), np.concatenate([codes, fresh_codes])
-                index, first = np.unique(index, return_index=True)
-                codes = codes[first]
             else:
                 index, codes = fresh, fresh_codes
         self.scanned[edge] = tick
@@ -68,7 +69,30 @@ class Offers:
         if len(index) == 0:
             self.remainder.pop(edge, None)
             return None
-        return Cells(index, codes, None if seen is None else seen.reshape(-1)[index])
+        seen = None if rows.seen is None else rows.seen[0, index]
+        return Cells(index, codes, seen)
+
+    def fresh(
+        self, edge: Edge, since: int, grids: PairGrids, rows: PairGrids
+    ) -> tuple[IntArray, np.ndarray] | None:
+        """The sender's cells stamped after ``since`` that are news to the receiver and did
+        not come from it: from the change log, or by scanning the ledger's boxes when the
+        log no longer reaches back that far (None: nothing was stamped since)."""
+        sender, receiver = edge
+        log = self.ledger.log
+        listed = None if log is None else log.newer(sender, since)
+        if log is not None and listed is not None:
+            if len(listed) == 0:
+                return None
+            marks, mark = log.next_mark(grids.codes.shape)
+            return select_listed(listed, receiver, as_row(marks), mark, *rows[1:])
+        boxes = compact(self.ledger.newer_boxes(sender, since))
+        if len(boxes) == 0:
+            return None
+        return select_cells(
+            boxes, since, receiver, grids.stamps, self.ledger.tiles[sender], grids.origins,
+            grids.codes, grids.receiver_codes, False, True, grids.seen, grids.observed,
+        )  # fmt: skip
 
     def split(self, agent: Agent, edge: Edge, cells: Cells, count: int) -> Cells:
         """The ``count`` cells of ``cells`` first in priority order (all of them when they
@@ -101,27 +125,23 @@ class Offers:
 
     def first(self, agent: Agent, sender: int, index: IntArray, count: int) -> IntArray:
         """Positions in ``index`` of the ``count`` cells of ``sender`` sent first
-        (``priority``; a partial sort: only which cells make the cut matters)."""
+        (``priority``; a selection: only which cells make the cut matters)."""
         if count == 0:
             return NONE
-        cols = self.ledger.stamps[sender].shape[1]
+        stamps = self.ledger.stamps[sender]
+        cols = stamps.shape[1]
         where = agent.believed_position
-        ticks = self.ledger.stamps[sender].reshape(-1)[index]
         if self.priority == "newest":
+            ticks = stamps.reshape(-1)[index]
             first: IntArray = np.lexsort((index, squared_distance(index, cols, where), -ticks))
             return first[:count]
-        if self.priority == "nearest":
-            return nearest(index, cols, where, count)
         chosen = strategy_point(agent) if self.priority == "strategy" else None
-        if chosen is not None:
-            return nearest(index, cols, chosen, count)
+        x, y = chosen or where
+        if self.priority == "nearest" or chosen is not None:
+            return cut_nearest(index, cols, x, y, count, stamps.reshape(-1), NO_TIER)
         # base_first: what the base lacks (as far as the sender knows) first
-        known = ticks <= self.ledger.synced[sender, 0] if sender != 0 else ticks < 0
-        lacking, rest = np.flatnonzero(~known), np.flatnonzero(known)
-        if len(lacking) >= count:
-            return lacking[nearest(index[lacking], cols, where, count)]
-        more = rest[nearest(index[rest], cols, where, count - len(lacking))]
-        return np.concatenate([lacking, more])
+        known_upto = int(self.ledger.synced[sender, 0]) if sender != 0 else -1
+        return cut_nearest(index, cols, x, y, count, stamps.reshape(-1), known_upto)
 
 
 def squared_distance(index: IntArray, cols: int, where: tuple[float, float]) -> np.ndarray:
@@ -130,14 +150,6 @@ def squared_distance(index: IntArray, cols: int, where: tuple[float, float]) -> 
         index // cols + 0.5 - where[1]
     ) ** 2
     return distance
-
-
-def nearest(index: IntArray, cols: int, where: tuple[float, float], count: int) -> IntArray:
-    """Positions in ``index`` of its ``count`` cells nearest ``where`` (all if fewer)."""
-    if count >= len(index):
-        return np.arange(len(index))
-    cut: IntArray = np.argpartition(squared_distance(index, cols, where), count - 1)[:count]
-    return cut
 
 
 def compact(boxes: np.ndarray) -> np.ndarray:

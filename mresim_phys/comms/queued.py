@@ -95,9 +95,11 @@ class QueuedExchange:
     load: RadioLoad = field(default_factory=lambda: RadioLoad.empty(0))
     base_changed: bool = False  # a packet landed at the base this step
     tree: bool = True  # this step's edges are spanning trees (multi-hop)
+    own: dict[int, TeammateInfo] = field(default_factory=dict)  # this step's own records
 
     def __post_init__(self) -> None:
         self.offers = Offers(self.ledger, self.layer.spec.priority)
+        self.ledger.keep_log()
 
     @property
     def cell_bytes(self) -> int:
@@ -117,6 +119,7 @@ class QueuedExchange:
         n = len(agents)
         traffic, self.load = Traffic.empty(n), RadioLoad.empty(n)
         self.base_changed, self.tree = False, groups is not None
+        self.own.clear()
         self.land(agents, step)
         left = np.full(n, np.iinfo(np.int64).max, dtype=np.int64)
         if self.layer.spec.radio_capacity is not None:
@@ -239,21 +242,28 @@ class QueuedExchange:
     ) -> list[TeammateInfo]:
         """The records the receiver holds in no newer version and that are not on their
         way to it: the sender's own first, then the newest."""
-        held = sorted(agents[sender].teammates.values(), key=lambda r: (-r.step, r.name))
+        known, name = agents[receiver].teammates, agents[receiver].name
         flying = {
             (r.name, r.step)
             for p in self.flight
             if (p.sender, p.receiver) == (sender, receiver)
             for r in p.records
         }
-        known = agents[receiver].teammates
-        return [
-            r
-            for r in (agents[sender].own_record(step), *held)
-            if r.name != agents[receiver].name
-            and (r.name not in known or known[r.name].step < r.step)
-            and (r.name, r.step) not in flying
-        ]
+
+        def offered(r: TeammateInfo) -> bool:
+            held = known.get(r.name)
+            return (
+                r.name != name
+                and (held is None or held.step < r.step)
+                and (r.name, r.step) not in flying
+            )
+
+        held = [r for r in agents[sender].teammates.values() if offered(r)]
+        held.sort(key=lambda r: (-r.step, r.name))
+        own = self.own.get(sender)
+        if own is None:  # one per agent and step: nothing it reports changes in the phase
+            own = self.own[sender] = agents[sender].own_record(step)
+        return [own, *held] if offered(own) else held
 
 
 def fitting(sizes: Sequence[int], room: int) -> int:
