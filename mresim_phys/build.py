@@ -30,6 +30,7 @@ from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.faults.runtime import Faults, build_faults
 from mresim_phys.knowledge.coverage import Coverage
 from mresim_phys.knowledge.latest import LatestCoverage, give_stamps
+from mresim_phys.knowledge.readings import READINGS, ReadingCounts
 from mresim_phys.knowledge.teammates import BASE_NAME
 from mresim_phys.localization.feature import LOCALIZATION, localize
 from mresim_phys.localization.spec import LocalizationSpec
@@ -51,6 +52,7 @@ from mresim_phys.scenario.run_specs import StartJitterSpec
 from mresim_phys.scenario.schema import BaseStationSpec, RobotSpec, Scenario, SensorSpec
 from mresim_phys.strategies import STRATEGIES
 from mresim_phys.types import BeliefGrid, FloatArray, RobotSight
+from mresim_phys.world.beam import Beam
 from mresim_phys.world.debris import RandomDebris
 from mresim_phys.world.doors import Door
 from mresim_phys.world.elements import build_elements
@@ -75,8 +77,9 @@ def check_start(world: World, robot: RobotSpec) -> None:
 
 
 def laser_of(spec: SensorSpec) -> Laser:
-    """The runtime laser of a sensor spec."""
-    return Laser(spec.range, spec.fov_deg, spec.rays, spec.noise_std, spec.safe_fraction)
+    """The runtime laser of a sensor spec (its beam model, if it has one)."""
+    beam = None if spec.beam is None else Beam(**spec.beam.model_dump())
+    return Laser(spec.range, spec.fov_deg, spec.rays, spec.noise_std, spec.safe_fraction, beam)
 
 
 def body_of(spec: RobotSpec) -> Body:
@@ -100,6 +103,7 @@ def make_robot(spec: RobotSpec, index: int, streams: Streams, shape: tuple[int, 
         planner=PLANNERS.make(spec.planner.name, spec.planner.params),
         heading=math.radians(spec.heading_deg),
         rng=streams.of_robot("strategy", spec.name),
+        features={} if spec.sensor.beam is None else {READINGS.key: ReadingCounts.on(shape)},
     )
 
 

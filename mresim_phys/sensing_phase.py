@@ -20,9 +20,12 @@ from time import perf_counter
 import numpy as np
 
 from mresim_phys.agents import Robot
+from mresim_phys.knowledge.beamfold import BeamScanQueue
+from mresim_phys.knowledge.evidence import integrate_evidence
 from mresim_phys.knowledge.latest import LATEST
-from mresim_phys.knowledge.mapping import integrate_scan
+from mresim_phys.knowledge.mapping import Update, integrate_scan
 from mresim_phys.knowledge.prior import PRIOR
+from mresim_phys.knowledge.readings import beam_state
 from mresim_phys.knowledge.scanfold import (
     ScanQueue,
     fold_placed,
@@ -35,9 +38,10 @@ from mresim_phys.localization.feature import LOCALIZATION
 from mresim_phys.localization.perceive import as_believed, match_scan
 from mresim_phys.motion import path_blocked
 from mresim_phys.parallel import Effects
+from mresim_phys.world.beam import read_beam
 from mresim_phys.world.queries import QueryFilter
 from mresim_phys.world.sensing import scan
-from mresim_phys.world.space import World
+from mresim_phys.world.space import Scan, World
 from mresim_phys.world.terrain import TerrainGrid
 
 LOOKAHEAD_STEPS = 3  # 'latest' beliefs: a path blocked within this many steps is dropped
@@ -76,22 +80,11 @@ class Senses:
             )  # fmt: skip
             scanned = perf_counter()
         else:
-            result = scan(
-                self.world, robot.position, robot.heading, laser, self.filter_of(robot),
-                self.streams[robot.index - 1],
-            )  # fmt: skip
+            result = self.read(robot)
             if loc is not None and not frozen(robot.features):
                 match_scan(loc, robot.belief, result)  # then folded where it believes it is
             scanned = perf_counter()
-            if loc is not None and observed is None:
-                update = fold_placed(
-                    result, robot.heading, laser, robot.belief, robot.safe, loc.believed
-                )
-            else:
-                result = result if loc is None else as_believed(result, loc)
-                update = integrate_scan(
-                    robot.belief, robot.safe, result, laser.safe_fraction, observed, step
-                )
+            update = self.fold(robot, result, observed, step)
         known = TERRAIN.state_of(robot.features)
         if update is not None and known is not None and self.terrain is not None:
             learn_terrain(known, self.terrain, update)
@@ -104,20 +97,61 @@ class Senses:
         if update is not None:
             effects.scanned(robot.belief, update)
 
-    def queue_for(self, robot: Robot) -> ScanQueue | None:
-        """A queue for the robot's scans of this turn (:class:`ScanQueue`), or None when
-        each scan must fold at once: range noise or latest observations (see
-        ``folds_in_one_call``), a path to check against every scan, terrain to learn, a
-        scan to match to the map before it folds."""
-        observed = LATEST.state_of(robot.features)
-        if not folds_in_one_call(robot.laser, observed) or PRIOR.key in robot.features:
-            return None
+    def read(self, robot: Robot) -> Scan:
+        """The robot's scan where it stands: the exact cast with its range noise, or read
+        through its beam model."""
+        stream = self.streams[robot.index - 1]
+        where, laser, shapes = robot.position, robot.laser, self.filter_of(robot)
+        result = scan(self.world, where, robot.heading, laser, shapes, stream)
+        state = beam_state(robot.features)
+        if laser.beam is None or state is None:
+            return result
+        return read_beam(result, laser.beam, stream, state.counts)
+
+    def fold(
+        self, robot: Robot, result: Scan, observed: np.ndarray | None, step: int
+    ) -> Update | None:
+        """Fold a scan the robot read into its map, where it believes it took it: weighed
+        as evidence for a beam-model laser (``knowledge/evidence.py``), else as the truth
+        (``knowledge/mapping.py``); the cells it marked FREE."""
+        laser, state = robot.laser, beam_state(robot.features)
         loc = LOCALIZATION.state_of(robot.features)
-        if loc is not None and loc.matching is not None:
-            return None
-        if TERRAIN.key in robot.features and self.terrain is not None:
+        placed = None if loc is None else loc.believed
+        if state is not None and laser.beam is not None:
+            maps = (robot.belief, robot.safe, state.evidence)
+            radius = laser.safe_fraction * laser.range
+            return integrate_evidence(result, robot.heading, maps, radius, placed, observed, step)
+        if loc is not None and observed is None:
+            return fold_placed(result, robot.heading, laser, robot.belief, robot.safe, loc.believed)
+        result = result if loc is None else as_believed(result, loc)
+        return integrate_scan(robot.belief, robot.safe, result, laser.safe_fraction, observed, step)
+
+    def queue_for(self, robot: Robot) -> ScanQueue | None:
+        """A queue for the robot's scans of this turn (:class:`ScanQueue`; a beam-model
+        laser's, :class:`BeamScanQueue`), or None when each scan must fold at once: range
+        noise or latest observations (see ``folds_in_one_call``), a path to check against
+        every scan, terrain to learn, a scan to match to the map before it folds."""
+        observed = LATEST.state_of(robot.features)
+        state = beam_state(robot.features) if robot.laser.beam is not None else None
+        if state is not None:
+            if observed is not None or self.folds_alone(robot):
+                return None
+            stream = self.streams[robot.index - 1]
+            shapes = self.filter_of(robot)
+            return BeamScanQueue(self.world, robot.laser, shapes, robot, stream, state)
+        if not folds_in_one_call(robot.laser, observed) or self.folds_alone(robot):
             return None
         return ScanQueue(self.world, robot.laser, self.filter_of(robot), robot)
+
+    def folds_alone(self, robot: Robot) -> bool:
+        """Whether each of the robot's scans must fold at once, whatever its laser: a path
+        to check against every scan, a scan to match before it folds, terrain to learn."""
+        if PRIOR.key in robot.features:
+            return True
+        loc = LOCALIZATION.state_of(robot.features)
+        if loc is not None and loc.matching is not None:
+            return True
+        return TERRAIN.key in robot.features and self.terrain is not None
 
     def hold(self, robot: Robot, queue: ScanQueue) -> None:
         """:meth:`sense`, held in ``queue`` until the robot's map is next read."""

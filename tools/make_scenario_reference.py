@@ -37,6 +37,7 @@ SECTIONS: list[tuple[str, type[BaseModel]]] = [
     ("team and each robot", schema.RobotParams),
     ("robots[i] (adds to the team fields)", schema.RobotSpec),
     ("sensor", schema.SensorSpec),
+    ("sensor.beam", schema.BeamSpec),
     ("communication", schema.CommSpec),
     ("communication.shadowing (either channel)", radio.ShadowingSpec),
     ("communication.bursts (either channel)", radio.BurstSpec),
@@ -86,6 +87,15 @@ NOTES = {
         "A Gilbert-Elliott chain per agent pair, from its stationary state; stream"
         " `bursts-<channel>`. The long-run loss is pi_bad * loss_bad + (1 - pi_bad) *"
         " loss_good with pi_bad = good_to_bad / (good_to_bad + bad_to_good)."
+    ),
+    "sensor.beam": (
+        "The laser beam model: each ray reads a hit (the true distance plus Gaussian noise),"
+        " a short return, no return or a random return, with the weights z_hit, z_short,"
+        " z_max, z_rand (summing to 1), or is lost (dropout); draws from the robot's stream"
+        " `sensing`. The robot maps by evidence (a cell is believed once two scans agree;"
+        " a reading through a wall it knows frees nothing behind it). Not with noise_std."
+        " Adds the metric column `noisy_readings`, the per-robot feature `readings` and"
+        " summary.json's `readings` object; see [sensing.md](sensing.md)."
     ),
     "localization (team or robots[i])": (
         "A robot with this block knows its pose only through its odometry and corrections:"

@@ -125,7 +125,7 @@ def fold_placed(
     stamps): the same map as ``integrate_scan`` of the scan moved and turned there
     (``localization/perceive.as_believed``)."""
     angles = np.ascontiguousarray(scan.angles, dtype=np.float64)
-    where = _placement((scan.origin[0], scan.origin[1], heading), placed)
+    where = placement((scan.origin[0], scan.origin[1], heading), placed)
     row0, col0, free = _fold_placed(
         float(scan.origin[0]), float(scan.origin[1]), angles, scan.ranges, scan.normals,
         scan.wall_hit, float(scan.max_range), belief, safe,
@@ -187,8 +187,9 @@ def _cast_and_fold_many(
 
 def folds_in_one_call(laser: Laser, observed: np.ndarray | None) -> bool:
     """Whether a scan of ``laser`` into a map (with ``observed`` stamps or not) can take
-    :func:`scan_into_map`: no range noise to draw, no latest observations to stamp."""
-    return laser.noise_std <= 0 and observed is None
+    :func:`scan_into_map`: exact readings (no noise to draw), no latest observations to
+    stamp."""
+    return laser.exact and observed is None
 
 
 def scan_into_map(
@@ -209,12 +210,12 @@ def scan_into_map(
     row0, col0, free = _cast_and_fold(
         grid, float(origin[0]), float(origin[1]), angles, float(laser.range), circles,
         belief, safe, float(laser.safe_fraction * laser.range),
-        _placement((origin[0], origin[1], heading), placed),
+        placement((origin[0], origin[1], heading), placed),
     )  # fmt: skip
     return None if row0 < 0 else Update(row0, col0, free.view(bool))
 
 
-def _placement(cast: Pose, placed: Pose | None) -> FloatArray:
+def placement(cast: Pose, placed: Pose | None) -> FloatArray:
     """(x, y, turn) where a scan cast at ``cast`` is folded (``placed``; None: where it
     was cast)."""
     if placed is None or placed == cast:
@@ -247,7 +248,7 @@ class ScanQueue:
         """Hold a scan taken at ``position`` facing ``heading`` (``placed``: the pose the
         robot believes it took it from; None: that one)."""
         cast = (float(position[0]), float(position[1]), float(heading))
-        self.poses.append((*cast, *(float(v) for v in _placement(cast, placed))))
+        self.poses.append((*cast, *(float(v) for v in placement(cast, placed))))
 
     def fold(self) -> Box | None:
         """Cast and fold the held scans into the robot's map, in order; the union of the

@@ -91,12 +91,15 @@ def chord_band(
     mask: BeliefGrid,
     r0: int,
     c0: int,
+    skip_radial: bool = False,
 ) -> IntArray:
     """Mark TRIMMED the band cells of every chord that lie past both flanking rays.
 
     A chord joins the ends of rays k and k+1; its band cells are those whose
     centre lies within EDGE_BAND of it along its minor axis, between the two rays,
     farther from the robot than the nearer ray end (and than NEAR_ROBOT).
+    With ``skip_radial``, a chord to a ray of length 0 (a beam-model ray left out:
+    ``knowledge/evidence.py``) runs along its other ray, cuts no corner and is skipped.
     Returns their (row, col) in the window.
     """
     n = len(ex)
@@ -109,6 +112,8 @@ def chord_band(
     count = 0
     for k in range(chords):
         k1 = k + 1 if k + 1 < n else 0
+        if skip_radial and (ranges[k] <= 0.0 or ranges[k1] <= 0.0):
+            continue
         ax, ay, bx, by = ex[k], ey[k], ex[k1], ey[k1]
         limit2 = max(min(ranges[k], ranges[k1]), NEAR_ROBOT) ** 2
         steep = abs(by - ay) > abs(bx - ax)

@@ -20,7 +20,7 @@ import numpy as np
 import yaml
 
 from mresim_phys.build import region_probe, run_rules
-from mresim_phys.columns import LOCALIZATION_COLUMNS, MEETING_COLUMNS, Layout
+from mresim_phys.columns import BEAM_COLUMN, LOCALIZATION_COLUMNS, MEETING_COLUMNS, Layout
 from mresim_phys.comms.radio_feature import radio_columns
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.errors import ScenarioError
@@ -87,13 +87,16 @@ def extra_columns(scenario: Scenario) -> list[str]:
     """The optional columns of the run: those its scenario names, then the localisation
     columns (``localization/feature.py``) if a robot has localisation, then the meeting
     columns (``meeting_board.py``) if a robot's strategy plans meetings, then the radio
-    columns (``comms/radio_feature.py``), each unless named already."""
+    columns (``comms/radio_feature.py``), then ``noisy_readings`` if a robot's laser has a
+    beam model (``knowledge/readings.py``), each unless named already."""
     named = list(scenario.metrics.columns)
     if has_localization(scenario):
         named += [c for c in LOCALIZATION_COLUMNS if c not in named]
     if plans_meetings(scenario):
         named += [c for c in MEETING_COLUMNS if c not in named]
     named += [c for c in radio_columns(scenario.communication) if c not in named]
+    if any(r.sensor.beam is not None for r in scenario.robots) and BEAM_COLUMN not in named:
+        named.append(BEAM_COLUMN)
     return named
 
 

@@ -27,6 +27,7 @@ from mresim_phys.errors import MresimError, ScenarioError
 from mresim_phys.output.files import atomic_path
 from mresim_phys.output.health import compare_health, compare_object
 from mresim_phys.output.localization import PoseRecorder, replayed_localization
+from mresim_phys.output.readings import replayed_readings
 from mresim_phys.output.recorders import checked_layers, frame_recorder, given
 from mresim_phys.output.runlog import Replay, RunLog
 from mresim_phys.output.video import chosen_video_path
@@ -158,8 +159,9 @@ def log_layout(log: RunLog, latest: bool) -> Layout:
 
 def replay_metrics(log: RunLog, run_dir: Path) -> tuple[list[str], bool]:
     """Write metrics-replayed.csv from the log and compare it with metrics.csv; recompute
-    the run-health record and, for a run with localisation, the ``localization`` object,
-    and compare them with summary.json's (one pass over the log)."""
+    the run-health record and, for a run with localisation, the ``localization`` object (with
+    a beam-model laser, the ``readings`` object), and compare them with summary.json's (one
+    pass over the log)."""
     out = run_dir / "metrics-replayed.csv"
     latest = log.meta.get("beliefs") == "latest"
     replay, last, poses = Replay(log, latest), None, PoseRecorder()
@@ -174,10 +176,11 @@ def replay_metrics(log: RunLog, run_dir: Path) -> tuple[list[str], bool]:
     health = replay.health_report(last).summary() if last is not None else {}
     lines, same_health = compare_health(health, run_dir)
     if last is not None and replay.coverage.connected is not None:
-        pose = replayed_localization(last, replay.coverage.connected, poses).get("localization")
-        if pose is not None:
-            more, same_pose = compare_object("localization", pose, run_dir, "localization")
-            lines, same_health = [*lines, *more], same_health and same_pose
+        reachable = replay.coverage.connected
+        objects = replayed_localization(last, reachable, poses) | replayed_readings(last, reachable)
+        for key, value in objects.items():
+            more, same = compare_object(key, value, run_dir, key)
+            lines, same_health = [*lines, *more], same_health and same
     live = run_dir / "metrics.csv"
     if not live.is_file():
         return [f"metrics recomputed into {out} (no metrics.csv to compare)", *lines], same_health

@@ -32,6 +32,7 @@ from mresim_phys.output.health import run_health
 from mresim_phys.output.localization import PoseRecorder, localization_summary
 from mresim_phys.output.meetings import meetings_summary
 from mresim_phys.output.physical import physical_summary
+from mresim_phys.output.readings import readings_summary
 from mresim_phys.output.recorders import Recorder, SnapshotSource, make_recorders, summarise
 from mresim_phys.output.robustness import check_paired, run_robustness, write_robustness
 from mresim_phys.output.rundir import StagedRun
@@ -143,7 +144,7 @@ def record_run(
     summary |= explorable_summary(sim.coverage, sim.record, sim.milestones)
     summary |= physical_summary(sim)  # seconds and metres, when the scenario gives dt
     poses = next((r for r in recorders if isinstance(r, PoseRecorder)), None)
-    summary |= localization_summary(sim, poses)
+    summary |= localization_summary(sim, poses) | readings_summary(sim)
     summary |= meetings_summary(sim)  # a run whose strategies plan meetings
     interrupted = reason == INTERRUPTED
     if interrupted:

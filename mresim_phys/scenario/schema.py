@@ -111,6 +111,55 @@ class CommSpec(ChannelSpec):
     )
 
 
+class BeamSpec(Strict):
+    """A laser's beam model (``world/beam.py``, docs/sensing.md): each ray reads a hit, a
+    short return, no return or a random return, with these weights, or is lost."""
+
+    z_hit: float = Field(1.0, ge=0, le=1, description="Weight of a hit: the true distance + noise.")
+    z_short: float = Field(
+        0.0, ge=0, le=1, description="Weight of a short return: something unmapped in the way."
+    )
+    z_max: float = Field(0.0, ge=0, le=1, description="Weight of no return (a max-range reading).")
+    z_rand: float = Field(0.0, ge=0, le=1, description="Weight of a uniform random reading.")
+    sigma_hit: float = Field(
+        0.0, ge=0, le=MAX_RANGE, description="Gaussian noise (cells) of a hit's distance."
+    )
+    lambda_short: float = Field(
+        0.1, gt=0, le=1000, description="Rate (per cell) of a short return's exponential."
+    )
+    dropout: float = Field(0.0, ge=0, lt=1, description="Probability that a ray is lost.")
+    max_free: float | None = Field(
+        None,
+        ge=0,
+        le=MAX_RANGE,
+        description=(
+            "Cells a no-return ray marks free (null: the whole range; 0: none, the ray is"
+            " left out of the free area)."
+        ),
+    )
+
+    speckle: float | None = Field(
+        None,
+        gt=0,
+        le=MAX_RANGE,
+        description=(
+            "The robot's speckle filter (cells): a return farther than this from every"
+            " return within speckle_window rays is left out (null: off)."
+        ),
+    )
+    speckle_window: int = Field(2, ge=1, le=64, description="Rays each side the filter compares.")
+
+    @model_validator(mode="after")
+    def _weights_sum_to_one(self) -> BeamSpec:
+        total = self.z_hit + self.z_short + self.z_max + self.z_rand
+        if abs(total - 1.0) > 1e-6:
+            raise ValueError(
+                "the weights z_hit + z_short + z_max + z_rand must sum to 1 (a reading is one"
+                f" of the four kinds); these sum to {total:g}"
+            )
+        return self
+
+
 class SensorSpec(Strict):
     """A planar laser scanner: ``rays`` rays evenly over ``fov_deg`` centred on the heading."""
 
@@ -123,6 +172,23 @@ class SensorSpec(Strict):
     safe_fraction: float = Field(
         0.1, gt=0, le=1, description="Safe space = rays clipped to this fraction of the range."
     )
+    beam: BeamSpec | None = Field(
+        None,
+        description=(
+            "Beam model of the readings: {z_hit, z_short, z_max, z_rand, sigma_hit,"
+            " lambda_short, dropout, max_free, speckle, speckle_window} (null: exact"
+            " distances; docs/sensing.md)."
+        ),
+    )
+
+    @model_validator(mode="after")
+    def _one_noise(self) -> SensorSpec:
+        if self.beam is not None and self.noise_std > 0:
+            raise ValueError(
+                "a sensor with a beam model takes its range noise from beam.sigma_hit; set"
+                " noise_std to 0 (or leave it out) and give the noise there"
+            )
+        return self
 
 
 class RobotParams(Strict):

@@ -47,8 +47,23 @@ def robot(data: Any, conv: Converter, where: str) -> Any:
         out["sensor"] = {
             k: conv.length(v) if k in ("range", "noise_std") else v for k, v in sensor.items()
         }
+        beam = mapping(sensor.get("beam"))
+        if beam is not None:
+            out["sensor"]["beam"] = beam_in_cells(beam, conv)
     if mapping(out.get("localization")) is not None:
         out["localization"] = localization(out["localization"], conv)
+    return out
+
+
+def beam_in_cells(beam: dict[str, Any], conv: Converter) -> dict[str, Any]:
+    """A sensor's ``beam`` block: its lengths (``sigma_hit``, ``max_free``, ``speckle``) in
+    cells, the short returns' rate per cell."""
+    out = dict(beam)
+    for key in ("sigma_hit", "max_free", "speckle"):
+        if key in out:
+            out[key] = conv.length(out[key])
+    if "lambda_short" in out:
+        out["lambda_short"] = conv.per_length(out["lambda_short"])
     return out
 
 

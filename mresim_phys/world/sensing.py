@@ -3,7 +3,8 @@
 A scan is ``rays`` rays spread evenly over ``fov_deg`` centred on the heading
 (181 rays over 180 degrees = 1 degree apart, as the original), each ending at the
 exact distance to the first wall (``world/raycast.py``: one compiled call per scan) or at
-the maximum range. Noise-free unless the sensor has ``noise_std``; noise comes from the robot's own
+the maximum range. Noise-free unless the sensor has ``noise_std`` or a beam model
+(``world/beam.py``, read by the sensing phase); noise comes from the robot's own
 ``sensing`` stream so it never shifts any other random draw.
 """
 
@@ -15,6 +16,7 @@ from functools import lru_cache
 import numpy as np
 
 from mresim_phys.types import FloatArray
+from mresim_phys.world.beam import Beam
 from mresim_phys.world.space import Scan, World
 
 
@@ -27,6 +29,12 @@ class Laser:
     rays: int = 181
     noise_std: float = 0.0  # Gaussian range noise (cells) on rays that hit something
     safe_fraction: float = 0.1  # safe space: rays clipped to this fraction of the range
+    beam: Beam | None = None  # the beam model's readings (``world/beam.py``); None: exact
+
+    @property
+    def exact(self) -> bool:
+        """Whether its readings are the exact distances (no noise, no beam model)."""
+        return self.noise_std <= 0 and self.beam is None
 
 
 @lru_cache(maxsize=64)
