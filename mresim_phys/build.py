@@ -30,11 +30,11 @@ from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.faults.runtime import Faults, build_faults
 from mresim_phys.knowledge.coverage import Coverage
 from mresim_phys.knowledge.latest import LatestCoverage, give_stamps
-from mresim_phys.knowledge.readings import READINGS, ReadingCounts
 from mresim_phys.knowledge.teammates import BASE_NAME
 from mresim_phys.localization.feature import LOCALIZATION, localize
 from mresim_phys.localization.spec import LocalizationSpec
 from mresim_phys.planning import PLANNERS
+from mresim_phys.readings_feature import READINGS, ReadingCounts
 from mresim_phys.rng import Streams
 from mresim_phys.scenario.faults import localization_faults, robustness_columns
 from mresim_phys.scenario.load import load_scenario

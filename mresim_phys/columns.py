@@ -50,7 +50,7 @@ RADIO_COLUMNS = (
     "bytes_to_base",
     "connected_to_base",
 )  # a run whose main channel has radio options (comms/radio_feature.py)
-BEAM_COLUMN = "noisy_readings"  # a run with a beam-model laser (knowledge/readings.py)
+BEAM_COLUMN = "noisy_readings"  # a run with a beam-model laser (readings_feature.py)
 MEETING_COLUMNS = (
     "meetings_planned",
     "meetings_kept",
@@ -353,7 +353,7 @@ FEATURE_COLUMNS = {
     **{n: f"mresim_phys.localization.feature:{n}" for n in LOCALIZATION_COLUMNS},
     **{n: f"mresim_phys.comms.radio_feature:{n}" for n in RADIO_COLUMNS},
     **{n: f"mresim_phys.meetings.columns:{n}" for n in MEETING_COLUMNS},
-    BEAM_COLUMN: "mresim_phys.knowledge.readings:noisy_readings",
+    BEAM_COLUMN: "mresim_phys.readings_feature:noisy_readings",
 }
 for _name, _reference in FEATURE_COLUMNS.items():
     COLUMNS.lazy(_name, _reference, ColumnParams)

@@ -175,7 +175,7 @@ FEATURES = FeatureList(
         "battery": "mresim_phys.faults.battery:BATTERY",
         "localization": "mresim_phys.localization.feature:LOCALIZATION",
         "radio": "mresim_phys.comms.radio_feature:RADIO",
-        "readings": "mresim_phys.knowledge.readings:READINGS",
+        "readings": "mresim_phys.readings_feature:READINGS",
         "terrain": "mresim_phys.knowledge.terrain:TERRAIN",
         "prior": "mresim_phys.knowledge.prior:PRIOR",
         "payload": "mresim_phys.knowledge.teammates:PAYLOAD",

@@ -25,7 +25,6 @@ from mresim_phys.knowledge.evidence import integrate_evidence
 from mresim_phys.knowledge.latest import LATEST
 from mresim_phys.knowledge.mapping import Update, integrate_scan
 from mresim_phys.knowledge.prior import PRIOR
-from mresim_phys.knowledge.readings import beam_state
 from mresim_phys.knowledge.scanfold import (
     ScanQueue,
     fold_placed,
@@ -38,6 +37,7 @@ from mresim_phys.localization.feature import LOCALIZATION
 from mresim_phys.localization.perceive import as_believed, match_scan
 from mresim_phys.motion import path_blocked
 from mresim_phys.parallel import Effects
+from mresim_phys.readings_feature import beam_state
 from mresim_phys.world.beam import read_beam
 from mresim_phys.world.queries import QueryFilter
 from mresim_phys.world.sensing import scan
@@ -138,7 +138,8 @@ class Senses:
                 return None
             stream = self.streams[robot.index - 1]
             shapes = self.filter_of(robot)
-            return BeamScanQueue(self.world, robot.laser, shapes, robot, stream, state)
+            sinks = (state.counts, state.evidence)
+            return BeamScanQueue(self.world, robot.laser, shapes, robot, stream, sinks)
         if not folds_in_one_call(robot.laser, observed) or self.folds_alone(robot):
             return None
         return ScanQueue(self.world, robot.laser, self.filter_of(robot), robot)

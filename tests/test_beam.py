@@ -17,7 +17,7 @@ from mresim_phys.cli import main
 from mresim_phys.knowledge.beamfold import BeamScanQueue
 from mresim_phys.knowledge.evidence import OCCUPIED_AT, integrate_evidence
 from mresim_phys.knowledge.frontiers import frontier_mask
-from mresim_phys.knowledge.readings import READINGS, ReadingCounts
+from mresim_phys.readings_feature import READINGS, ReadingCounts
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 from mresim_phys.world.beam import DRAWS, KINDS, Beam, read_beam
 from mresim_phys.world.sensing import scan
@@ -177,7 +177,8 @@ def test_the_queued_scans_fold_as_the_scans_one_by_one(tmp_path: Path) -> None:
         integrate_evidence(read, heading, maps, laser.safe_fraction * laser.range)
     queued = ReadingCounts.on(robot.belief.shape)
     holder = type("Holder", (), {"belief": robot.belief.copy(), "safe": robot.safe.copy()})()
-    queue = BeamScanQueue(sim.world, laser, shapes, holder, np.random.default_rng(4), queued)
+    sinks = (queued.counts, queued.evidence)
+    queue = BeamScanQueue(sim.world, laser, shapes, holder, np.random.default_rng(4), sinks)
     for x, y, heading in poses:
         queue.add((x, y), heading)
     queue.fold()

@@ -16,7 +16,6 @@ import numpy as np
 from numba import njit
 
 from mresim_phys.knowledge.evidence import place_evidence
-from mresim_phys.knowledge.readings import ReadingCounts
 from mresim_phys.knowledge.scanfold import MapHolder, ScanQueue
 from mresim_phys.planning.grid import Box
 from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray
@@ -94,7 +93,8 @@ def _cast_read_fold_many(
 class BeamScanQueue(ScanQueue):
     """A turn's scans of a laser with a beam model, read and folded together (module
     docstring); the kinds of their readings are added to the robot's counts, their
-    evidence to its grid (``state``)."""
+    evidence to its grid (``sinks``: counts, evidence; ``readings_feature.py`` keeps
+    them)."""
 
     def __init__(
         self,
@@ -103,10 +103,11 @@ class BeamScanQueue(ScanQueue):
         shape_filter: QueryFilter,
         robot: MapHolder,
         rng: np.random.Generator,
-        state: ReadingCounts,
+        sinks: tuple[np.ndarray, np.ndarray],
     ) -> None:
         super().__init__(world, laser, shape_filter, robot)
-        self.rng, self.state = rng, state
+        self.rng = rng
+        self.counts, self.evidence = sinks
 
     def fold(self) -> Box | None:
         """Draw, cast, read and fold the held scans, in order (:class:`ScanQueue.fold`)."""
@@ -121,6 +122,6 @@ class BeamScanQueue(ScanQueue):
         r0, r1, c0, c1 = _cast_read_fold_many(
             grid, poses, ray_offsets(laser.fov_deg, laser.rays), float(laser.range), circles,
             robot.belief, robot.safe, float(laser.safe_fraction * laser.range),
-            beam.params(laser.range), draws, self.state.counts, self.state.evidence,
+            beam.params(laser.range), draws, self.counts, self.evidence,
         )  # fmt: skip
         return None if r0 < 0 else (r0, r1, c0, c1)

@@ -24,7 +24,7 @@ Occupancy grid mapping weighs each reading as evidence instead (Thrun, Burgard a
 
 The robot's own neighbourhood (``NEAR_ROBOT``) is FREE as in the exact fold; safe space
 is this scan's free cells within the safe radius. The evidence grid is the robot's own
-(``knowledge/readings.py`` keeps it): maps that arrive from teammates change the map,
+(``readings_feature.py`` keeps it): maps that arrive from teammates change the map,
 not the evidence, and a later scan of the robot's own overrules them where its evidence
 is decided.
 """

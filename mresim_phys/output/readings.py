@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from mresim_phys.knowledge.readings import READINGS, Readings
 from mresim_phys.output.localization import consistency
+from mresim_phys.readings_feature import READINGS, Readings
 from mresim_phys.snapshot import Snapshot
 from mresim_phys.types import BeliefGrid, BoolGrid
 

@@ -88,7 +88,7 @@ def extra_columns(scenario: Scenario) -> list[str]:
     columns (``localization/feature.py``) if a robot has localisation, then the meeting
     columns (``meeting_board.py``) if a robot's strategy plans meetings, then the radio
     columns (``comms/radio_feature.py``), then ``noisy_readings`` if a robot's laser has a
-    beam model (``knowledge/readings.py``), each unless named already."""
+    beam model (``readings_feature.py``), each unless named already."""
     named = list(scenario.metrics.columns)
     if has_localization(scenario):
         named += [c for c in LOCALIZATION_COLUMNS if c not in named]

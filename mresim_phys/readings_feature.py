@@ -1,4 +1,4 @@
-"""A laser's readings (phase 5, a per-robot feature): how a beam-model laser read its rays.
+"""A laser's readings (phase 2, a per-robot feature): how a beam-model laser read its rays.
 
 Every robot whose ``sensor`` has a ``beam`` model (``world/beam.py``) gets the feature
 ``readings``: how many of its rays so far read a hit, a short return, no return (max), a
