@@ -36,8 +36,8 @@ import math
 import numpy as np
 from numba import njit
 
-from mresim_phys.knowledge.mapping import Update, fill_centres
-from mresim_phys.knowledge.scanfold import Pose, placement
+from mresim_phys.knowledge.mapping import Update, fill_centres, polygon_window, scan_polygon
+from mresim_phys.knowledge.scanfold import Pose, placement, turned
 from mresim_phys.knowledge.wall_marks import NEAR_ROBOT, WALL_GAP, chord_band, hit_cell
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN, BeliefGrid, BoolGrid, FloatArray
 from mresim_phys.world.space import Scan
@@ -129,19 +129,11 @@ def fold_evidence(
     for k in range(n):
         _clip_at_wall(ox, oy, ux[k], uy[k], ranges, wall_hit, k, evidence)
     ex, ey = ox + ranges * ux, oy + ranges * uy
-    span = angles[n - 1] - angles[0]
-    full = span + span / (n - 1) >= 2.0 * math.pi - 1e-9
-    first = 0 if full else 1
-    vx, vy = np.empty(n + first), np.empty(n + first)
-    vx[0], vy[0] = ox, oy
-    vx[first:], vy[first:] = ex, ey
-    r0 = max(math.floor(vy.min()) - 1, 0)
-    r1 = min(math.ceil(vy.max()) + 1, rows)
-    c0 = max(math.floor(vx.min()) - 1, 0)
-    c1 = min(math.ceil(vx.max()) + 1, cols)
+    vx, vy, full = scan_polygon(ox, oy, angles, ex, ey)
+    r0, r1, c0, c1 = polygon_window(vx, vy, rows, cols)
     if r0 >= r1 or c0 >= c1:
         return -1, -1, np.zeros((0, 0), np.uint8)
-    seen = _scan_polygon(ox, oy, ux, uy, ex, ey, vx, vy, ranges, full, r0, c0, r1 - r0, c1 - c0)
+    seen = _polygon_mask(ox, oy, ux, uy, ex, ey, vx, vy, ranges, full, r0, c0, r1 - r0, c1 - c0)
     hits = _hit_cells(ex, ey, ux, uy, normals, wall_hit, ranges, max_range, evidence)
     for k in range(len(hits)):  # first: the one pass below then decides each seen cell
         evidence[hits[k, 0], hits[k, 1]] = min(evidence[hits[k, 0], hits[k, 1]] + HIT, CAP)
@@ -210,7 +202,7 @@ def _believe(
 
 
 @njit(cache=True, nogil=True)
-def _scan_polygon(
+def _polygon_mask(
     ox: float,
     oy: float,
     ux: FloatArray,
@@ -377,12 +369,7 @@ def place_evidence(
             ox, oy, angles, ranges, normals, wall_hit, max_range, belief, safe, safe_radius,
             evidence, observed, step,
         )  # fmt: skip
-    c, s = np.cos(turn), np.sin(turn)
-    turned = np.empty((len(angles), 2))
-    for k in range(len(angles)):
-        turned[k, 0] = c * normals[k, 0] - s * normals[k, 1]
-        turned[k, 1] = s * normals[k, 0] + c * normals[k, 1]
     return fold_evidence(
-        bx, by, angles + turn, ranges, turned, wall_hit, max_range, belief, safe, safe_radius,
-        evidence, observed, step,
+        bx, by, angles + turn, ranges, turned(normals, turn), wall_hit, max_range, belief,
+        safe, safe_radius, evidence, observed, step,
     )  # fmt: skip

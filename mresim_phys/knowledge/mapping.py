@@ -169,6 +169,35 @@ def refresh_seen(
                 observed[r, c] = step
 
 
+@njit(cache=True, nogil=True, inline="always")
+def scan_polygon(
+    ox: float, oy: float, angles: FloatArray, ex: FloatArray, ey: FloatArray
+) -> tuple[FloatArray, FloatArray, bool]:
+    """A scan's free polygon: the origin (unless the scan is a full circle: the gap behind
+    its last ray no wider than the ray spacing) then the ray ends; and whether it is one."""
+    n = len(angles)
+    span = angles[n - 1] - angles[0]
+    full = span + span / (n - 1) >= 2.0 * math.pi - 1e-9
+    first = 0 if full else 1
+    vx, vy = np.empty(n + first), np.empty(n + first)
+    vx[0], vy[0] = ox, oy
+    vx[first:] = ex
+    vy[first:] = ey
+    return vx, vy, full
+
+
+@njit(cache=True, nogil=True, inline="always")
+def polygon_window(
+    vx: FloatArray, vy: FloatArray, rows: int, cols: int
+) -> tuple[int, int, int, int]:
+    """(r0, r1, c0, c1): the polygon's bounding window, a cell of margin, clipped to the map."""
+    r0 = max(math.floor(vy.min()) - 1, 0)
+    r1 = min(math.ceil(vy.max()) + 1, rows)
+    c0 = max(math.floor(vx.min()) - 1, 0)
+    c1 = min(math.ceil(vx.max()) + 1, cols)
+    return r0, r1, c0, c1
+
+
 @njit(cache=True, nogil=True)
 def fold_scan(
     ox: float,
@@ -187,20 +216,8 @@ def fold_scan(
     rows, cols = belief.shape
     ux, uy = np.cos(angles), np.sin(angles)
     ex, ey = ox + ranges * ux, oy + ranges * uy
-    span = angles[n - 1] - angles[0]
-    # a full circle: the gap behind the last ray is no wider than the ray spacing
-    full = span + span / (n - 1) >= 2.0 * math.pi - 1e-9
-    # polygon: the origin (unless the scan is a full circle) then the ray ends
-    first = 0 if full else 1
-    m = n + first
-    vx, vy = np.empty(m), np.empty(m)
-    vx[0], vy[0] = ox, oy
-    vx[first:] = ex
-    vy[first:] = ey
-    r0 = max(math.floor(vy.min()) - 1, 0)
-    r1 = min(math.ceil(vy.max()) + 1, rows)
-    c0 = max(math.floor(vx.min()) - 1, 0)
-    c1 = min(math.ceil(vx.max()) + 1, cols)
+    vx, vy, full = scan_polygon(ox, oy, angles, ex, ey)
+    r0, r1, c0, c1 = polygon_window(vx, vy, rows, cols)
     if r0 >= r1 or c0 >= c1:
         return -1, -1, np.zeros((0, 0), np.uint8)
     mask = np.zeros((r1 - r0, c1 - c0), np.uint8)

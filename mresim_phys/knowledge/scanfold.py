@@ -85,15 +85,22 @@ def _place_and_fold(
     bx, by, turn = placed[0], placed[1], placed[2]
     if bx == ox and by == oy and turn == 0.0:
         return fold_scan(ox, oy, angles, ranges, normals, wall_hit, max_range, belief, safe, radius)
-    c, s = np.cos(turn), np.sin(turn)
-    turned = np.empty((len(angles), 2))
-    for k in range(len(angles)):
-        turned[k, 0] = c * normals[k, 0] - s * normals[k, 1]
-        turned[k, 1] = s * normals[k, 0] + c * normals[k, 1]
     turned_angles = angles + turn
     return fold_scan(
-        bx, by, turned_angles, ranges, turned, wall_hit, max_range, belief, safe, radius
-    )
+        bx, by, turned_angles, ranges, turned(normals, turn), wall_hit, max_range, belief,
+        safe, radius,
+    )  # fmt: skip
+
+
+@njit(cache=True, nogil=True, inline="always")
+def turned(normals: FloatArray, turn: float) -> FloatArray:
+    """Each (n, 2) row of ``normals`` turned by ``turn`` radians."""
+    c, s = np.cos(turn), np.sin(turn)
+    out = np.empty((len(normals), 2))
+    for k in range(len(normals)):
+        out[k, 0] = c * normals[k, 0] - s * normals[k, 1]
+        out[k, 1] = s * normals[k, 0] + c * normals[k, 1]
+    return out
 
 
 @njit(cache=True, nogil=True)
