@@ -16,7 +16,7 @@ import numpy as np
 from numba import njit
 
 from mresim_phys.knowledge.evidence import place_evidence
-from mresim_phys.knowledge.scanfold import MapHolder, ScanQueue
+from mresim_phys.knowledge.scanfold import MapHolder, ScanQueue, grow_window
 from mresim_phys.planning.grid import Box
 from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray
 from mresim_phys.world.beam import DRAWS, Beam, read_rays
@@ -79,14 +79,8 @@ def _cast_read_fold_many(
             grid, poses[i], offsets, max_range, circles, belief, safe, safe_radius, params,
             draws[i], counts, evidence,
         )  # fmt: skip
-        if row0 < 0:
-            continue
-        h, w = free.shape
-        if r0 < 0:
-            r0, r1, c0, c1 = row0, row0 + h, col0, col0 + w
-        else:
-            r0, r1 = min(r0, row0), max(r1, row0 + h)
-            c0, c1 = min(c0, col0), max(c1, col0 + w)
+        if row0 >= 0:
+            r0, r1, c0, c1 = grow_window((r0, r1, c0, c1), row0, col0, free)
     return r0, r1, c0, c1
 
 

@@ -181,15 +181,22 @@ def _cast_and_fold_many(
             grid, poses[i, 0], poses[i, 1], angles, max_range, circles, belief, safe,
             safe_radius, poses[i, 3:],
         )  # fmt: skip
-        if row0 < 0:
-            continue
-        h, w = free.shape
-        if r0 < 0:
-            r0, r1, c0, c1 = row0, row0 + h, col0, col0 + w
-        else:
-            r0, r1 = min(r0, row0), max(r1, row0 + h)
-            c0, c1 = min(c0, col0), max(c1, col0 + w)
+        if row0 >= 0:
+            r0, r1, c0, c1 = grow_window((r0, r1, c0, c1), row0, col0, free)
     return r0, r1, c0, c1
+
+
+@njit(cache=True, nogil=True, inline="always")
+def grow_window(
+    window: tuple[int, int, int, int], row0: int, col0: int, free: BeliefGrid
+) -> tuple[int, int, int, int]:
+    """``window`` (row0, row1, col0, col1; row0 = -1: none yet) grown to hold a scan's
+    window, the ``free`` mask at (``row0``, ``col0``)."""
+    r0, r1, c0, c1 = window
+    h, w = free.shape
+    if r0 < 0:
+        return row0, row0 + h, col0, col0 + w
+    return min(r0, row0), max(r1, row0 + h), min(c0, col0), max(c1, col0 + w)
 
 
 def folds_in_one_call(laser: Laser, observed: np.ndarray | None) -> bool:
