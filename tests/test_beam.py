@@ -17,6 +17,7 @@ from mresim_phys.cli import main
 from mresim_phys.knowledge.beamfold import BeamScanQueue
 from mresim_phys.knowledge.evidence import OCCUPIED_AT, integrate_evidence
 from mresim_phys.knowledge.frontiers import frontier_mask
+from mresim_phys.knowledge.latest import LATEST
 from mresim_phys.readings_feature import READINGS, ReadingCounts
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 from mresim_phys.world.beam import DRAWS, KINDS, Beam, read_beam
@@ -267,3 +268,33 @@ def test_range_noise_and_a_beam_model_together_are_refused(
     team = {"speed": 2, "radius": 1.0, "sensor": sensor}
     assert main(["validate", str(scenario_file(team=team))]) == 2
     assert "beam.sigma_hit" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize(
+    "extra",
+    [
+        {"simulation": {"belief": "latest"}},
+        {"team_localization": {"odometry": {"alpha": [0.0002, 1e-6, 0.0002, 1e-6]}}},
+        {"team_localization": {"corrections": [{"kind": "scan_matching", "every": 1}]}},
+    ],
+)
+def test_a_beam_model_runs_with_latest_beliefs_and_with_localisation(
+    tmp_path: Path, extra: dict[str, Any]
+) -> None:
+    """The scans that fold one by one (latest beliefs stamp what they decide; a drifting
+    robot weighs its scan where it believes it took it, after matching it) read through
+    the model too: the team maps the office's first room, and with latest beliefs every
+    cell a robot holds free was observed at some step."""
+    top = {k: v for k, v in extra.items() if k != "team_localization"}
+    path = office(tmp_path, HEAVY, steps=40, **top)
+    if "team_localization" in extra:
+        data = yaml.safe_load(path.read_text(encoding="utf-8"))
+        data["team"]["localization"] = extra["team_localization"]
+        path.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
+    sim = Simulation.from_yaml(path)
+    assert sim.run().explored > 0.02
+    readings = READINGS.value_in(sim.robots[0].features)
+    assert readings is not None and readings.total > 0
+    observed = LATEST.state_of(sim.robots[0].features)
+    if observed is not None:
+        assert (observed[sim.robots[0].belief == FREE] >= 0).all()

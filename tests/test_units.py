@@ -204,3 +204,15 @@ def test_validate_scenario_turns_a_mapping_in_metres_into_cells() -> None:
     scenario = validate_scenario(in_metres(), "<data>")
     assert scenario.robots[0].start == (245.0, 60.0)
     assert scenario.units == "cells" and scenario.team.speed == 3.0
+
+
+def test_a_beam_models_lengths_are_metres_and_its_rate_per_metre(tmp_path: Path) -> None:
+    """With 'units: m' a sensor's beam block gives sigma_hit, max_free and speckle in
+    metres and lambda_short per metre; the run holds them in cells (0.05 m a cell)."""
+    beam = {"sigma_hit": 0.02, "max_free": 1.5, "speckle": 0.1, "lambda_short": 2.0}
+    team = {"speed": 1.5, "radius": 0.1, "sensor": {"range": 4.0, "beam": beam}}
+    scenario = load_scenario(write(tmp_path, in_metres(team=team)))
+    got = scenario.robots[0].sensor.beam
+    assert got is not None
+    assert got.sigma_hit == pytest.approx(0.4) and got.max_free == pytest.approx(30.0)
+    assert got.speckle == pytest.approx(2.0) and got.lambda_short == pytest.approx(0.1)
