@@ -7,10 +7,10 @@ Occupancy grid mapping weighs each reading as evidence instead (Thrun, Burgard a
 *Probabilistic Robotics*, 9.2: log odds), which is what this fold does, in whole units:
 
 * every cell of the scan's free polygon (the same polygon and chord band as the exact
-  fold) is a *miss*: its evidence drops by :data:`MISS`; rays the beam model left out
-  (lost, filtered, no return) are spanned by the chord between their neighbours when at
-  most :data:`GAP` are left out in a row, and pull the outline in to the robot when more
-  are (a small obstacle between far rays is not swallowed);
+  fold) is a *miss*: its evidence drops by :data:`MISS`; a ray the beam model left out
+  (lost, filtered, no return) has length 0, so it pulls the outline in to the robot and
+  a small obstacle between far rays is not swallowed (the chords into it run along its
+  neighbours and cut no corner: ``chord_band`` skips them);
 * the cell a return ended in is a *hit*: up by :data:`HIT` (a return's end is an
   obstacle whatever made it); and so is every cell between two consecutive returns closer
   than :data:`~.wall_marks.WALL_GAP` (the face between them, as the exact fold joins close
@@ -47,7 +47,6 @@ HIT = 3  # evidence the cell a return ended in gains
 CAP = 12  # evidence stays within [-CAP, CAP]
 FREE_AT = -2  # evidence at or below which the map holds a cell FREE
 OCCUPIED_AT = 4  # evidence at or above which it holds it OCCUPIED
-GAP = 0  # rays left out in a row that the outline spans (more pull it in to the robot)
 
 
 def integrate_evidence(
@@ -119,13 +118,10 @@ def fold_evidence(
     col0, mask of the window's cells the map now holds FREE that the scan saw) or
     row0 = -1 when the scan's window lies off the map. With ``observed`` ('latest'
     beliefs) every cell the scan decided was observed at ``step``."""
-    kept = _outline(ranges)
-    if len(kept) < 2:
-        return -1, -1, np.zeros((0, 0), np.uint8)
-    angles, ranges, normals, wall_hit = angles[kept], ranges[kept], normals[kept], wall_hit[kept]
     n = len(angles)
     rows, cols = belief.shape
     ux, uy = np.cos(angles), np.sin(angles)
+    ranges, wall_hit = ranges.copy(), wall_hit.copy()  # cut at known walls below
     for k in range(n):
         _clip_at_wall(ox, oy, ux[k], uy[k], ranges, wall_hit, k, evidence)
     ex, ey = ox + ranges * ux, oy + ranges * uy
@@ -153,31 +149,6 @@ def fold_evidence(
     for k in range(len(hits)):
         _believe(belief, evidence, observed, step, hits[k, 0], hits[k, 1])
     return r0, c0, seen
-
-
-@njit(cache=True, nogil=True)
-def _outline(ranges: FloatArray) -> np.ndarray:
-    """The rays that outline the scan's free polygon: every ray with a length, and of each
-    run of more than :data:`GAP` rays left out (length 0) its first and last, which pull
-    the outline in to the robot; a shorter run is spanned by the chord between its
-    neighbours, as the exact fold spans the space between two rays."""
-    n = len(ranges)
-    out = np.empty(2 * n, np.int64)  # a run of one left out gives two (the same ray twice)
-    count, k = 0, 0
-    while k < n:
-        if ranges[k] > 0.0:
-            out[count] = k
-            count += 1
-            k += 1
-            continue
-        end = k
-        while end < n and ranges[end] <= 0.0:
-            end += 1
-        if end - k > GAP:
-            out[count], out[count + 1] = k, end - 1
-            count += 2
-        k = end
-    return out[:count]
 
 
 @njit(cache=True, nogil=True, inline="always")
