@@ -21,6 +21,7 @@ import numpy as np
 
 from mresim_phys.agents import Agent, Body, Robot, empty_belief
 from mresim_phys.build_world import build_prior, build_terrain, check_world_events, world_can_change
+from mresim_phys.clocks.feature import CLOCK, Clock
 from mresim_phys.comms import COMM_MODELS
 from mresim_phys.comms.ledger import Ledger
 from mresim_phys.comms.network import Channel, Network
@@ -124,6 +125,15 @@ def give_localization(
             pose = (*robot.position, robot.heading)
             state = localize(block, pose, (odometry, fixes, jumps), bounds)
             robot.features[LOCALIZATION.key] = state
+
+
+def give_clocks(team: list[Robot], scenario: Scenario, streams: Streams) -> None:
+    """The clock of each robot whose spec has one (``clocks/``); its drawn compute delays
+    from its ``compute-delay`` stream."""
+    for robot, spec in zip(team, scenario.robots, strict=True):
+        if spec.clock is not None:
+            rng = streams.of_robot("compute-delay", robot.name)
+            robot.features[CLOCK.key] = Clock.of(spec.clock, rng)
 
 
 def make_base(spec: BaseStationSpec, shape: tuple[int, int]) -> Agent:
@@ -329,6 +339,7 @@ def build_setup(scenario: Scenario) -> Setup:
     check_base(world.occupied, scenario.base_station)
     check_beacons(world.occupied, scenario.robots)
     give_localization(robots, scenario, streams, world.shape)
+    give_clocks(robots, scenario, streams)
     starts = [r.position for r in robots]
     events = [make_event(e) for e in scenario.events]
     check_event_boxes(scenario, world.shape)

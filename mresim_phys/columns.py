@@ -51,6 +51,7 @@ RADIO_COLUMNS = (
     "connected_to_base",
 )  # a run whose main channel has radio options (comms/radio_feature.py)
 BEAM_COLUMN = "noisy_readings"  # a run with a beam-model laser (readings_feature.py)
+CLOCK_COLUMN = "decisions"  # a run with a robot clock (clocks/feature.py)
 MEETING_COLUMNS = (
     "meetings_planned",
     "meetings_kept",
@@ -354,6 +355,7 @@ FEATURE_COLUMNS = {
     **{n: f"mresim_phys.comms.radio_feature:{n}" for n in RADIO_COLUMNS},
     **{n: f"mresim_phys.meetings.columns:{n}" for n in MEETING_COLUMNS},
     BEAM_COLUMN: "mresim_phys.readings_feature:noisy_readings",
+    CLOCK_COLUMN: "mresim_phys.clocks.feature:decisions",
 }
 for _name, _reference in FEATURE_COLUMNS.items():
     COLUMNS.lazy(_name, _reference, ColumnParams)

@@ -176,6 +176,7 @@ FEATURES = FeatureList(
         "localization": "mresim_phys.localization.feature:LOCALIZATION",
         "radio": "mresim_phys.comms.radio_feature:RADIO",
         "readings": "mresim_phys.readings_feature:READINGS",
+        "clock": "mresim_phys.clocks.feature:CLOCK",
         "terrain": "mresim_phys.knowledge.terrain:TERRAIN",
         "prior": "mresim_phys.knowledge.prior:PRIOR",
         "payload": "mresim_phys.knowledge.teammates:PAYLOAD",

@@ -24,6 +24,7 @@ from typing import Any, Protocol
 
 from mresim_phys.agents import Robot
 from mresim_phys.broken_parts import broken_of
+from mresim_phys.clocks.feature import CLOCK, ClockValue
 from mresim_phys.knowledge.activity import health_of
 from mresim_phys.knowledge.health import HealthWatch, RobotStep
 from mresim_phys.localization.feature import LOCALIZATION
@@ -91,6 +92,7 @@ def robot_steps(
                 safe=r.safe,
                 given_up=given_up,
                 goal=r.goal,
+                clocked=held_by_clock(CLOCK.value_in(r.features), len(r.path) > 0),
             )
         )
     return out
@@ -138,7 +140,13 @@ def step_of(agent: AgentLike) -> RobotStep:
         agent.safe,
         agent.given_up,
         agent.goal,
+        held_by_clock(CLOCK.of(agent), len(agent.path) > 0),
     )
+
+
+def held_by_clock(clock: ClockValue | None, has_path: bool) -> bool:
+    """Whether a robot's clock (``clocks/``; None: it has none) kept it still this step."""
+    return clock is not None and clock.holds(has_path)
 
 
 def believed_position(agent: AgentLike) -> tuple[float, float]:

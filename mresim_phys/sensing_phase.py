@@ -20,6 +20,7 @@ from time import perf_counter
 import numpy as np
 
 from mresim_phys.agents import Robot
+from mresim_phys.clocks.feature import CLOCK
 from mresim_phys.knowledge.beamfold import BeamScanQueue
 from mresim_phys.knowledge.evidence import integrate_evidence
 from mresim_phys.knowledge.latest import LATEST
@@ -162,8 +163,12 @@ class Senses:
 
     def takes_scan(self, robot: Robot) -> bool:
         """Whether the robot can scan where it stands (a working laser, not buried by a
-        change of the world); a scan it takes is counted."""
+        change of the world, on a step its clock lets it scan: ``clocks/``); a scan it
+        takes is counted."""
         if not robot.can_sense or self.world.buried(robot.position):
+            return False
+        clock = CLOCK.state_of(robot.features)
+        if clock is not None and not clock.scan():
             return False
         robot.scans += 1
         return True

@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 from mresim_phys.agent_views import agent_snapshot, robot_view
 from mresim_phys.agents import Agent, Robot
 from mresim_phys.build import Scenario, Setup, build_setup, load_scenario
+from mresim_phys.clocks.gate import acts, follows_given, may_decide, settle, tick
 from mresim_phys.comms.ledger import box_around, sensed_tick
 from mresim_phys.comms.radio_feature import radio_columns
 from mresim_phys.errors import ScenarioError, UnknownRobotError
@@ -149,6 +150,7 @@ class Simulation:
         """
         self.t += 1
         self.apply_events()
+        tick(self.robots, self.t)
         given, due = self.decide(actions or {})
         self.move_and_sense(given, due)
         self.world.place_robots([r.position for r in self.robots])
@@ -210,31 +212,38 @@ class Simulation:
     def decide(self, actions: Mapping[str, Decision]) -> tuple[set[str], set[str]]:
         """Decide phase: supplied decisions are adopted; returns (given, due).
 
-        ``given``: the robots a caller gave a decision (their strategies are not asked this
-        step); ``due``: the robots whose replan is due, asked by :meth:`move_and_sense`
-        before they move (a replan reads only the robot's own knowledge, so asking then is
-        the same as asking now).
+        ``given``: the robots that follow a caller's decision this step (their strategies
+        are not asked); ``due``: the robots whose replan is due, asked by
+        :meth:`move_and_sense` before they move (a replan reads only the robot's own
+        knowledge, so asking then is the same as asking now). A robot with a clock
+        (``clocks/gate.py``) decides only on its steps and within its decision period; a
+        caller's decision for it waits for its next step.
         """
         unknown = sorted(set(actions) - {r.name for r in self.robots}) if actions else []
         if unknown:
             raise ValueError(f"actions name robots the team does not have: {unknown}")
+        given: set[str] = set()
         due: set[str] = set()
         for robot in self.robots:
             if not robot.can_move:
                 continue
             assert robot.strategy is not None
-            if robot.name in actions:
-                robot.adopt(actions[robot.name], self.t)
-            elif wants_plan(robot, self.t, robot.strategy.params.replan_interval):
+            if follows_given(robot, actions.get(robot.name), self.t):
+                given.add(robot.name)
+            elif (
+                acts(robot)
+                and may_decide(robot, self.t)
+                and wants_plan(robot, self.t, robot.strategy.params.replan_interval)
+            ):
                 due.add(robot.name)
-        return set(actions), due
+        return given, due
 
     def move_and_sense(self, given: set[str], due: set[str]) -> None:
         """Move phase: each robot replans if due, then moves up to its speed, scanning (and
         replanning) on the way; one task per robot (on threads if ``simulation.threads``
         allows), shared effects applied in robot order afterwards. A robot whose drive has
         failed (and whose sensor works) scans once where it stands."""
-        movers = [r for r in self.robots if r.can_move]
+        movers = [r for r in self.robots if r.can_move and acts(r)]
         tasks = [partial(self.robot_turn, r, r.name in due, r.name in given) for r in movers]
         threaded = self.pool.threads > 1
         heavy = [r.name in due or replans_on_the_way(r) for r in movers] if threaded else []
@@ -290,10 +299,13 @@ class Simulation:
         self.senses.sense(robot, effects, self.t)
 
     def replan(self, robot: Robot, effects: Effects) -> None:
-        """Ask the robot's strategy for a new path from what the robot knows."""
+        """Ask the robot's strategy for a new path from what the robot knows (unless its
+        clock forbids it now); followed now or when its compute delay has passed."""
         assert robot.strategy is not None
+        if not may_decide(robot, self.t):
+            return
         started = perf_counter()
-        robot.adopt(relax.decide(robot.strategy, self.view_of(robot)), self.t)
+        settle(robot, relax.decide(robot.strategy, self.view_of(robot)), self.t)
         effects.spend("planning", perf_counter() - started)
 
     def view_of(self, robot: Robot) -> RobotView:

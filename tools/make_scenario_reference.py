@@ -22,6 +22,7 @@ from mresim_phys.comms import radio_params as radio  # noqa: E402
 from mresim_phys.faults import spec as fault_spec  # noqa: E402
 from mresim_phys.localization import spec as localization  # noqa: E402
 from mresim_phys.planning import PLANNERS  # noqa: E402
+from mresim_phys.clocks.spec import ClockSpec, DelaySpec  # noqa: E402
 from mresim_phys.scenario import run_specs, schema  # noqa: E402
 from mresim_phys.scenario.maps import PriorSpec  # noqa: E402
 from mresim_phys.scenario.yamlfile import MAX_ALIAS_VALUES, MAX_YAML_BYTES  # noqa: E402
@@ -38,6 +39,8 @@ SECTIONS: list[tuple[str, type[BaseModel]]] = [
     ("robots[i] (adds to the team fields)", schema.RobotSpec),
     ("sensor", schema.SensorSpec),
     ("sensor.beam", schema.BeamSpec),
+    ("clock (team or robots[i])", ClockSpec),
+    ("clock.compute_delay", DelaySpec),
     ("communication", schema.CommSpec),
     ("communication.shadowing (either channel)", radio.ShadowingSpec),
     ("communication.bursts (either channel)", radio.BurstSpec),
@@ -96,6 +99,23 @@ NOTES = {
         " a reading through a wall it knows frees nothing behind it). Not with noise_std."
         " Adds the metric column `noisy_readings`, the per-robot feature `readings` and"
         " summary.json's `readings` object; see [sensing.md](sensing.md)."
+    ),
+    "clock (team or robots[i])": (
+        "A robot's own clock (a robot's block merges into the team's key by key). It acts"
+        " (moves, decides, scans) on the steps t with t % act_every == phase and still"
+        " communicates on every step; its strategy is asked at most once every"
+        " decision_period steps and never while a plan waits; a plan takes effect"
+        " compute_delay steps after it was asked (the robot follows its old path until"
+        " then); it scans on a step at least scan_period steps after its last. A failure"
+        " drops the waiting plan, a recovery starts the clock again on that step, and a"
+        " caller's decision (`step(actions=...)`, the viewer) waits for its next step."
+        " Adds the metric column `decisions` and the per-robot feature `clock`; see"
+        " [clocks.md](clocks.md)."
+    ),
+    "clock.compute_delay": (
+        "An integer d (every plan waits d steps), or {min, max}: each plan waits a number"
+        " of steps drawn uniformly from min to max (both included) from the robot's stream"
+        " `compute-delay`."
     ),
     "localization (team or robots[i])": (
         "A robot with this block knows its pose only through its odometry and corrections:"

@@ -7,8 +7,8 @@ a snapshot holds of it: state, odometer, path, drive, pose, map) and keeps, per 
   ``working`` (it moved at least :data:`MOVE_EPS` cells), else ``stuck`` (it had a path
   to follow, or its last move bumped: state ``error``), else ``waiting`` (``active`` and
   holding still by its strategy's choice: its goal is where it stands, as a relay at a
-  meeting point), else ``idle`` (parked, done, no path); ``""`` when not assessed (step 0,
-  a failed robot, a broken drive);
+  meeting point, or held still by its clock: ``clocks/``), else ``idle`` (parked, done, no
+  path); ``""`` when not assessed (step 0, a failed robot, a broken drive);
 * ``idle_steps``, ``stuck_steps``, ``waiting_steps`` and the longest idle stretch;
 * every change of its reported state (``active``, ``done``, ``error``, ``failed``) with
   the step and the reason the run gave (:class:`StateChange`; the live reasons come from
@@ -80,6 +80,7 @@ class RobotStep:
     safe: BoolGrid | None = None  # its safe space: where it (or a teammate it heard) has been
     given_up: BoolGrid | None = None  # frontier cells its strategy tried in vain and gave up
     goal: tuple[float, float] | None = None  # where its latest decision sends it
+    clocked: bool = False  # its clock (clocks/) kept it still this step
 
     @property
     def holding(self) -> bool:
@@ -202,6 +203,8 @@ class HealthWatch:
             moved = robot.distance - health.distance
             assessed = not first and robot.can_move
             activity = activity_of(moved, robot.has_path, robot.state, robot.holding)
+            if robot.clocked and moved < MOVE_EPS:  # its clock, not the robot, kept it still
+                activity = WAITING
             health.activity = activity if assessed else ""
             health.distance = robot.distance
             self.count(step, robot, health)

@@ -20,7 +20,13 @@ import numpy as np
 import yaml
 
 from mresim_phys.build import region_probe, run_rules
-from mresim_phys.columns import BEAM_COLUMN, LOCALIZATION_COLUMNS, MEETING_COLUMNS, Layout
+from mresim_phys.columns import (
+    BEAM_COLUMN,
+    CLOCK_COLUMN,
+    LOCALIZATION_COLUMNS,
+    MEETING_COLUMNS,
+    Layout,
+)
 from mresim_phys.comms.radio_feature import radio_columns
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.errors import ScenarioError
@@ -88,7 +94,8 @@ def extra_columns(scenario: Scenario) -> list[str]:
     columns (``localization/feature.py``) if a robot has localisation, then the meeting
     columns (``meeting_board.py``) if a robot's strategy plans meetings, then the radio
     columns (``comms/radio_feature.py``), then ``noisy_readings`` if a robot's laser has a
-    beam model (``readings_feature.py``), each unless named already."""
+    beam model (``readings_feature.py``), then ``decisions`` if a robot has a clock
+    (``clocks/feature.py``), each unless named already."""
     named = list(scenario.metrics.columns)
     if has_localization(scenario):
         named += [c for c in LOCALIZATION_COLUMNS if c not in named]
@@ -97,6 +104,8 @@ def extra_columns(scenario: Scenario) -> list[str]:
     named += [c for c in radio_columns(scenario.communication) if c not in named]
     if any(r.sensor.beam is not None for r in scenario.robots) and BEAM_COLUMN not in named:
         named.append(BEAM_COLUMN)
+    if any(r.clock is not None for r in scenario.robots) and CLOCK_COLUMN not in named:
+        named.append(CLOCK_COLUMN)
     return named
 
 

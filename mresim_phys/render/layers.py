@@ -34,6 +34,7 @@ ROBOT_LAYERS += ("localization",)  # a robot's believed pose and its 95 % ellips
 ROBOT_LAYERS += ("radio",)  # bytes queued on bounded links, beside the robot's name
 ROBOT_LAYERS += ("ghost_walls",)  # cells an agent's map holds as walls that are free
 ROBOT_LAYERS += ("readings",)  # a beam-model laser's share of noisy readings, by the name
+ROBOT_LAYERS += ("clock",)  # a clocked robot's decisions and its plan's wait, by the name
 LAYERS = GLOBAL_LAYERS + ROBOT_LAYERS
 DEFAULT_GLOBAL = frozenset(GLOBAL_LAYERS)
 DEFAULT_ROBOT = frozenset(ROBOT_LAYERS) - {

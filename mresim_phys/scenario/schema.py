@@ -20,6 +20,7 @@ from pydantic import (
     model_validator,
 )
 
+from mresim_phys.clocks.spec import ClockSpec
 from mresim_phys.comms.radio_params import RadioSpec
 from mresim_phys.faults.spec import FaultsSpec
 from mresim_phys.localization.spec import LocalizationSpec
@@ -225,6 +226,13 @@ class RobotParams(Strict):
             " (null: the robot knows its exact pose)."
         ),
     )
+    clock: ClockSpec | None = Field(
+        None,
+        description=(
+            "Its own clock: {act_every, phase, decision_period, compute_delay, scan_period}"
+            " (null: it acts, decides and scans on every step; docs/clocks.md)."
+        ),
+    )
 
 
 class RobotSpec(RobotParams):
@@ -387,10 +395,10 @@ class Scenario(Strict):
 
 
 def _inherit(team: dict[str, Any], robot: dict[str, Any]) -> dict[str, Any]:
-    """Robot fields over team defaults; a robot's ``sensor`` and ``localization`` dicts
-    merge into the team's key by key."""
+    """Robot fields over team defaults; a robot's ``sensor``, ``localization`` and ``clock``
+    dicts merge into the team's key by key."""
     merged = {**team, **robot}
-    for key in ("sensor", "localization"):
+    for key in ("sensor", "localization", "clock"):
         theirs, own = team.get(key), robot.get(key)
         if isinstance(theirs, dict) and isinstance(own, dict):
             merged[key] = {**theirs, **own}
