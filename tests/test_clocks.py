@@ -19,6 +19,7 @@ from mresim_phys import Simulation
 from mresim_phys.agents import Robot
 from mresim_phys.cli import main
 from mresim_phys.clocks.feature import CLOCK, Clock
+from mresim_phys.columns import value_of
 from mresim_phys.strategies import Decision
 
 SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
@@ -250,3 +251,14 @@ def test_bad_clock_input_is_one_paragraph_naming_the_field_and_exit_2(
     assert main(["validate", str(scenario_file(team=team))]) == 2
     err = capsys.readouterr().err
     assert field in err and "Traceback" not in err and "scenario.yaml" in err
+
+
+def test_rendezvous_pairs_still_agree_when_their_plans_come_late() -> None:
+    """A plan that waited is followed, and its proposal sent, for a step before its
+    strategy decides again: role_based's pairs still agree and keep their meetings."""
+    rooms = SCENARIOS / "23_rooms_role_based.yaml"
+    sim = Simulation.from_yaml(rooms, **{"team.clock": {"compute_delay": 3}})
+    sim.run()
+    kept = value_of("meetings_kept", sim.record)
+    assert isinstance(kept, int) and kept >= 3
+    assert sim.stop_reason() == "known_at_base"

@@ -108,7 +108,7 @@ NOTES = {
         " compute_delay steps after it was asked (the robot follows its old path until"
         " then); it scans on a step at least scan_period steps after its last. A failure"
         " drops the waiting plan, a recovery starts the clock again on that step, and a"
-        " caller's decision (`step(actions=...)`, the viewer) waits for its next step."
+        " caller's decision (`step(actions=...)`) waits for its next step."
         " Adds the metric column `decisions` and the per-robot feature `clock`; see"
         " [clocks.md](clocks.md)."
     ),

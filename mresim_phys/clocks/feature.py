@@ -68,6 +68,7 @@ class Clock:
     pending: Decision | None = None  # a plan asked for and not yet followed
     decided_at: int = 0  # the step the pending plan was asked for
     due_at: int = 0  # the first step it may take effect on
+    applied_at: int = -1  # the step the last plan that waited took effect
     held: Decision | None = None  # a caller's decision given on a step it does not act on
     odometer: float = 0.0  # the robot's distance when its pending plan was asked for
     was_alive: bool = True
@@ -82,10 +83,13 @@ class Clock:
         low, high = self.spec.compute_delay.min, self.spec.compute_delay.max
         return low if low == high else int(self.rng.integers(low, high + 1))
 
-    def ready_in(self) -> int:
-        """Steps until its strategy may be asked again (0: now; a pending plan aside)."""
+    def ready_in(self, step: int) -> int:
+        """Steps until its strategy may be asked again (0: now; a pending plan aside): its
+        decision period after the last ask, and not on the step a plan that waited took
+        effect."""
         last = self.last_decided
-        return 0 if last is None else max(0, last + self.spec.decision_period - self.now)
+        period = 0 if last is None else last + self.spec.decision_period - step
+        return max(0, period, self.applied_at + 1 - step)
 
     def scan(self) -> bool:
         """Whether the robot may scan on this step; a scan it takes is noted."""
@@ -103,7 +107,7 @@ class ClockFeature(RobotFeature[Clock, ClockValue]):
     def value(self, state: Clock) -> ClockValue:
         """Decisions so far, the pending plan's wait, whether it acts now."""
         wait = max(state.due_at - state.now, 0) if state.pending is not None else -1
-        return ClockValue(state.decisions, wait, state.acting, state.ready_in())
+        return ClockValue(state.decisions, wait, state.acting, state.ready_in(state.now))
 
     def encode(self, value: ClockValue) -> Any:
         """``[decisions, wait, acting, ready_in]``."""

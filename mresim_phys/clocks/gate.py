@@ -10,7 +10,10 @@ on the step it came back). Then, for a robot with a clock (docs/clocks.md):
 * a caller's decision (``Simulation.step(actions=...)``) is followed on its next step it
   acts on (:func:`follows_given`), replacing any plan its strategy had asked for;
 * its strategy is asked when a replan is due and ``decision_period`` steps have passed
-  since it was last asked, and never while a plan is pending (:func:`may_decide`);
+  since it was last asked, never while a plan is pending, and not on the step a plan that
+  waited takes effect (:func:`may_decide`): what the plan carries (a rendezvous proposal)
+  goes out with the robot's record at that step's exchange before its strategy decides
+  again, as it does without a delay;
 * the plan it asks for takes effect ``compute_delay`` steps later (:func:`settle`): until
   then it follows its old path (or stands). A plan that takes effect after the robot moved
   on is joined where the robot is (:func:`joined`: from the path point nearest to it);
@@ -62,13 +65,11 @@ def acts(robot: Robot) -> bool:
 
 
 def may_decide(robot: Robot, step: int) -> bool:
-    """Whether the robot's strategy may be asked at ``step``: no plan pending and its
-    decision period passed since it was last asked."""
+    """Whether the robot's strategy may be asked at ``step``: no plan pending, its decision
+    period passed since it was last asked, and no plan that waited took effect on this step
+    (a strategy's next decision comes after the exchange that carried its last one)."""
     clock = CLOCK.state_of(robot.features)
-    if clock is None:
-        return True
-    last = clock.last_decided
-    return clock.pending is None and (last is None or step - last >= clock.spec.decision_period)
+    return clock is None or (clock.pending is None and clock.ready_in(step) == 0)
 
 
 def settle(robot: Robot, decision: Decision, step: int) -> None:
@@ -109,7 +110,7 @@ def follows_given(robot: Robot, action: Decision | None, step: int) -> bool:
         moved = robot.distance > clock.odometer
         plan = clock.pending
         robot.adopt(joined(plan, robot.believed_position) if moved else plan, step)
-        clock.pending = None
+        clock.pending, clock.applied_at = None, step
     return False
 
 
