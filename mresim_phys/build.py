@@ -20,7 +20,14 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from mresim_phys.agents import Agent, Body, Robot, empty_belief
-from mresim_phys.build_world import build_prior, build_terrain, check_world_events, world_can_change
+from mresim_phys.build_world import (
+    build_ground,
+    build_prior,
+    build_terrain,
+    check_world_events,
+    no_go_of,
+    world_can_change,
+)
 from mresim_phys.clocks.feature import CLOCK, Clock
 from mresim_phys.comms import COMM_MODELS
 from mresim_phys.comms.ledger import Ledger
@@ -29,6 +36,7 @@ from mresim_phys.comms.radio import build_layer
 from mresim_phys.comms.radio_feature import RADIO, RadioCounters
 from mresim_phys.comms.regions import RegionProbe
 from mresim_phys.faults.runtime import Faults, build_faults
+from mresim_phys.ground.grid import Ground
 from mresim_phys.knowledge.coverage import Coverage
 from mresim_phys.knowledge.latest import LatestCoverage, give_stamps
 from mresim_phys.knowledge.teammates import BASE_NAME
@@ -289,6 +297,7 @@ class Setup:
     free_area: int = 0  # explorable cells at the start: the done rule's building, known to robots
     elements: list[MovingObstacle | Door | RandomDebris] = field(default_factory=list)
     terrain: TerrainGrid | None = None  # true speed factor per cell; None: no terrain
+    ground: Ground | None = None  # true ground classes (ground/); None: none
     prior: BeliefGrid | None = None  # the prior map the listed robots start with; None: none
     faults: Faults | None = None  # random failures, batteries, hazard zones; None: none
 
@@ -301,9 +310,13 @@ class Setup:
         return [self.streams.get("event", k) for k in range(len(self.events))]
 
 
-def explorable_area(occupied: np.ndarray, robots: list[Robot]) -> Explorable:
-    """The explorable area of ``robots`` from where they start (after any jitter)."""
-    return Explorable(occupied, [RobotSight(r.position, r.radius, r.laser.range) for r in robots])
+def explorable_area(
+    occupied: np.ndarray, robots: list[Robot], ground: Ground | None = None
+) -> Explorable:
+    """The explorable area of ``robots`` from where they start (after any jitter), where a
+    robot may stand (not on ground no robot crosses)."""
+    sights = [RobotSight(r.position, r.radius, r.laser.range) for r in robots]
+    return Explorable(occupied, sights, no_go_of(ground, robots))
 
 
 def run_rules(scenario: Scenario) -> RunRules:
@@ -348,8 +361,10 @@ def build_setup(scenario: Scenario) -> Setup:
     elements = build_elements(
         scenario.obstacles, scenario.doors, scenario.random_debris, world, streams, bodies
     )
+    crosses = [spec.crosses for spec in scenario.robots]
+    ground = build_ground(scenario.ground, robots, crosses, world.shape)
     reachable = Reachable(truth.occupied, starts)
-    explorable = explorable_area(truth.occupied, robots)
+    explorable = explorable_area(truth.occupied, robots, ground)
     rules = run_rules(scenario)
     base = make_base(scenario.base_station, world.shape)
     if rules.latest:
@@ -383,6 +398,7 @@ def build_setup(scenario: Scenario) -> Setup:
         free_area=int(np.count_nonzero(explorable.mask)),
         elements=elements,
         terrain=terrain,
+        ground=ground,
         prior=prior,
         faults=build_faults(scenario.faults, robots, world.shape, streams),
     )

@@ -9,6 +9,9 @@ from __future__ import annotations
 
 from mresim_phys.agents import Robot
 from mresim_phys.errors import ScenarioError
+from mresim_phys.ground.feature import GROUND
+from mresim_phys.ground.grid import Access, Ground, ground_of
+from mresim_phys.ground.spec import GroundSpec
 from mresim_phys.knowledge.prior import PRIOR, prior_belief
 from mresim_phys.knowledge.prior import STREAM as PRIOR_STREAM
 from mresim_phys.knowledge.terrain import TERRAIN, unknown_terrain
@@ -18,7 +21,7 @@ from mresim_phys.scenario.on_map import check_door_names, load_map
 from mresim_phys.scenario.schema import (
     Scenario,
 )
-from mresim_phys.types import BeliefGrid
+from mresim_phys.types import BeliefGrid, BoolGrid
 from mresim_phys.world.element_params import TerrainSpec
 from mresim_phys.world.event_api import Event, NeedsMap
 from mresim_phys.world.space import World
@@ -58,6 +61,32 @@ def build_terrain(
         if known is not None:
             robot.features[TERRAIN.key] = known
     return truth
+
+
+def build_ground(
+    spec: GroundSpec | None,
+    robots: list[Robot],
+    crosses: list[dict[str, float] | None],
+    shape: tuple[int, int],
+) -> Ground | None:
+    """The true ground classes (a ScenarioError naming the field if they cannot be built);
+    each robot's access to them, from its ``crosses`` (``ground/``)."""
+    try:
+        ground = ground_of(spec, shape)
+    except ValueError as exc:
+        raise ScenarioError(str(exc)) from None
+    if ground is not None:
+        for robot, own in zip(robots, crosses, strict=True):
+            robot.features[GROUND.key] = Access.of(ground, own)
+    return ground
+
+
+def no_go_of(ground: Ground | None, robots: list[Robot]) -> BoolGrid | None:
+    """The cells no robot may enter (ground every robot is barred from; None: none)."""
+    if ground is None:
+        return None
+    access = [GROUND.state_of(r.features) for r in robots]
+    return ground.no_go([a.factors for a in access if a is not None])
 
 
 def build_prior(

@@ -178,6 +178,7 @@ FEATURES = FeatureList(
         "readings": "mresim_phys.readings_feature:READINGS",
         "clock": "mresim_phys.clocks.feature:CLOCK",
         "terrain": "mresim_phys.knowledge.terrain:TERRAIN",
+        "ground": "mresim_phys.ground.feature:GROUND",
         "prior": "mresim_phys.knowledge.prior:PRIOR",
         "payload": "mresim_phys.knowledge.teammates:PAYLOAD",
         "observed": "mresim_phys.knowledge.latest:LATEST",

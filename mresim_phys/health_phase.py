@@ -25,6 +25,8 @@ from typing import Any, Protocol
 from mresim_phys.agents import Robot
 from mresim_phys.broken_parts import broken_of
 from mresim_phys.clocks.feature import CLOCK, ClockValue
+from mresim_phys.ground.feature import GROUND
+from mresim_phys.ground.grid import ClassGrid
 from mresim_phys.knowledge.activity import health_of
 from mresim_phys.knowledge.health import HealthWatch, RobotStep
 from mresim_phys.localization.feature import LOCALIZATION
@@ -93,6 +95,7 @@ def robot_steps(
                 given_up=given_up,
                 goal=r.goal,
                 clocked=held_by_clock(CLOCK.value_in(r.features), len(r.path) > 0),
+                barred=barred_of(r),
             )
         )
     return out
@@ -125,8 +128,11 @@ class AgentLike(Protocol):
     def goal(self) -> tuple[float, float] | None: ...
 
 
-def step_of(agent: AgentLike) -> RobotStep:
-    """A snapshot's robot as the watch reads it (the same values the live run gives)."""
+def step_of(agent: AgentLike, ground: ClassGrid | None = None) -> RobotStep:
+    """A snapshot's robot as the watch reads it (the same values the live run gives;
+    ``ground``: the run's true ground classes, None: none)."""
+    crossing = GROUND.of(agent)
+    barred = None if crossing is None or ground is None else crossing.barred_on(ground)
     return RobotStep(
         agent.name,
         agent.state,
@@ -141,7 +147,14 @@ def step_of(agent: AgentLike) -> RobotStep:
         agent.given_up,
         agent.goal,
         held_by_clock(CLOCK.of(agent), len(agent.path) > 0),
+        barred,
     )
+
+
+def barred_of(robot: Robot) -> BoolGrid | None:
+    """The ground a live robot cannot cross (``ground/``; None: the run has none)."""
+    access = GROUND.state_of(robot.features)
+    return None if access is None else access.barred
 
 
 def held_by_clock(clock: ClockValue | None, has_path: bool) -> bool:

@@ -15,7 +15,9 @@ scaled down to the remaining budget, as in the original.
 
 Terrain (``terrain:``): a step's distance budget is ``speed * factor`` of the cell under
 the robot at the start of the step (the truth, ``world/terrain.py``; 1 without terrain),
-whatever ground the step then crosses.
+whatever ground the step then crosses; with ground classes (``ground:``) times the robot's
+own factor of the class of that cell. A move that would take the robot's centre into a
+cell of a class it cannot cross is refused (:func:`stop_at_ground`).
 """
 
 from __future__ import annotations
@@ -30,6 +32,8 @@ import numpy as np
 from numba import njit
 
 from mresim_phys.agents import Robot
+from mresim_phys.ground.feature import GROUND
+from mresim_phys.ground.grid import ClassGrid
 from mresim_phys.knowledge.mapping import mark_bump
 from mresim_phys.knowledge.teammates import PAYLOAD
 from mresim_phys.localization.faults import frozen
@@ -51,6 +55,7 @@ class MoveRules:
     scan_every_point: bool
     shape_filter_of: Callable[[Robot], tuple[int, int, int]]
     terrain: TerrainGrid | None = None  # true speed factors (world/terrain.py); None: none
+    ground: ClassGrid | None = None  # true ground classes (ground/grid.py); None: none
 
 
 def wants_plan(robot: Robot, step: int, interval: int) -> bool:
@@ -118,6 +123,9 @@ def take_step(
     and at the end.
     """
     budget = robot.speed * factor_at(rules.terrain, robot.position)
+    access = GROUND.state_of(robot.features)
+    if access is not None and rules.ground is not None:  # its own factor of the ground class
+        budget *= access.factor_at(rules.ground, robot.position)
     moved = False
     # a strategy that talks through its payload (rendezvous, role swaps) runs a protocol of
     # one decision per exchange: it is not asked again within the step
@@ -180,6 +188,10 @@ def move_towards(
         settle()
         stop_with_error(robot, hit.point if loc is None else loc.to_believed(hit.point))
         return None
+    access = GROUND.state_of(robot.features)
+    if access is not None and access.enters_barred(robot.position, true_end):
+        stop_at_ground(robot)
+        return None
     robot.advance_to(true_end)
     if loc is not None and leg is not None:
         robot.heading = pose[2]
@@ -220,6 +232,14 @@ def stop_with_error(robot: Robot, contact: tuple[float, float]) -> None:
         direction = np.array([dx, dy]) / math.hypot(dx, dy)
     if not mark_bump(robot.belief, contact, direction):
         robot.escape_from = robot.position
+    robot.status = "error"
+    robot.path = robot.path[:0]
+    robot.reached_goal = False
+
+
+def stop_at_ground(robot: Robot) -> None:
+    """The move would take the robot into ground it cannot cross (``ground/``): it stops
+    with its error flag set and its path dropped; its map marks nothing (not a wall)."""
     robot.status = "error"
     robot.path = robot.path[:0]
     robot.reached_goal = False

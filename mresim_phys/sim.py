@@ -108,7 +108,8 @@ class Simulation:
             self.agents, s.network, s.world, s.coverage, (s.reachable, s.explorable),
             s.event_streams(), s.elements,
         )  # fmt: skip
-        self.move_rules = MoveRules(s.rules.scan_every_point, self.robot_filter, s.terrain)
+        ground = None if s.ground is None else s.ground.grid
+        self.move_rules = MoveRules(s.rules.scan_every_point, self.robot_filter, s.terrain, ground)
         self.pool = RobotPool(thread_count(scenario.simulation.threads, len(self.robots)))
         self.apply_events()
         self._stamped: frozenset[int] = frozenset()  # robots whose task stamped the ledger
@@ -387,6 +388,7 @@ class Simulation:
             world_version=self.world.version,
             latest=self.rules.latest,
             terrain=None if self.setup.terrain is None else read_only(self.setup.terrain),
+            ground=self.setup.ground,
             prior=self.setup.prior,
             hazards=self.hazards,
             movables=movable_views(self.world, self.setup.elements),

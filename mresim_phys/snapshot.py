@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 from numpy.typing import NDArray
 
+from mresim_phys.ground.grid import Ground
 from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray, RobotSight
 
 if TYPE_CHECKING:
@@ -144,6 +145,7 @@ class Snapshot:
     world_version: int = 0  # World.version: bumped by every change of the truth
     latest: bool = False  # robots' maps hold each cell's latest observation (belief: latest)
     terrain: NDArray[np.float32] | None = None  # true speed factors (static); None: no terrain
+    ground: Ground | None = None  # true ground classes (static, ground/); None: none
     prior: NDArray[np.uint8] | None = None  # the prior map robots were given (static); None
     hazards: NDArray[np.float32] | None = None  # hazard zones' failure probability (static)
     movables: tuple[MovableSnapshot, ...] = ()  # every obstacle and door, scenario order

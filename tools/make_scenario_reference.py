@@ -23,6 +23,7 @@ from mresim_phys.faults import spec as fault_spec  # noqa: E402
 from mresim_phys.localization import spec as localization  # noqa: E402
 from mresim_phys.planning import PLANNERS  # noqa: E402
 from mresim_phys.clocks.spec import ClockSpec, DelaySpec  # noqa: E402
+from mresim_phys.ground.spec import GroundRegion, GroundSpec  # noqa: E402
 from mresim_phys.scenario import run_specs, schema  # noqa: E402
 from mresim_phys.scenario.maps import PriorSpec  # noqa: E402
 from mresim_phys.scenario.yamlfile import MAX_ALIAS_VALUES, MAX_YAML_BYTES  # noqa: E402
@@ -67,6 +68,8 @@ SECTIONS: list[tuple[str, type[BaseModel]]] = [
     ("", shapes.MaskRegion),
     ("terrain", elements.TerrainSpec),
     ("terrain.regions[i]", elements.TerrainRegion),
+    ("ground", GroundSpec),
+    ("ground.regions[i]", GroundRegion),
     ("prior", PriorSpec),
     ("faults", fault_spec.FaultsSpec),
     ("faults.random[i]", fault_spec.RandomFaultSpec),
@@ -158,6 +161,22 @@ NOTES = {
         " of `1 / factor` of its two cells; `jps` and `topological` plan with that cost-aware"
         " A* once the robot knows slow ground. The `terrain` video layer tints slow ground"
         " brown."
+    ),
+    "ground": (
+        "Named ground classes (rubble, stairs, water, ...) with each class's default speed"
+        " factor in [0, 1] (0: a robot cannot enter it), from a colour `image` the size of"
+        " the map whose `legend` gives each class's colour [r, g, b] (other colours: floor)"
+        " and/or `regions` drawn over it in order. A robot's `crosses` (team or robots[i])"
+        " gives its own factor per class. Each robot plans over the cells it can cross,"
+        " pricing slow ones by 1 / factor, moves at its factor of the class under it, and"
+        " never enters a cell it cannot cross; it knows the class of every cell its map holds"
+        " free (a cell's class travels with the cell). Ground no robot crosses is left out"
+        " of the explorable area. The `ground` video layer shades each class in its colour;"
+        " see [ground.md](ground.md)."
+    ),
+    "ground.regions[i]": (
+        "One of `box`, `circle`, `polygon` or `mask`, as the regions above, with its class"
+        " (`ground`)."
     ),
     "terrain.regions[i]": (
         "One of `box`, `circle`, `polygon` or `mask`, as the regions above, with its `factor`."

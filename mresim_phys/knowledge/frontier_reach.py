@@ -119,10 +119,12 @@ def frontier_check(
     radius: float,
     safe: BoolGrid | None = None,
     given_up: BoolGrid | None = None,
+    barred: BoolGrid | None = None,
 ) -> FrontierCheck:
     """The frontier cells of ``belief`` and how many a robot of ``radius`` at ``position``
     (world x, y in cells) could reach (module docstring; ``safe``: its safe space;
-    ``given_up``: the cells its strategy tried in vain and gave up)."""
+    ``given_up``: the cells its strategy tried in vain and gave up; ``barred``: ground it
+    cannot cross, ``ground/``)."""
     box = bbox(belief == FREE)
     if box is None:
         return NO_FRONTIER
@@ -131,11 +133,11 @@ def frontier_check(
     total = int(np.count_nonzero(frontier))
     if total == 0:
         return NO_FRONTIER
-    body = reached_near(belief, box, crop, position, radius)
+    body = reached_near(belief, box, crop, position, radius, barred)
     reachable = frontier & body if body is not None else np.zeros_like(frontier)
     rest = frontier & ~reachable
     found = int(np.count_nonzero(reachable))
-    loose = reached_near(belief, box, crop, position, 0.0) if found < total else None
+    loose = reached_near(belief, box, crop, position, 0.0, barred) if found < total else None
     closed = int(np.count_nonzero(rest & loose)) if loose is not None else 0
     return FrontierCheck(total, found, closed, total - found - closed, body is not None)
 
@@ -153,11 +155,14 @@ def reached_near(
     crop: Box,
     position: tuple[float, float],
     clearance: float,
+    barred: BoolGrid | None = None,
 ) -> BoolGrid | None:
     """Within ``crop``: the cells within ``target_reach(clearance)`` (centre to centre) of
     a passable cell (at ``clearance``) 4-connected to the robot's snapped position; None if
     it snaps onto none."""
     passable, _ = passable_cells(belief, clearance, free_box)
+    if barred is not None:
+        passable &= ~barred
     start = snap_to_passable(passable, position, MAX_SNAP)
     if start is None:
         return None

@@ -81,6 +81,7 @@ class RobotStep:
     given_up: BoolGrid | None = None  # frontier cells its strategy tried in vain and gave up
     goal: tuple[float, float] | None = None  # where its latest decision sends it
     clocked: bool = False  # its clock (clocks/) kept it still this step
+    barred: BoolGrid | None = None  # ground it cannot cross (ground/); None: none
 
     @property
     def holding(self) -> bool:
@@ -92,7 +93,9 @@ class RobotStep:
 
 def check_of(robot: RobotStep) -> FrontierCheck:
     """The frontier check of the robot's own map, where it stands."""
-    return frontier_check(robot.belief, robot.position, robot.radius, robot.safe, robot.given_up)
+    return frontier_check(
+        robot.belief, robot.position, robot.radius, robot.safe, robot.given_up, robot.barred
+    )
 
 
 def activity_of(moved: float, has_path: bool, state: str, holding: bool = False) -> str:

@@ -44,8 +44,8 @@ from mresim_phys.features import FEATURES
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
 from mresim_phys.types import FloatArray, IntArray
 
-FORMAT, VERSION = "mresim-runlog", 8
-READABLE = (1, 2, 3, 4, 5, 6, 7, 8)  # versions it reads (how each differs: run-log-format.md)
+FORMAT, VERSION = "mresim-runlog", 9
+READABLE = (1, 2, 3, 4, 5, 6, 7, 8, 9)  # versions it reads (how each differs: run-log-format.md)
 OLD_KEYS = {"parts": "broken", "lost": "presumed_lost", "health": "state_reason"}  # version <= 6
 NEW, NONE = -1, -2  # PointsField codes: the points are stored; the field is None
 Parts = dict[str, list[np.ndarray]]
@@ -169,6 +169,7 @@ SNAPSHOT_LINE = {
 SNAPSHOT_ELSEWHERE: tuple[str, ...] = ("resolution", "truth", "agents")
 SNAPSHOT_ELSEWHERE += ("movables", "rubble", "gave_way", "terrain", "prior")  # in truth.npz
 SNAPSHOT_ELSEWHERE += ("hazards",)  # in truth.npz
+SNAPSHOT_ELSEWHERE += ("ground",)  # truth.npz "ground" and meta.json "ground" (version 9)
 SNAPSHOT_ELSEWHERE += ("latest",)  # meta.json "beliefs"
 SNAPSHOT_ELSEWHERE += ("sights",)  # meta.json "sights" (output.logmeta)
 SNAPSHOT_ELSEWHERE += ("dt",)  # meta.json "dt", written when the scenario gives it

@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from mresim_phys.ground.feature import GROUND
 from mresim_phys.output.files import WriteError, atomic_path, cause_of, write_json_atomic
 from mresim_phys.output.logformat import (
     AGENT_LINE,
@@ -80,6 +81,9 @@ def new_meta(
         meta["sights"] = [sight_meta(s) for s in first.sights]
     if first.dt is not None:  # a run given in seconds too (scenario dt)
         meta["dt"] = first.dt
+    if first.ground is not None:  # the classes (the grid is in truth.npz) and who crosses what
+        crossings = [GROUND.of(a) for a in first.robots]
+        meta["ground"] = first.ground.meta([list(c.factors) for c in crossings if c is not None])
     return meta
 
 
@@ -117,6 +121,8 @@ class RunLogWriter:
         statics: dict[str, Any] = {"occupied": truth}
         if first.terrain is not None:
             statics["terrain"] = first.terrain
+        if first.ground is not None:
+            statics["ground"] = first.ground.grid
         if first.prior is not None:
             statics["prior"] = first.prior
         if first.hazards is not None:

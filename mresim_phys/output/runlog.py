@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 
 from mresim_phys.errors import MresimError
+from mresim_phys.ground.grid import Ground
 from mresim_phys.health_phase import step_of
 from mresim_phys.knowledge.activity import with_activity
 from mresim_phys.knowledge.coverage import Coverage
@@ -81,6 +82,9 @@ class RunLog:
         self.terrain = terrain  # true speed factors (static), None without terrain
         self.prior = prior  # the prior map robots were given, None without one
         self.hazards = hazards  # hazard zones' failure probability per cell, None without
+        grid = read_static(log_dir, "ground") if "ground" in meta else None
+        # the true ground classes (ground/), None without
+        self.ground = None if grid is None else Ground.from_meta(meta["ground"], read_only(grid))
         self.names: list[str] = [a["name"] for a in meta["agents"]]  # base first, as in snapshots
         self.robot_names = [a["name"] for a in meta["agents"] if a["kind"] == "robot"]
         self.steps: int = meta["steps"]  # committed steps (whole chunks only if never closed)
@@ -192,7 +196,10 @@ class Replay:
         self.latest = latest  # 'latest' beliefs: maps can lose FREE cells (knowledge.latest)
         self.sights = read_sights(log.meta)
         truth = self.truth.view(bool).reshape(self.shape)  # writable: one compiled kernel
-        self.explorable = Explorable(truth, self.sights) if self.sights else None
+        ground = log.ground
+        no_go = None if ground is None else ground.no_go(log.meta["ground"]["factors"])
+        self.ground_grid = None if ground is None else ground.grid
+        self.explorable = Explorable(truth, self.sights, no_go) if self.sights else None
         counted, connected = (
             (reachable, None) if self.explorable is None else (self.explorable.mask, reachable)
         )
@@ -240,7 +247,7 @@ class Replay:
                 free.append(self.newly_free(i, belief_changed))
         record = self.measure(fields["step"], free, fields["links"], agents, fields["comm"])
         record = replace(record, meetings=fields["meetings"])  # logged whole (meetings/)
-        self.health.update(fields["step"], [step_of(a) for a in agents[1:]])
+        self.health.update(fields["step"], [step_of(a, self.ground_grid) for a in agents[1:]])
         self.health.note_progress(fields["step"], record.explored, record.known_at_base)
         agents[1:] = [
             replace(a, features=with_activity(a, self.health.view(a.name)[0])) for a in agents[1:]
@@ -257,6 +264,7 @@ class Replay:
             resolution=self.log.meta.get("resolution"),
             dt=self.log.meta.get("dt"),
             terrain=self.log.terrain,
+            ground=self.log.ground,
             prior=self.log.prior,
             hazards=self.log.hazards,
             latest=self.latest,
@@ -268,7 +276,7 @@ class Replay:
 
     def health_report(self, last: Snapshot) -> HealthReport:
         """The run-health record at the end, ``last`` being the last step replayed."""
-        return self.health.report([step_of(a) for a in last.robots])
+        return self.health.report([step_of(a, self.ground_grid) for a in last.robots])
 
     def follow_truth(self, version: int, chunk: Chunk, j: int) -> None:
         """Apply the step's truth change, if the world changed, and retarget the coverage."""

@@ -26,7 +26,7 @@ from mresim_phys.features import FEATURES
 from mresim_phys.knowledge.activity import health_of
 from mresim_phys.render.labels import Label, place_labels
 from mresim_phys.render.layers import LayerSpec
-from mresim_phys.render.legend import BELIEVED, legend_band
+from mresim_phys.render.legend import BELIEVED, Swatch, legend_band
 from mresim_phys.render.legend import world_legend as world_legend
 from mresim_phys.render.meetings import draw_meetings, meeting_marks
 from mresim_phys.render.pose import draw_beliefs, path_start, shows_beliefs
@@ -56,7 +56,7 @@ class Overlay:
 
     def __init__(self, layers: LayerSpec, style: Style, scale: float, to_px: np.ndarray) -> None:
         self.layers, self.style, self.scale, self.to_px = layers, style, scale, to_px
-        self._legend: tuple[tuple[tuple[str, ...], ...], np.ndarray] | None = None
+        self._legend: tuple[tuple[tuple[Swatch, ...], ...], np.ndarray] | None = None
 
     def px(self, xy: Sequence[float] | np.ndarray) -> np.ndarray:
         """World (x, y) points -> fixed-point output pixel coordinates (int32, 4 bits)."""
@@ -233,7 +233,7 @@ class Overlay:
                 draw_label(image, movable.name, centre, w / 2 * self.scale, style.obstacle, style)
 
     def _paste_legend(
-        self, image: np.ndarray, names: tuple[str, ...], extras: tuple[str, ...],
+        self, image: np.ndarray, names: tuple[str, ...], extras: tuple[Swatch, ...],
         marks: tuple[str, ...] = (),
     ) -> int:  # fmt: skip
         """The legend band over the bottom of ``image``; its height in pixels."""

@@ -32,6 +32,7 @@ from mresim_phys.render.raster import (
     colour_labels,
     packed_colours,
     shade_ghosts,
+    shade_ground,
     shade_hazards,
     shade_lost,
     shade_prior,
@@ -99,6 +100,8 @@ class Renderer:
         image = self._colour(label)
         if snapshot.terrain is not None and "terrain" in self.layers.global_layers:
             shade_terrain(image, snapshot.terrain, snapshot.truth, self.map_size, self.style)
+        if snapshot.ground is not None and "ground" in self.layers.global_layers:
+            shade_ground(image, snapshot.ground, snapshot.truth, self.map_size, self.style)
         if snapshot.prior is not None and "prior" in self.layers.global_layers:
             shade_prior(image, snapshot.prior, snapshot.truth, self.map_size, self.style)
         if snapshot.lost_knowledge is not None and "lost_knowledge" in self.layers.global_layers:

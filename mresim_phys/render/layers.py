@@ -27,6 +27,7 @@ GLOBAL_LAYERS += ("lost_knowledge",)  # cells only a robot that fell silent knew
 GLOBAL_LAYERS += ("hazards",)  # hazard zones of a faults: block
 GLOBAL_LAYERS += ("scale_bar",)  # metres on the frame, when the map's resolution is known
 GLOBAL_LAYERS += ("meetings",)  # meetings kept and missed (the rendezvous accounting)
+GLOBAL_LAYERS += ("ground",)  # ground classes, each shaded in its colour (ground/)
 ROBOT_LAYERS: tuple[str, ...] = ("location", "path", "free_space", "safe_space", "frontiers")
 ROBOT_LAYERS += ("comm_range", "goal", "skeleton", "rendezvous", "presumed_lost")
 ROBOT_LAYERS += ("rv_candidates", "rv_through_walls")  # multi-point rendezvous

@@ -33,21 +33,29 @@ GLYPH_COLOUR: BGR = (90, 90, 90)  # the legend's robot glyphs (a robot's own col
 BELIEVED = "believed pose"  # the legend mark of a believed pose (``render.pose``)
 
 
-def world_legend(snap: Snapshot, on: frozenset[str]) -> tuple[str, ...]:
-    """The changing world's legend entries (Style colour names) a frame shows: obstacle and
-    door if the run has them, rubble once some has fallen, hazard zones (a static run
-    without faults: none)."""
+Swatch = str | tuple[str, tuple[int, int, int]]  # a Style colour name, or (label, BGR)
+
+
+def world_legend(snap: Snapshot, on: frozenset[str]) -> tuple[Swatch, ...]:
+    """The world's legend entries a frame shows: obstacle and door if the run has them,
+    rubble once some has fallen, hazard zones (Style colour names), then the ground
+    classes with their colours (a static run without faults or ground: none)."""
     kinds = {m.kind for m in snap.movables}
     rubble = snap.rubble is not None and bool(snap.rubble.any())
     present = [("obstacle", "obstacles", "obstacle" in kinds), ("door", "doors", "door" in kinds)]
     present.append(("rubble", "debris", rubble))
     present.append(("hazard", "hazards", snap.hazards is not None))
-    return tuple(name for name, layer, shown in present if shown and layer in on)
+    names: tuple[Swatch, ...] = tuple(n for n, layer, shown in present if shown and layer in on)
+    ground = snap.ground
+    if ground is None or "ground" not in on:
+        return names
+    classes = ((n, (c[2], c[1], c[0])) for n, c in zip(ground.names, ground.colours, strict=True))
+    return (*names, *classes)
 
 
 def legend_band(
     width: int, names: Sequence[str], layers: LayerSpec, style: Style,
-    extras: Sequence[str] = (), marks: Sequence[str] = (),
+    extras: Sequence[Swatch] = (), marks: Sequence[str] = (),
 ) -> np.ndarray:  # fmt: skip
     """A band image with colour swatches for the map classes shown, the changing world's
     ``extras`` (Style colour names) and every robot, then (when robots are drawn) the
@@ -62,7 +70,7 @@ def legend_band(
         items.append(("frontier", style.frontier))
     if "ghost_walls" in robot_layers:
         items.append(("ghost wall", style.ghost_wall))
-    items += [(name, getattr(style, name)) for name in extras]
+    items += [(e, getattr(style, e)) if isinstance(e, str) else e for e in extras]
     items += [(name, style.robot_colour(i)) for i, name in enumerate(names)]
     glyphs = (*(STATE_GLYPHS if "location" in robot_layers else ()), *marks)
     (_, th), base = cv2.getTextSize("Ag", FONT, style.font_scale, 1)

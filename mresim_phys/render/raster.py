@@ -35,6 +35,7 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from mresim_phys.ground.grid import Ground
 from mresim_phys.knowledge.frontiers import sees_unknown
 from mresim_phys.render.layers import LayerSpec
 from mresim_phys.render.style import (
@@ -254,6 +255,18 @@ def shade_terrain(
     (1 - factor)``: the slower, the browner; walls and open floor (factor 1) stay. In place."""
     alpha = np.where(truth, np.float32(0), np.float32(style.terrain_alpha) * (1 - terrain))
     tint_cells(image, alpha, style.terrain, map_size)
+
+
+def shade_ground(
+    image: np.ndarray, ground: Ground, truth: BoolGrid, map_size: tuple[int, int], style: Style
+) -> None:
+    """Tint the free cells of each ground class toward its colour (its legend colour, RGB)
+    by ``ground_alpha`` (the ``ground`` layer). In place."""
+    free = ~truth
+    for value, rgb in enumerate(ground.colours, start=1):
+        cells = (ground.grid == value) & free
+        alpha = np.float32(style.ground_alpha) * cells.astype(np.float32)
+        tint_cells(image, alpha, (rgb[2], rgb[1], rgb[0]), map_size)
 
 
 def shade_prior(

@@ -46,6 +46,7 @@ class Style:
     skeleton: BGR = (0, 90, 200)
     terrain: BGR = (20, 60, 110)  # dark brown: slow ground is tinted toward it
     terrain_alpha: float = 0.7  # tint of the slowest ground (factor -> 0); factor 1: none
+    ground_alpha: float = 0.45  # tint of a ground class toward its colour (ground/)
     prior: BGR = (200, 110, 40)  # blue: walls of the prior map where the truth is free
     prior_alpha: float = 0.5
     lost_knowledge: BGR = (60, 20, 220)  # crimson: cells only a failed robot knew

@@ -35,7 +35,7 @@ from mresim_phys.scenario.schema import (
 )
 from mresim_phys.scenario.units import to_cells
 from mresim_phys.strategies import STRATEGIES
-from mresim_phys.world.element_params import absolute_terrain
+from mresim_phys.world.element_params import absolute_layer
 from mresim_phys.world.event_catalog import EVENTS
 from mresim_phys.world.shapes import region_under
 
@@ -267,13 +267,15 @@ def absolute_map(spec: MapSpec, folder: Path, source: str, field: str) -> MapSpe
 
 
 def resolve_mask_paths(scenario: Scenario, folder: Path) -> Scenario:
-    """The scenario with the mask images of collapse events, random debris and terrain made
-    absolute (relative paths are to the YAML file), so the run can be built anywhere."""
+    """The scenario with the mask images of collapse events, random debris, terrain and
+    ground classes made absolute (relative paths are to the YAML file), so the run can be
+    built anywhere."""
     events = [e.under(folder) for e in scenario.events]
     debris = scenario.random_debris
     if debris is not None:
         debris = debris.model_copy(update={"region": region_under(debris.region, folder)})
-    terrain = absolute_terrain(scenario.terrain, folder)
+    terrain = absolute_layer(scenario.terrain, folder)
+    ground = absolute_layer(scenario.ground, folder)
     faults = scenario.faults
     if faults is not None:
         hazards = [
@@ -281,7 +283,13 @@ def resolve_mask_paths(scenario: Scenario, folder: Path) -> Scenario:
         ]
         faults = faults.model_copy(update={"hazards": hazards})
     return scenario.model_copy(
-        update={"events": events, "random_debris": debris, "terrain": terrain, "faults": faults}
+        update={
+            "events": events,
+            "random_debris": debris,
+            "terrain": terrain,
+            "ground": ground,
+            "faults": faults,
+        }
     )
 
 

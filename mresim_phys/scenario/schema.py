@@ -23,6 +23,7 @@ from pydantic import (
 from mresim_phys.clocks.spec import ClockSpec
 from mresim_phys.comms.radio_params import RadioSpec
 from mresim_phys.faults.spec import FaultsSpec
+from mresim_phys.ground.spec import Factor, GroundSpec, check_team_crosses
 from mresim_phys.localization.spec import LocalizationSpec
 from mresim_phys.scenario.event_union import EventList
 from mresim_phys.scenario.hierarchy import check_hierarchy
@@ -226,6 +227,13 @@ class RobotParams(Strict):
             " (null: the robot knows its exact pose)."
         ),
     )
+    crosses: dict[str, Factor] | None = Field(
+        None,
+        description=(
+            "Its speed factor on each ground class it crosses otherwise than the class's"
+            " default, in [0, 1] (0: it cannot enter); docs/ground.md."
+        ),
+    )
     clock: ClockSpec | None = Field(
         None,
         description=(
@@ -324,6 +332,10 @@ class Scenario(Strict):
         None,
         description="Random failures, battery, hazard zones, out-of-contact rule (null: none).",
     )
+    ground: GroundSpec | None = Field(
+        None,
+        description="Ground classes (rubble, stairs, water...) robots cross at their own factors.",
+    )
 
     @model_validator(mode="before")
     @classmethod
@@ -382,6 +394,11 @@ class Scenario(Strict):
         check_hierarchy(self.robots)
         return self
 
+    @model_validator(mode="after")
+    def _crosses_name_classes(self) -> Scenario:
+        check_team_crosses(self.ground, [(r.name, r.crosses) for r in self.robots if r.crosses])
+        return self
+
     @field_validator("robots")
     @classmethod
     def _unique_names(cls, robots: list[RobotSpec]) -> list[RobotSpec]:
@@ -395,10 +412,10 @@ class Scenario(Strict):
 
 
 def _inherit(team: dict[str, Any], robot: dict[str, Any]) -> dict[str, Any]:
-    """Robot fields over team defaults; a robot's ``sensor``, ``localization`` and ``clock``
-    dicts merge into the team's key by key."""
+    """Robot fields over team defaults; a robot's ``sensor``, ``localization``, ``clock``
+    and ``crosses`` dicts merge into the team's key by key."""
     merged = {**team, **robot}
-    for key in ("sensor", "localization", "clock"):
+    for key in ("sensor", "localization", "clock", "crosses"):
         theirs, own = team.get(key), robot.get(key)
         if isinstance(theirs, dict) and isinstance(own, dict):
             merged[key] = {**theirs, **own}

@@ -175,7 +175,7 @@ def region_of(data: Any, conv: Converter) -> Any:
 
 
 def world(data: dict[str, Any], conv: Converter) -> dict[str, Any]:
-    """Obstacles, doors, events, debris, terrain and faults in cells."""
+    """Obstacles, doors, events, debris, terrain, ground classes and faults in cells."""
     out = dict(data)
     out["obstacles"] = listed(
         out.get("obstacles"), lambda o, i: obstacle(o, conv, f"obstacles[{i}]")
@@ -188,12 +188,13 @@ def world(data: dict[str, Any], conv: Converter) -> dict[str, Any]:
         if isinstance(debris.get("size"), list):
             debris = {**debris, "size": [conv.cells(v) for v in debris["size"]]}
         out["random_debris"] = debris
-    terrain = mapping(out.get("terrain"))
-    if terrain is not None:
-        out["terrain"] = {
-            **terrain,
-            "regions": listed(terrain.get("regions"), lambda r, _: conv.region(r)),
-        }
+    for key in ("terrain", "ground"):  # their regions' shapes
+        layer = mapping(out.get(key))
+        if layer is not None:
+            out[key] = {
+                **layer,
+                "regions": listed(layer.get("regions"), lambda r, _: conv.region(r)),
+            }
     out["faults"] = faults(out.get("faults"), conv)
     return present(out, data)
 

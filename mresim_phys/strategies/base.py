@@ -28,6 +28,7 @@ from typing import Any, ClassVar, Protocol, runtime_checkable
 
 import numpy as np
 
+from mresim_phys.ground.feature import GROUND
 from mresim_phys.knowledge.prior import PRIOR
 from mresim_phys.knowledge.prior import planning_map as belief_with_prior
 from mresim_phys.knowledge.teammates import LOST, Payload, TeammateInfo
@@ -184,9 +185,15 @@ class PlanContext:
     @cached_property
     def _passable(self) -> tuple[np.ndarray, Box | None]:
         if PRIOR.of(self.view) is None:
-            return passable_cells(self.view.belief, self.view.clearance, self.free_box)
-        planned = self.view.planning_map  # the prior fills what the belief does not know
-        return passable_cells(planned, self.view.clearance, bbox(planned == FREE))
+            cells = passable_cells(self.view.belief, self.view.clearance, self.free_box)
+        else:
+            planned = self.view.planning_map  # the prior fills what the belief does not know
+            cells = passable_cells(planned, self.view.clearance, bbox(planned == FREE))
+        ground = GROUND.of(self.view)  # ground classes it cannot cross (ground/)
+        if ground is None or cells[1] is None:
+            return cells
+        passable = ground.passable(cells[0])
+        return passable, bbox(passable)
 
     @property
     def passable(self) -> np.ndarray:
@@ -201,9 +208,12 @@ class PlanContext:
 
     @cached_property
     def slowness(self) -> FloatArray | None:
-        """Cost multipliers of the terrain the robot knows (``planning.costs``); None while
-        it knows no slow ground (or the run has no terrain): uniform costs."""
-        return slowness_of(TERRAIN.of(self.view))
+        """Cost multipliers of the terrain the robot knows (``planning.costs``) and of the
+        ground classes it crosses slowly (``ground/``); None while it knows no slow ground
+        (or the run has neither): uniform costs."""
+        terrain = slowness_of(TERRAIN.of(self.view))
+        ground = GROUND.of(self.view)
+        return terrain if ground is None else ground.slowness_with(terrain)
 
     @cached_property
     def search(self) -> PausedSearch | None:

@@ -9,8 +9,9 @@ without numpy, pymunk or OpenCV. What each element does in a run lives beside it
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping, Sequence
 from pathlib import Path
-from typing import Annotated, Literal
+from typing import Annotated, Any, ClassVar, Literal, Protocol, TypeVar
 
 from pydantic import Field, Tag, model_validator
 
@@ -159,23 +160,23 @@ class ObstacleParams(Strict):
 SHAPE_KEYS = ("box", "circle", "polygon", "mask")
 
 
-class TerrainRegion(Strict):
-    """One region of slower ground: one of ``box``, ``circle``, ``polygon``, ``mask``."""
+class ShapedRegion(Strict):
+    """A region of the map given by one of ``box``, ``circle``, ``polygon``, ``mask``."""
 
+    KIND: ClassVar[str] = "a region"  # what errors call it
     box: tuple[int, int, int, int] | None = Field(None, description="[x0, y0, x1, y1] in cells.")
     circle: tuple[float, float, float] | None = Field(None, description="[x, y, r] in cells.")
     polygon: list[tuple[float, float]] | None = Field(
         None, min_length=3, description="Vertices [[x, y], ...] in cells."
     )
     mask: Path | None = Field(None, description="PNG the size of the map; dark pixels are in.")
-    factor: float = Field(gt=0, le=1, description="Speed factor on the region, in (0, 1].")
 
     @model_validator(mode="after")
-    def _one_shape(self) -> TerrainRegion:
+    def _one_shape(self) -> ShapedRegion:
         given = [k for k in SHAPE_KEYS if getattr(self, k) is not None]
         if len(given) != 1:
             raise ValueError(
-                "a terrain region needs exactly one of 'box', 'circle', 'polygon' or 'mask'"
+                f"{self.KIND} needs exactly one of 'box', 'circle', 'polygon' or 'mask'"
                 f" (got {given or 'none'})"
             )
         self.region()  # the shape's own checks (a box's corners in order, r > 0)
@@ -191,6 +192,13 @@ class TerrainRegion(Strict):
             return PolygonRegion(polygon=self.polygon)
         assert self.mask is not None
         return MaskRegion(mask=self.mask)
+
+
+class TerrainRegion(ShapedRegion):
+    """One region of slower ground: one of ``box``, ``circle``, ``polygon``, ``mask``."""
+
+    KIND: ClassVar[str] = "a terrain region"
+    factor: float = Field(gt=0, le=1, description="Speed factor on the region, in (0, 1].")
 
 
 class TerrainSpec(Strict):
@@ -214,7 +222,20 @@ class TerrainSpec(Strict):
         return self
 
 
-def absolute_terrain(spec: TerrainSpec | None, folder: Path) -> TerrainSpec | None:
+class ImageLayer(Protocol):
+    """A map layer given by an image and regions (terrain, ground classes)."""
+
+    @property
+    def image(self) -> Path | None: ...
+    @property
+    def regions(self) -> Sequence[ShapedRegion] | None: ...
+    def model_copy(self, *, update: Mapping[str, Any] | None = None, deep: bool = False) -> Any: ...
+
+
+L = TypeVar("L", bound=ImageLayer)
+
+
+def absolute_layer(spec: L | None, folder: Path) -> L | None:
     """``spec`` with its image and mask paths made absolute (relative to ``folder``)."""
     if spec is None:
         return None
@@ -223,4 +244,5 @@ def absolute_terrain(spec: TerrainSpec | None, folder: Path) -> TerrainSpec | No
         r.model_copy(update={"mask": r.mask and (folder / r.mask.expanduser()).resolve()})
         for r in spec.regions
     ]
-    return spec.model_copy(update={"image": image, "regions": regions})
+    copied: L = spec.model_copy(update={"image": image, "regions": regions})
+    return copied

@@ -150,11 +150,14 @@ def dilated(grid: BoolGrid, kernel: Kernel, box: Box, outside: bool) -> BoolGrid
     return np.ascontiguousarray(out).view(bool)
 
 
-def positions(occupied: BoolGrid, radius: float, box: Box | None = None) -> BoolGrid:
+def positions(
+    occupied: BoolGrid, radius: float, box: Box | None = None, no_go: BoolGrid | None = None
+) -> BoolGrid:
     """The cells of ``box`` (the whole map if None) whose centres are positions of a body
-    of ``radius``."""
+    of ``radius`` (``no_go``: cells no robot may enter, ground no robot crosses)."""
     box = box or (0, occupied.shape[0], 0, occupied.shape[1])
-    return ~dilated(occupied, body_kernel(radius), box, outside=True)
+    places = ~dilated(occupied, body_kernel(radius), box, outside=True)
+    return places if no_go is None else places & ~cut(no_go, box)
 
 
 def start_seeds(
@@ -207,9 +210,12 @@ class Explorable:
     """The explorable cells of a team on a map (:attr:`mask`), followed across changes;
     :attr:`robots` are the robots given, with their seeds."""
 
-    def __init__(self, occupied: BoolGrid, robots: Sequence[RobotSight]) -> None:
+    def __init__(
+        self, occupied: BoolGrid, robots: Sequence[RobotSight], no_go: BoolGrid | None = None
+    ) -> None:
         self.shape: tuple[int, int] = (int(occupied.shape[0]), int(occupied.shape[1]))
-        self.places = {r.radius: positions(occupied, r.radius) for r in robots}
+        self.no_go = no_go  # cells no robot may enter (ground classes; static)
+        self.places = {r.radius: positions(occupied, r.radius, no_go=no_go) for r in robots}
         self.robots = [seeded(occupied, self.places[r.radius], r) for r in robots]
         groups: dict[tuple[float, float], SightGroup] = {}
         for robot in self.robots:
@@ -228,7 +234,7 @@ class Explorable:
         """Compute everything afresh on ``occupied`` (the seeds stay those of the start;
         ``again``: the positions too)."""
         for radius in self.places if again else ():
-            self.places[radius] = positions(occupied, radius)
+            self.places[radius] = positions(occupied, radius, no_go=self.no_go)
         labels = free_components(occupied)
         for group in self.groups:
             self._compute(occupied, group, labels)
@@ -293,7 +299,7 @@ class Explorable:
         window = grown(box, body_kernel(radius).shape[0] // 2, self.shape)
         region = cut(self.places[radius], window)
         held = region.copy()
-        region[...] = positions(occupied, radius, window)
+        region[...] = positions(occupied, radius, window, self.no_go)
         return window, held
 
     def _follow(
