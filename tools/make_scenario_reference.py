@@ -18,12 +18,12 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from mresim_phys import COMM_MODELS, STRATEGIES  # noqa: E402
+from mresim_phys.clocks.spec import ClockSpec, DelaySpec  # noqa: E402
 from mresim_phys.comms import radio_params as radio  # noqa: E402
 from mresim_phys.faults import spec as fault_spec  # noqa: E402
+from mresim_phys.ground.spec import GroundRegion, GroundSpec  # noqa: E402
 from mresim_phys.localization import spec as localization  # noqa: E402
 from mresim_phys.planning import PLANNERS  # noqa: E402
-from mresim_phys.clocks.spec import ClockSpec, DelaySpec  # noqa: E402
-from mresim_phys.ground.spec import GroundRegion, GroundSpec  # noqa: E402
 from mresim_phys.scenario import run_specs, schema  # noqa: E402
 from mresim_phys.scenario.maps import PriorSpec  # noqa: E402
 from mresim_phys.scenario.yamlfile import MAX_ALIAS_VALUES, MAX_YAML_BYTES  # noqa: E402
