@@ -1,4 +1,4 @@
-"""Command line (output edge): ``mresim run | validate | replay | view | plot | bench`` (and
+"""Command line (output edge): ``mresim run | validate | replay | view | plot | bench | make-map``
 ``sweep | compare | robustness``, from ``sweeps/cli.py``).
 
 Argument parsing and dispatch only, with light imports: each command's work
@@ -18,7 +18,13 @@ from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
 from typing import Literal
 
-from mresim_phys.arg_types import comma_separated, non_negative_int, positive_float, positive_int
+from mresim_phys.arg_types import (
+    add_settings,
+    comma_separated,
+    non_negative_int,
+    positive_float,
+    positive_int,
+)
 from mresim_phys.errors import MresimError
 from mresim_phys.plugin import named_object
 from mresim_phys.render.layers import GLOBAL_LAYERS, ROBOT_LAYERS
@@ -116,6 +122,7 @@ def make_parser() -> argparse.ArgumentParser:
         "--metrics", action="store_true", help="recompute metrics.csv from the log and compare"
     )
     add_view_parser(commands)
+    add_make_map_parser(commands)
     plot = commands.add_parser("plot", help="plot one or more runs' metrics")
     plot.add_argument("run_dirs", type=Path, nargs="+", help="run folders")
     plot.add_argument("--out", type=Path, help="folder for the PNGs (default: the run's plots/)")
@@ -193,6 +200,37 @@ def robot_counts(text: str) -> tuple[int, ...]:
     return tuple(comma_separated(text, positive_int, "team sizes such as 4,8,16"))
 
 
+def add_make_map_parser(commands: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
+    """The make-map sub-command (``mapgen/``)."""
+    make = commands.add_parser(
+        "make-map",
+        help="draw a seeded building, office, cave or rubble site (docs/procedural-maps.md)",
+    )
+    make.add_argument("kind", choices=("building", "office", "cave", "rubble"))
+    make.add_argument("--seed", type=non_negative_int, default=0, help="the map's seed (default 0)")
+    make.add_argument(
+        "--size", type=map_size, required=True, metavar="WxH", help="cells, e.g. 400x300"
+    )
+    make.add_argument(
+        "--out", type=Path, required=True, help="folder for map.png, map.yaml, scenario.yaml"
+    )
+    make.add_argument("--robots", type=positive_int, default=4, help="starts to place (default 4)")
+    make.add_argument(
+        "--radius", type=positive_float, default=2.0, help="body radius the starts fit (default 2)"
+    )
+    add_settings(
+        make, "a parameter of the kind, e.g. room_min=20 (repeatable; docs/procedural-maps.md)"
+    )
+
+
+def map_size(text: str) -> tuple[int, int]:
+    """argparse type: ``WxH`` in cells."""
+    width, sep, height = text.lower().partition("x")
+    if not sep:
+        raise argparse.ArgumentTypeError(f"expected WxH such as 400x300, got {text!r}")
+    return positive_int(width), positive_int(height)
+
+
 def thread_setting(text: str) -> int | Literal["auto"]:
     """argparse type: ``auto`` or a thread count >= 1."""
     return "auto" if text.strip() == "auto" else positive_int(text)
@@ -226,6 +264,7 @@ COMMANDS: dict[str, str | Callable[[argparse.Namespace], int]] = {
     "plot": "mresim_phys.commands:plot_command",
     "bench": "mresim_phys.commands:bench_command",
     "view": "mresim_phys.viewer.command:view_command",
+    "make-map": "mresim_phys.mapgen.command:make_map_command",
     **SWEEP_COMMANDS,
 }
 
