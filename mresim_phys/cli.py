@@ -1,5 +1,5 @@
-"""Command line (output edge): ``mresim run | validate | replay | view | plot | bench | make-map``
-``sweep | compare | robustness``, from ``sweeps/cli.py``).
+"""Command line (output edge): ``mresim run | validate | replay | view | plot | bench |
+make-map`` (and ``sweep | compare | robustness``, from ``sweeps/cli.py``).
 
 Argument parsing and dispatch only, with light imports: each command's work
 (``commands.py``, ``validation.py``, ``viewer/command.py``, ``sweeps/cli.py``) is imported
