@@ -34,5 +34,7 @@ BUILT_IN: dict[str, tuple[str, type[BaseModel]]] = {
     "role_based": ("role_based:RoleBased", p.RoleBasedParams),
     "role_switch": ("role_switch:RoleSwitch", p.RoleSwitchParams),
     "sector_rendezvous": ("sector:SectorRendezvous", p.SectorParams),
+    "nearest_frontier": ("baselines:NearestFrontier", p.NearestFrontierParams),
+    "voronoi": ("baselines:VoronoiExploration", p.VoronoiParams),
 }
 STRATEGIES.enter("mresim_phys.strategies.", BUILT_IN)

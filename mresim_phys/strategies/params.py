@@ -119,6 +119,22 @@ class MinPosParams(FrontierParams):
     )
 
 
+class NearestFrontierParams(FrontierParams):
+    """Frontier exploration's parameters, for the nearest frontier: a frontier's size is
+    its own cells (its utility is not used) and no mission-complete rule."""
+
+    frontier_size: Literal["region", "cells"] = Field(
+        "cells", description="Unused by the nearest-frontier choice; 'cells' skips the region."
+    )
+    done_fraction: float | None = Field(
+        None, gt=0, le=1, description="Unused: the robot explores until no frontier is left."
+    )
+
+
+class VoronoiParams(NearestFrontierParams):
+    """Nearest-frontier parameters; ``teammate_memory`` says whose Voronoi cells count."""
+
+
 class RoleBasedParams(FrontierParams):
     """Greedy frontier exploration's parameters and the rendezvous rules (original values)."""
 

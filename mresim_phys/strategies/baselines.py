@@ -1,0 +1,157 @@
+"""Baselines (phase 4, decide): the exploration strategies papers compare against.
+
+Both explore as ``frontier`` does (the robot's own frontier clusters, their target cells and
+path costs, giving up unresolved frontier cells, going home when nothing is left, the
+initial random steps) with other parts (``strategies/parts.py``):
+
+* ``nearest_frontier``: uncoordinated nearest-frontier exploration (B. Yamauchi,
+  "Frontier-based exploration using multiple robots", Agents 1998): every robot goes to the
+  frontier nearest to it by path, whatever its teammates do. No auction, no utility, no
+  mission-complete rule: it returns to the base when no frontier is left.
+* ``voronoi``: Voronoi partitioning of the frontiers: a frontier cell belongs to the robot
+  nearest to it (straight-line distance from the last known positions; ties to the first
+  in the team's order), among this robot and the teammates it heard from within
+  ``teammate_memory`` steps, not presumed lost and whose drive and sensor work; a robot
+  takes the nearest frontier of its own cell by path, and never one in a living
+  teammate's cell. A robot whose cell holds no frontier returns to the base; as it moves
+  its cell moves with it, and the cell of a teammate that failed (or is presumed lost)
+  becomes its neighbours'. (The partition of K. M. Wurm, C. Stachniss, W. Burgard,
+  "Coordinated multi-robot exploration using a segmentation of the environment", IROS
+  2008, and of J. Hu et al., "Voronoi-based multi-robot autonomous exploration in unknown
+  environments via deep reinforcement learning", IEEE T-VT 2020, by distance to robots.)
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import ClassVar
+
+import numpy as np
+
+from mresim_phys.knowledge.frontiers import Frontiers
+from mresim_phys.strategies.base import RobotView
+from mresim_phys.strategies.catalog import STRATEGIES
+from mresim_phys.strategies.frontier import FrontierExploration
+from mresim_phys.strategies.params import NearestFrontierParams, StrategyParams, VoronoiParams
+from mresim_phys.strategies.parts import (
+    AllFrontiers,
+    FrontierFilter,
+    FrontierParts,
+    Offer,
+    auction_team,
+)
+from mresim_phys.types import FloatArray, IntArray
+
+
+@dataclass
+class NearestRanking:
+    """Every reachable frontier, nearest (by path) first; settled once the nearest found
+    lies within the search horizon (a frontier beyond it costs more)."""
+
+    def candidates(self, frontiers: Frontiers, costs: FloatArray) -> IntArray:
+        """Indices of the reachable frontiers, nearest first (ties: the first cluster)."""
+        order = np.argsort(costs, kind="stable")
+        kept: IntArray = order[np.isfinite(costs[order])]
+        return kept
+
+    def settled(
+        self, frontiers: Frontiers, costs: FloatArray, candidates: IntArray, limit: float
+    ) -> bool:
+        """Whether the nearest found cannot be beaten beyond the horizon ``limit``."""
+        return limit == np.inf or (len(candidates) > 0 and bool(costs[candidates[0]] <= limit))
+
+
+class OwnChoice:
+    """The robot takes its own first candidate, whatever its teammates do."""
+
+    def choose(self, offer: Offer) -> int:
+        """The first candidate."""
+        return int(offer.candidates[0])
+
+
+class NeverDone:
+    """No mission-complete rule: a robot explores until no frontier is left."""
+
+    def met(self, view: RobotView) -> bool:
+        """Never."""
+        return False
+
+
+@dataclass
+class VoronoiCell:
+    """The frontier cells nearer to this robot than to any living teammate it knows of."""
+
+    teammate_memory: int
+
+    def keep(self, view: RobotView, found: Frontiers) -> Frontiers:
+        """``found`` with only the cells of this robot's Voronoi cell (module docstring)."""
+        team = auction_team(view, self.teammate_memory)
+        if not team or len(found) == 0:
+            return found
+        cells = found.cells_rc.astype(float) + 0.5  # (row, col) centres
+
+        def gap(p: tuple[float, float]) -> FloatArray:
+            return np.hypot(cells[:, 1] - p[0], cells[:, 0] - p[1])
+
+        mine = gap(view.position)
+        rank = view.tie_rank(view.name)
+        keep = np.ones(len(cells), dtype=bool)
+        for mate in team:
+            theirs = gap(mate.position)
+            before = view.tie_rank(mate.name) < rank
+            keep &= (mine < theirs) | ((mine == theirs) & (not before))
+        return keep_cells(found, keep)
+
+
+def keep_cells(found: Frontiers, kept: np.ndarray) -> Frontiers:
+    """``found`` with only the ``kept`` cells; clusters left without a cell dropped and the
+    others renumbered, their sizes and centroids those of their kept cells."""
+    clusters = found.cluster_of[kept]
+    counts = np.bincount(clusters, minlength=len(found))
+    alive = counts > 0
+    new_index = np.cumsum(alive) - 1
+    cells = found.cells_rc[kept]
+    sums = np.column_stack(
+        (
+            np.bincount(clusters, weights=cells[:, 1], minlength=len(found)),
+            np.bincount(clusters, weights=cells[:, 0], minlength=len(found)),
+        )
+    )
+    centroids = sums[alive] / counts[alive, None] + 0.5
+    return Frontiers(
+        sizes=counts[alive].astype(np.intp),
+        centroids=centroids,
+        cells_rc=cells,
+        cluster_of=new_index[clusters].astype(np.intp),
+    )
+
+
+def nearest_parts(cell: FrontierFilter | None = None) -> FrontierParts:
+    """Nearest frontier first, taken whatever the teammates do, no mission-complete rule
+    (``cell``: which frontiers count; default every one)."""
+    return FrontierParts(
+        filter=cell or AllFrontiers(), ranking=NearestRanking(), allocation=OwnChoice(),
+        done=NeverDone(),
+    )  # fmt: skip
+
+
+@STRATEGIES.register
+class NearestFrontier(FrontierExploration):
+    """Uncoordinated nearest-frontier exploration (Yamauchi 1998)."""
+
+    name = "nearest_frontier"
+    Params: ClassVar[type[StrategyParams]] = NearestFrontierParams
+
+    def __init__(self, params: NearestFrontierParams) -> None:
+        super().__init__(params, nearest_parts())
+
+
+@STRATEGIES.register
+class VoronoiExploration(FrontierExploration):
+    """Each robot explores the frontiers of its own Voronoi cell, nearest first."""
+
+    name = "voronoi"
+    Params: ClassVar[type[StrategyParams]] = VoronoiParams
+
+    def __init__(self, params: VoronoiParams) -> None:
+        super().__init__(params, nearest_parts(VoronoiCell(params.teammate_memory)))

@@ -1,0 +1,139 @@
+"""The baselines papers compare against (``strategies/baselines.py``): uncoordinated nearest
+frontier goes to the nearest frontier whatever its teammates do; Voronoi partitioning
+never takes a frontier in a living teammate's cell, and takes over a dead robot's cell."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pytest
+
+from mresim_phys import Simulation
+from mresim_phys.agents import Robot
+from mresim_phys.strategies import Decision, RobotView
+from mresim_phys.strategies.base import plan_context
+from mresim_phys.strategies.parts import auction_team
+
+ROOMS = Path(__file__).resolve().parent.parent / "scenarios" / "13_rooms_4_robots.yaml"
+
+
+def watch(robot: Robot, sim: Simulation, seen: list[tuple[int, RobotView, Decision]]) -> None:
+    """Record every decision of ``robot`` with the view it was made from."""
+    strategy: Any = robot.strategy
+    decide = strategy.decide
+
+    def recorded(view: RobotView) -> Decision:
+        decision: Decision = decide(view)
+        seen.append((sim.t, view, decision))
+        return decision
+
+    strategy.decide = recorded
+
+
+def first_target(strategy: str) -> dict[str, tuple[float, float]]:
+    """The centroid of each robot's first frontier on the rooms map (no random steps)."""
+    sim = Simulation.from_yaml(
+        ROOMS, steps=1, **{"team.strategy": {"name": strategy, "params": {"init_cycles": 0}}}
+    )
+    sim.step()
+    out = {}
+    for robot in sim.robots:
+        assert robot.decision is not None
+        info = robot.decision.info
+        centre = info["frontiers"].centroids[info["target_cluster"]]
+        out[robot.name] = (round(float(centre[0]), 1), round(float(centre[1]), 1))
+    return out
+
+
+def test_nearest_frontier_takes_the_nearest_frontier_whatever_the_team_does() -> None:
+    sim = Simulation.from_yaml(ROOMS, steps=60, **{"team.strategy": "nearest_frontier"})
+    seen: list[tuple[int, RobotView, Decision]] = []
+    watch(sim.robot("A"), sim, seen)
+    sim.run()
+    checked = 0
+    for _, view, decision in seen:
+        frontiers = decision.info.get("frontiers")
+        if frontiers is None or decision.goal is None:
+            continue
+        field = plan_context(view).field
+        costs = field.cost_at(frontiers.cells_rc[:, 0], frontiers.cells_rc[:, 1])
+        goal = (math.floor(decision.goal[1]), math.floor(decision.goal[0]))
+        mine = field.cost_at(np.array([goal[0]]), np.array([goal[1]]))[0]
+        assert (
+            mine <= np.nanmin(np.where(np.isfinite(costs), costs, np.nan)) + 3.0
+        )  # its target's reach
+        checked += 1
+    assert checked >= 3
+    # robots side by side head for the same frontier: no coordination
+    goals = first_target("nearest_frontier")
+    assert goals["A"] == goals["B"]
+    assert len(set(first_target("frontier").values())) > 1
+
+
+def voronoi_violations(seen: list[tuple[int, RobotView, Decision]], name: str) -> int:
+    """Decisions whose goal frontier cell is nearer to a living known teammate."""
+    bad = 0
+    for _, view, decision in seen:
+        frontiers = decision.info.get("frontiers")
+        if frontiers is None or decision.goal is None:
+            continue
+        cells = frontiers.cells_rc[frontiers.cluster_of == decision.info["target_cluster"]]
+        x, y = view.position
+        for mate in auction_team(view, 500):
+            mx, my = mate.position
+            mine = np.hypot(cells[:, 1] + 0.5 - x, cells[:, 0] + 0.5 - y)
+            theirs = np.hypot(cells[:, 1] + 0.5 - mx, cells[:, 0] + 0.5 - my)
+            bad += int((theirs < mine).any())
+    return bad
+
+
+def test_voronoi_never_takes_a_frontier_in_a_living_teammates_cell() -> None:
+    sim = Simulation.from_yaml(ROOMS, steps=150, **{"team.strategy": "voronoi"})
+    seen = {r.name: [] for r in sim.robots}  # type: ignore[var-annotated]
+    for robot in sim.robots:
+        watch(robot, sim, seen[robot.name])
+    sim.run()
+    assert sum(len(s) for s in seen.values()) >= 20
+    for name, decisions in seen.items():
+        assert voronoi_violations(decisions, name) == 0, name
+
+
+def test_voronoi_takes_over_a_dead_robots_cell() -> None:
+    """D fails early: once it is presumed lost, its cell (the frontier nearest its last
+    position) is taken by a teammate; while it lived, nobody took a frontier nearer to it."""
+    events = [{"step": 20, "fail": "D"}]
+    sim = Simulation.from_yaml(
+        ROOMS,
+        steps=400,
+        events=events,
+        **{"team.strategy": "voronoi", "simulation.presume_lost_after": 30},
+    )
+    seen = {r.name: [] for r in sim.robots}  # type: ignore[var-annotated]
+    for robot in sim.robots:
+        watch(robot, sim, seen[robot.name])
+    sim.run()
+    last = sim.base.teammates["D"].position
+    took_over = 0
+    for name, decisions in seen.items():
+        if name == "D":
+            continue
+        for _step, view, decision in decisions:
+            if decision.goal is None or "D" not in view.lost:
+                continue
+            gx, gy = decision.goal
+            if math.hypot(gx - last[0], gy - last[1]) < math.hypot(
+                gx - view.position[0], gy - view.position[1]
+            ):
+                took_over += 1
+    assert took_over >= 1
+    assert sim.record.explored >= 0.9
+
+
+@pytest.mark.parametrize("strategy", ["nearest_frontier", "voronoi"])
+def test_the_baselines_explore_the_rooms(strategy: str) -> None:
+    sim = Simulation.from_yaml(ROOMS, **{"team.strategy": strategy})
+    record = sim.run()
+    assert sim.stop_reason() == "known_at_base" and record.explored > 0.9
