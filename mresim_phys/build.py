@@ -29,12 +29,14 @@ from mresim_phys.build_world import (
     world_can_change,
 )
 from mresim_phys.clocks.feature import CLOCK, Clock
+from mresim_phys.columns import TEAM_COLUMNS
 from mresim_phys.comms import COMM_MODELS
 from mresim_phys.comms.ledger import Ledger
 from mresim_phys.comms.network import Channel, Network
 from mresim_phys.comms.radio import build_layer
 from mresim_phys.comms.radio_feature import RADIO, RadioCounters
 from mresim_phys.comms.regions import RegionProbe
+from mresim_phys.discovery_feature import give_discovery
 from mresim_phys.faults.runtime import Faults, build_faults
 from mresim_phys.ground.grid import Ground
 from mresim_phys.knowledge.coverage import Coverage
@@ -353,6 +355,8 @@ def build_setup(scenario: Scenario) -> Setup:
     check_beacons(world.occupied, scenario.robots)
     give_localization(robots, scenario, streams, world.shape)
     give_clocks(robots, scenario, streams)
+    if scenario.metrics.team or set(TEAM_COLUMNS) & set(scenario.metrics.columns):
+        give_discovery(robots, world.shape)
     starts = [r.position for r in robots]
     events = [make_event(e) for e in scenario.events]
     check_event_boxes(scenario, world.shape)

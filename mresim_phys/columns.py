@@ -52,6 +52,7 @@ RADIO_COLUMNS = (
 )  # a run whose main channel has radio options (comms/radio_feature.py)
 BEAM_COLUMN = "noisy_readings"  # a run with a beam-model laser (readings_feature.py)
 CLOCK_COLUMN = "decisions"  # a run with a robot clock (clocks/feature.py)
+TEAM_COLUMNS = ("overlap", "workload_cv", "discovered")  # metrics.team (discovery_feature.py)
 MEETING_COLUMNS = (
     "meetings_planned",
     "meetings_kept",
@@ -336,6 +337,12 @@ def base_links(r: StepRecord) -> int | None:
     return None if r.link_matrix is None else int(np.count_nonzero(r.link_matrix[0, 1:]))
 
 
+@column("longest_path", optional=True)
+def longest_path(r: StepRecord) -> float:
+    """The distance the robot that drove farthest has driven (cells)."""
+    return max((robot.distance for robot in r.robots), default=0.0)
+
+
 @column("robot_base_link", per_robot=True, prefix="base_link", optional=True)
 def robot_base_link(r: StepRecord) -> list[int]:
     """1 where the robot is linked to the base directly on the main channel this step."""
@@ -356,6 +363,7 @@ FEATURE_COLUMNS = {
     **{n: f"mresim_phys.meetings.columns:{n}" for n in MEETING_COLUMNS},
     BEAM_COLUMN: "mresim_phys.readings_feature:noisy_readings",
     CLOCK_COLUMN: "mresim_phys.clocks.feature:decisions",
+    **{n: f"mresim_phys.discovery_feature:{n}" for n in TEAM_COLUMNS},
 }
 for _name, _reference in FEATURE_COLUMNS.items():
     COLUMNS.lazy(_name, _reference, ColumnParams)

@@ -177,6 +177,7 @@ FEATURES = FeatureList(
         "radio": "mresim_phys.comms.radio_feature:RADIO",
         "readings": "mresim_phys.readings_feature:READINGS",
         "clock": "mresim_phys.clocks.feature:CLOCK",
+        "discovery": "mresim_phys.discovery_feature:DISCOVERY",
         "terrain": "mresim_phys.knowledge.terrain:TERRAIN",
         "ground": "mresim_phys.ground.feature:GROUND",
         "prior": "mresim_phys.knowledge.prior:PRIOR",

@@ -36,6 +36,7 @@ from mresim_phys.build import Scenario, Setup, build_setup, load_scenario
 from mresim_phys.clocks.gate import acts, follows_given, may_decide, settle, tick
 from mresim_phys.comms.ledger import box_around, sensed_tick
 from mresim_phys.comms.radio_feature import radio_columns
+from mresim_phys.discovery_feature import count_discoveries, watch_discoveries
 from mresim_phys.errors import ScenarioError, UnknownRobotError
 from mresim_phys.event_context import RunEventContext
 from mresim_phys.faults.runtime import hazard_grid
@@ -66,7 +67,14 @@ from mresim_phys.snapshot import (
     read_only,
 )
 from mresim_phys.strategies import Decision, RobotView, relax
-from mresim_phys.tracking import CommTotals, Curves, Milestones, StallWatch
+from mresim_phys.tracking import (
+    CommTotals,
+    Curves,
+    Milestones,
+    StallWatch,
+    budget_level,
+    thresholds_with,
+)
 from mresim_phys.world.views import movable_views
 
 PHASES = ("sensing", "mapping", "planning", "communication", "metrics")
@@ -94,7 +102,8 @@ class Simulation:
         self.comm = self.network.idle(len(self.agents))
         self.known_at_base = 0.0
         self.known_at_base_connected: float | None = 0.0  # over the connected free cells
-        self.milestones = Milestones()
+        levels = [*scenario.metrics.levels, *budget_level(scenario.metrics.budget)]
+        self.milestones = Milestones(thresholds_with(levels))
         self.comm_totals = CommTotals(radio=radio_columns(self.scenario.communication))
         self.stall = StallWatch(s.rules.stalled_for, s.rules.stalled_gain)
         self.curves = Curves()
@@ -250,6 +259,7 @@ class Simulation:
         heavy = [r.name in due or replans_on_the_way(r) for r in movers] if threaded else []
         for effects in self.pool.run(tasks, heavy):
             self.apply(effects)
+        count_discoveries(movers)
         self._stamped = frozenset(r.index for r in movers)
         for robot in self.robots:
             if robot.alive and not robot.can_move and robot.can_sense:
@@ -259,7 +269,11 @@ class Simulation:
         """A scan where ``robot`` stands, outside the robots' tasks (at the start of a run,
         or for a robot whose drive has failed); the ledger learns its window at once."""
         effects = Effects()
+        found = watch_discoveries(robot)
         self.sense(robot, effects)
+        if found is not None:
+            found.seen(robot.belief)
+            found.count()
         self.apply(effects)
         if effects.window is not None:
             self.network.note_scan(robot.index, effects.window)
@@ -269,6 +283,7 @@ class Simulation:
         comm ledger (which the communication phase would do otherwise: nothing changes the
         robot's map in between); what they did to shared state, held back."""
         effects = Effects()
+        found = watch_discoveries(robot)
         if due:
             self.replan(robot, effects)
         replan, sense = partial(self.replan, effects=effects), partial(self.sense, effects=effects)
@@ -279,6 +294,8 @@ class Simulation:
             hold = partial(self.senses.hold, queue=queue)
             settle = partial(self.senses.fold_held, queue, effects)
             take_step(robot, self.world, self.move_rules, given, replan, hold, settle)
+        if found is not None:
+            found.seen(robot.belief)
         loc = LOCALIZATION.state_of(robot.features)
         if loc is not None and not frozen(robot.features):  # the base and beacons seen from here
             landmark_fixes(loc, self.base.position, self.world, self.robot_filter(robot))

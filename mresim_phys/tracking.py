@@ -15,6 +15,7 @@ from mresim_phys.columns import value_of
 from mresim_phys.knowledge.coverage import Coverage
 from mresim_phys.knowledge.health import Progress
 from mresim_phys.metrics import THRESHOLDS, StepRecord
+from mresim_phys.scenario.run_specs import BudgetSpec
 
 MILESTONE_COLUMNS = ("explored", "known_at_base", "explored_connected", "known_at_base_connected")
 
@@ -40,27 +41,46 @@ def fraction(name: str, record: StepRecord) -> float:
     return 0.0 if value is None else value
 
 
-def no_milestones() -> dict[str, int | None]:
+def no_milestones(levels: tuple[float, ...] = THRESHOLDS) -> dict[str, int | None]:
     """Every threshold, none reached yet."""
-    return dict.fromkeys(map(str, THRESHOLDS))
+    return dict.fromkeys(map(str, levels))
+
+
+def budget_level(budget: BudgetSpec | None) -> list[float]:
+    """The level a scenario's ``metrics.budget`` asks for (tracked as a milestone), or none."""
+    if budget is None:
+        return []
+    level = budget.explored if budget.explored is not None else budget.known_at_base
+    return [] if level is None else [level]
+
+
+def thresholds_with(levels: list[float] | tuple[float, ...]) -> tuple[float, ...]:
+    """The milestones' thresholds and a scenario's ``metrics.levels``, in order."""
+    return tuple(sorted(set(THRESHOLDS) | set(levels)))
 
 
 @dataclass
 class Milestones:
     """First step at which ``explored`` / ``known_at_base`` (and their ``_connected``
-    versions) reached each threshold."""
+    versions) reached each threshold (0.5, 0.9, 0.95 and a scenario's ``levels``)."""
 
+    levels: tuple[float, ...] = THRESHOLDS
     explored: dict[str, int | None] = field(default_factory=no_milestones)
     known_at_base: dict[str, int | None] = field(default_factory=no_milestones)
     explored_connected: dict[str, int | None] = field(default_factory=no_milestones)
     known_at_base_connected: dict[str, int | None] = field(default_factory=no_milestones)
+
+    def __post_init__(self) -> None:
+        if self.levels != THRESHOLDS:
+            for name in MILESTONE_COLUMNS:
+                setattr(self, name, no_milestones(self.levels))
 
     def update(self, record: StepRecord) -> None:
         """Note thresholds first crossed by ``record``."""
         for name in MILESTONE_COLUMNS:
             value = number(name, record)
             table = getattr(self, name)
-            for threshold in THRESHOLDS:
+            for threshold in self.levels:
                 key = str(threshold)
                 if table[key] is None and value is not None and value >= threshold:
                     table[key] = record.step

@@ -50,6 +50,8 @@ SECTIONS: list[tuple[str, type[BaseModel]]] = [
     ("simulation", run_specs.SimulationSpec),
     ("simulation.start_jitter", run_specs.StartJitterSpec),
     ("render", run_specs.RenderSpec),
+    ("metrics", run_specs.MetricsSpec),
+    ("metrics.budget", run_specs.BudgetSpec),
     ("obstacles[i]", elements.ObstacleParams),
     ("obstacles[i].shape: one of", shapes.CircleShape),
     ("", shapes.BoxShape),
@@ -114,6 +116,11 @@ NOTES = {
         " caller's decision (`step(actions=...)`) waits for its next step."
         " Adds the metric column `decisions` and the per-robot feature `clock`; see"
         " [clocks.md](clocks.md)."
+    ),
+    "metrics": (
+        "Optional columns, more milestone levels, success within a budget and the team's"
+        " figures (overlap, workload balance, discoveries, longest path); see"
+        ' [metric-columns.md](metric-columns.md), "The figures papers report".'
     ),
     "clock.compute_delay": (
         "An integer d (every plan waits d steps), or {min, max}: each plan waits a number"

@@ -25,6 +25,7 @@ from mresim_phys.columns import (
     CLOCK_COLUMN,
     LOCALIZATION_COLUMNS,
     MEETING_COLUMNS,
+    TEAM_COLUMNS,
     Layout,
 )
 from mresim_phys.comms.radio_feature import radio_columns
@@ -95,7 +96,8 @@ def extra_columns(scenario: Scenario) -> list[str]:
     columns (``meeting_board.py``) if a robot's strategy plans meetings, then the radio
     columns (``comms/radio_feature.py``), then ``noisy_readings`` if a robot's laser has a
     beam model (``readings_feature.py``), then ``decisions`` if a robot has a clock
-    (``clocks/feature.py``), each unless named already."""
+    (``clocks/feature.py``), then the team columns with ``metrics.team``
+    (``discovery_feature.py``), each unless named already."""
     named = list(scenario.metrics.columns)
     if has_localization(scenario):
         named += [c for c in LOCALIZATION_COLUMNS if c not in named]
@@ -106,6 +108,9 @@ def extra_columns(scenario: Scenario) -> list[str]:
         named.append(BEAM_COLUMN)
     if any(r.clock is not None for r in scenario.robots) and CLOCK_COLUMN not in named:
         named.append(CLOCK_COLUMN)
+    if scenario.metrics.team:
+        team = (*TEAM_COLUMNS, "longest_path", "connected_to_base")
+        named += [c for c in team if c not in named]
     return named
 
 

@@ -37,6 +37,7 @@ from mresim_phys.output.recorders import Recorder, SnapshotSource, make_recorder
 from mresim_phys.output.robustness import check_paired, run_robustness, write_robustness
 from mresim_phys.output.rundir import StagedRun
 from mresim_phys.output.signals import StopRequest, stop_on_signals
+from mresim_phys.output.team import team_summary
 from mresim_phys.sim import Simulation
 from mresim_phys.snapshot import Snapshot
 from mresim_phys.tracking import explorable_summary
@@ -144,7 +145,7 @@ def record_run(
     summary |= explorable_summary(sim.coverage, sim.record, sim.milestones)
     summary |= physical_summary(sim)  # seconds and metres, when the scenario gives dt
     poses = next((r for r in recorders if isinstance(r, PoseRecorder)), None)
-    summary |= localization_summary(sim, poses) | readings_summary(sim)
+    summary |= localization_summary(sim, poses) | readings_summary(sim) | team_summary(sim)
     summary |= meetings_summary(sim)  # a run whose strategies plan meetings
     interrupted = reason == INTERRUPTED
     if interrupted:

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Annotated, Literal
 
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from mresim_phys.strict import Strict
 
@@ -125,12 +125,45 @@ class RenderSpec(Strict):
     plots: bool = Field(True, description="Write plots at the end (needs the plot extra).")
 
 
+class BudgetSpec(Strict):
+    """Success within a budget: a fraction reached within a number of steps."""
+
+    explored: float | None = Field(None, gt=0, le=1, description="The explored fraction to reach.")
+    known_at_base: float | None = Field(
+        None, gt=0, le=1, description="The fraction known at the base to reach."
+    )
+    within: int = Field(ge=1, description="Steps the run may take to reach it.")
+
+    @model_validator(mode="after")
+    def _one_goal(self) -> BudgetSpec:
+        if (self.explored is None) == (self.known_at_base is None):
+            raise ValueError("give exactly one of 'explored' or 'known_at_base' to reach")
+        return self
+
+
 class MetricsSpec(Strict):
-    """What ``metrics.csv`` holds beyond its default columns."""
+    """What ``metrics.csv`` and ``summary.json`` hold beyond their defaults."""
 
     columns: list[str] = Field(
         default_factory=list,
         description="Optional metric columns written after the default ones, in this order:"
         " a column's name (robots_done, base_links, robot_base_link, robot_battery, or one a"
         " package registers) or package.module:Class; see docs/metric-columns.md.",
+    )
+    levels: list[Annotated[float, Field(gt=0, le=1)]] = Field(
+        default_factory=list,
+        max_length=20,
+        description="More coverage levels for steps_to_explored and steps_to_known_at_base"
+        " (beside 0.5, 0.9, 0.95), e.g. [0.85, 0.99].",
+    )
+    budget: BudgetSpec | None = Field(
+        None,
+        description="Success within a budget: {explored or known_at_base: level, within:"
+        " steps}; summary.json's success (true, false).",
+    )
+    team: bool = Field(
+        False,
+        description="Count each robot's discoveries: the columns overlap, workload_cv,"
+        " discovered_<robot>, longest_path and connected_to_base, and summary.json's team"
+        " object.",
     )
