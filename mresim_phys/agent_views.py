@@ -8,9 +8,13 @@ renderers and the run log). The simulation (``sim.py``) builds both every step.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
+from numpy.typing import NDArray
 
 from mresim_phys.agents import Agent, Robot
+from mresim_phys.build import Setup
 from mresim_phys.features import FEATURES
 from mresim_phys.knowledge.activity import with_health
 from mresim_phys.knowledge.teammates import presumed_lost, with_lost
@@ -120,3 +124,21 @@ def agent_snapshot(
         ),
         parent=info.get("parent", agent.parent),  # a strategy that changes the hierarchy
     )
+
+
+def static_fields(
+    setup: Setup, dt: float | None, hazards: NDArray[np.float32] | None
+) -> dict[str, Any]:
+    """The snapshot fields that never change during a run: the map's resolution and the
+    scenario's dt, the belief rule, terrain, ground classes, prior map, hazard zones and
+    what the explorable area was computed from."""
+    return {
+        "resolution": setup.resolution,
+        "dt": dt,
+        "latest": setup.rules.latest,
+        "terrain": None if setup.terrain is None else read_only(setup.terrain),
+        "ground": setup.ground,
+        "prior": setup.prior,
+        "hazards": hazards,
+        "sights": tuple(setup.explorable.robots),
+    }

@@ -30,10 +30,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from mresim_phys.agent_views import agent_snapshot, robot_view
+from mresim_phys.agent_views import agent_snapshot, robot_view, static_fields
 from mresim_phys.agents import Agent, Robot
 from mresim_phys.build import Scenario, Setup, build_setup, load_scenario
-from mresim_phys.clocks.gate import acts, follows_given, may_decide, settle, tick
+from mresim_phys.clocks.gate import acts, decide_phase, may_decide, settle, tick
 from mresim_phys.comms.ledger import box_around, sensed_tick
 from mresim_phys.comms.radio_feature import radio_columns
 from mresim_phys.discovery_feature import count_discoveries, watch_discoveries
@@ -58,14 +58,11 @@ from mresim_phys.metrics import (
     measure_step,
     update_known_at_base,
 )
-from mresim_phys.motion import MoveRules, replans_on_the_way, take_step, wants_plan
+from mresim_phys.motion import MoveRules, replans_on_the_way, take_step
 from mresim_phys.parallel import Effects, RobotPool, thread_count
 from mresim_phys.sensing_phase import Senses
-from mresim_phys.snapshot import (
-    CommSummary,
-    Snapshot,
-    read_only,
-)
+from mresim_phys.snapshot import CommSummary, Snapshot, read_only
+from mresim_phys.stop_rules import stop_reason
 from mresim_phys.strategies import Decision, RobotView, relax
 from mresim_phys.tracking import (
     CommTotals,
@@ -113,6 +110,7 @@ class Simulation:
         self.senses = Senses(s.world, s.rules.robots_block, s.terrain, s.sensing_streams())
         # the hazard zones' failure probability per cell and step (static; None: no zones)
         self.hazards: NDArray[np.float32] | None = hazard_grid(s.faults, s.world.shape)
+        self._statics = static_fields(s, scenario.dt, self.hazards)  # what every snapshot holds
         self._events = RunEventContext(
             self.agents, s.network, s.world, s.coverage, (s.reachable, s.explorable),
             s.event_streams(), s.elements,
@@ -189,22 +187,8 @@ class Simulation:
 
     def stop_reason(self) -> str | None:
         """Why the run stops now (``steps``, ``explored``, ``known_at_base``, ``all_done``,
-        ``stalled``)."""
-        rules = self.rules
-        if rules.stop_explored is not None and self.record.explored >= rules.stop_explored:
-            return "explored"
-        known = self.record.known_at_base
-        if rules.stop_known_at_base is not None and known >= rules.stop_known_at_base:
-            return "known_at_base"
-        if rules.stop_all_done and self.all_idle():
-            return "all_done"
-        if self.t < rules.steps and self.stall.stalled(self.t):
-            return "stalled"
-        return "steps" if self.t >= rules.steps else None
-
-    def all_idle(self) -> bool:
-        """Every robot has failed, or is done and has arrived where it was going."""
-        return all(not r.alive or (r.done and len(r.path) == 0) for r in self.robots)
+        ``stalled``: ``stop_rules.py``)."""
+        return stop_reason(self.rules, self.record, self.robots, self.stall)
 
     def apply_events(self) -> None:
         """Events phase: every scheduled event acts through the run's event context, then
@@ -232,21 +216,7 @@ class Simulation:
         unknown = sorted(set(actions) - {r.name for r in self.robots}) if actions else []
         if unknown:
             raise ValueError(f"actions name robots the team does not have: {unknown}")
-        given: set[str] = set()
-        due: set[str] = set()
-        for robot in self.robots:
-            if not robot.can_move:
-                continue
-            assert robot.strategy is not None
-            if follows_given(robot, actions.get(robot.name), self.t):
-                given.add(robot.name)
-            elif (
-                acts(robot)
-                and may_decide(robot, self.t)
-                and wants_plan(robot, self.t, robot.strategy.params.replan_interval)
-            ):
-                due.add(robot.name)
-        return given, due
+        return decide_phase(self.robots, actions, self.t)
 
     def move_and_sense(self, given: set[str], due: set[str]) -> None:
         """Move phase: each robot replans if due, then moves up to its speed, scanning (and
@@ -383,38 +353,26 @@ class Simulation:
             for a in self.agents
         ]
         rubble, gave_way = self.world.debris() or (None, None)
+        record, comm = self.record, self.comm
+        control = comm.control_links.copy() if self.network.control else None
         return Snapshot(
+            **self._statics,
             step=self.t,
-            explored=self.record.explored,
-            known_at_base=self.record.known_at_base,
-            alive=self.record.alive,
+            explored=record.explored,
+            known_at_base=record.known_at_base,
+            alive=record.alive,
             truth=read_only(self.world.occupied),
             agents=tuple(agents),
             links=self.links.copy(),
             events=tuple(self.events_now),
-            resolution=self.setup.resolution,
-            dt=self.scenario.dt,
-            comm=CommSummary(
-                self.record.comm_bytes,
-                self.comm.control_links.copy() if self.network.control else None,
-                self.record.control_bytes,
-                self.record.latency_max,
-                self.record.latency_mean,
-                self.comm.traffic.sent.copy(),
-            ),
+            comm=CommSummary.of(record, control, comm.traffic.sent.copy()),
             world_version=self.world.version,
-            latest=self.rules.latest,
-            terrain=None if self.setup.terrain is None else read_only(self.setup.terrain),
-            ground=self.setup.ground,
-            prior=self.setup.prior,
-            hazards=self.hazards,
             movables=movable_views(self.world, self.setup.elements),
             rubble=rubble,
             gave_way=gave_way,
             lost_knowledge=self.failures.lost_view(),
             failures=self.failures.notes(),
-            sights=tuple(self.setup.explorable.robots),
-            meetings=self.record.meetings,
+            meetings=record.meetings,
         )
 
     def measure(self) -> StepRecord:

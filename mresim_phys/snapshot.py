@@ -13,12 +13,11 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Protocol
 
 import numpy as np
 from numpy.typing import NDArray
 
-from mresim_phys.ground.grid import Ground
 from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray, RobotSight
 
 if TYPE_CHECKING:
@@ -93,6 +92,15 @@ class CommSummary:
         }
 
     @classmethod
+    def of(cls, record: Any, control_links: np.ndarray | None, sent: np.ndarray) -> CommSummary:
+        """A step's summary from its record (bytes, latencies), the control channel's
+        links (None: no control channel) and the bytes each pair sent."""
+        return cls(
+            record.comm_bytes, control_links, record.control_bytes, record.latency_max,
+            record.latency_mean, sent,
+        )  # fmt: skip
+
+    @classmethod
     def from_json(cls, line: dict[str, Any] | None, n: int) -> CommSummary:
         """Read :meth:`to_json` back for ``n`` agents (empty for logs older than it)."""
         if line is None:
@@ -122,6 +130,21 @@ class MovableSnapshot:
     segment: tuple[tuple[float, float], tuple[float, float]] | None = None  # a door's ends
 
 
+class GroundLayer(Protocol):
+    """The ground classes a snapshot carries (``ground.grid.Ground``): the class of every
+    cell (0: floor, i + 1: ``names[i]``), the names, their colours (RGB) and their
+    default factors."""
+
+    @property
+    def grid(self) -> NDArray[np.uint8]: ...
+    @property
+    def names(self) -> tuple[str, ...]: ...
+    @property
+    def colours(self) -> tuple[tuple[int, int, int], ...]: ...
+    @property
+    def defaults(self) -> tuple[float, ...]: ...
+
+
 @dataclass(frozen=True)
 class Snapshot:
     """A whole run at the end of step ``step``; ``agents[0]`` is the base station.
@@ -145,7 +168,7 @@ class Snapshot:
     world_version: int = 0  # World.version: bumped by every change of the truth
     latest: bool = False  # robots' maps hold each cell's latest observation (belief: latest)
     terrain: NDArray[np.float32] | None = None  # true speed factors (static); None: no terrain
-    ground: Ground | None = None  # true ground classes (static, ground/); None: none
+    ground: GroundLayer | None = None  # true ground classes (static, ground/); None: none
     prior: NDArray[np.uint8] | None = None  # the prior map robots were given (static); None
     hazards: NDArray[np.float32] | None = None  # hazard zones' failure probability (static)
     movables: tuple[MovableSnapshot, ...] = ()  # every obstacle and door, scenario order

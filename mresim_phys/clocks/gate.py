@@ -26,14 +26,38 @@ A robot without a clock passes every gate and adopts every decision at once, as 
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Mapping, Sequence
 from dataclasses import replace
 
 import numpy as np
 
 from mresim_phys.agents import Robot
 from mresim_phys.clocks.feature import CLOCK, Clock
+from mresim_phys.motion import wants_plan
 from mresim_phys.strategies import Decision
+
+
+def decide_phase(
+    robots: Sequence[Robot], actions: Mapping[str, Decision], step: int
+) -> tuple[set[str], set[str]]:
+    """The decide phase (``Simulation.decide``): (given, due). ``given``: the robots that
+    follow a caller's decision at ``step``; ``due``: those that act on it, may decide
+    and whose replan is due (``motion.wants_plan``)."""
+    given: set[str] = set()
+    due: set[str] = set()
+    for robot in robots:
+        if not robot.can_move:
+            continue
+        assert robot.strategy is not None
+        if follows_given(robot, actions.get(robot.name), step):
+            given.add(robot.name)
+        elif (
+            acts(robot)
+            and may_decide(robot, step)
+            and wants_plan(robot, step, robot.strategy.params.replan_interval)
+        ):
+            due.add(robot.name)
+    return given, due
 
 
 def tick(robots: Sequence[Robot], step: int) -> None:

@@ -22,6 +22,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mresim_phys.ground.spec import GroundSpec
+from mresim_phys.snapshot import GroundLayer
 from mresim_phys.types import BoolGrid, FloatArray
 from mresim_phys.world.footprints import region_cells
 
@@ -46,16 +47,6 @@ class Ground:
         ]
         return np.array([1.0, *values], dtype=np.float64)
 
-    def meta(self, factors: list[list[float]]) -> dict[str, Any]:
-        """What the run log's meta.json holds of the classes (the grid is in truth.npz),
-        with each robot's ``factors`` (``Access.factors``) in robot order."""
-        return {
-            "names": list(self.names),
-            "defaults": list(self.defaults),
-            "colours": [list(c) for c in self.colours],
-            "factors": factors,
-        }
-
     @classmethod
     def from_meta(cls, meta: dict[str, Any], grid: ClassGrid) -> Ground:
         """The classes a run log holds (:meth:`meta`, the grid from truth.npz)."""
@@ -76,6 +67,17 @@ class Ground:
         row, col = int(np.floor(xy[1])), int(np.floor(xy[0]))
         rows, cols = self.grid.shape
         return int(self.grid[row, col]) if 0 <= row < rows and 0 <= col < cols else 0
+
+
+def ground_meta(layer: GroundLayer, factors: list[list[float]]) -> dict[str, Any]:
+    """What the run log's meta.json holds of the classes (the grid is in truth.npz), with
+    each robot's ``factors`` (``Access.factors``) in robot order."""
+    return {
+        "names": list(layer.names),
+        "defaults": list(layer.defaults),
+        "colours": [list(c) for c in layer.colours],
+        "factors": factors,
+    }
 
 
 def ground_of(spec: GroundSpec | None, shape: tuple[int, int]) -> Ground | None:

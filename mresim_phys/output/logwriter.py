@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from mresim_phys.ground.feature import GROUND
+from mresim_phys.ground.grid import ground_meta
 from mresim_phys.output.files import WriteError, atomic_path, cause_of, write_json_atomic
 from mresim_phys.output.logformat import (
     AGENT_LINE,
@@ -83,7 +84,8 @@ def new_meta(
         meta["dt"] = first.dt
     if first.ground is not None:  # the classes (the grid is in truth.npz) and who crosses what
         crossings = [GROUND.of(a) for a in first.robots]
-        meta["ground"] = first.ground.meta([list(c.factors) for c in crossings if c is not None])
+        factors = [list(c.factors) for c in crossings if c is not None]
+        meta["ground"] = ground_meta(first.ground, factors)
     return meta
 
 

@@ -35,7 +35,6 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
-from mresim_phys.ground.grid import Ground
 from mresim_phys.knowledge.frontiers import sees_unknown
 from mresim_phys.render.layers import LayerSpec
 from mresim_phys.render.style import (
@@ -53,7 +52,7 @@ from mresim_phys.render.style import (
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN, BeliefGrid, BoolGrid
 
 if TYPE_CHECKING:
-    from mresim_phys.snapshot import Snapshot
+    from mresim_phys.snapshot import GroundLayer, Snapshot
 
 
 @njit(cache=True, nogil=True)
@@ -258,7 +257,7 @@ def shade_terrain(
 
 
 def shade_ground(
-    image: np.ndarray, ground: Ground, truth: BoolGrid, map_size: tuple[int, int], style: Style
+    image: np.ndarray, ground: GroundLayer, truth: BoolGrid, map_size: tuple[int, int], style: Style
 ) -> None:
     """Tint the free cells of each ground class toward its colour (its legend colour, RGB)
     by ``ground_alpha`` (the ``ground`` layer). In place."""
