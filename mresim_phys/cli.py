@@ -1,5 +1,5 @@
 """Command line (output edge): ``mresim run | validate | replay | view | plot | bench |
-make-map`` (and ``sweep | compare | robustness``, from ``sweeps/cli.py``).
+make-map | make-set`` (and ``sweep | compare | robustness``, from ``sweeps/cli.py``).
 
 Argument parsing and dispatch only, with light imports: each command's work
 (``commands.py``, ``validation.py``, ``viewer/command.py``, ``sweeps/cli.py``) is imported
@@ -206,7 +206,7 @@ def add_make_map_parser(commands: argparse._SubParsersAction[argparse.ArgumentPa
         "make-map",
         help="draw a seeded building, office, cave or rubble site (docs/procedural-maps.md)",
     )
-    make.add_argument("kind", choices=("building", "office", "cave", "rubble"))
+    make.add_argument("kind", choices=("building", "office", "cave", "rubble", "blueprint"))
     make.add_argument("--seed", type=non_negative_int, default=0, help="the map's seed (default 0)")
     make.add_argument(
         "--size", type=map_size, required=True, metavar="WxH", help="cells, e.g. 400x300"
@@ -221,6 +221,11 @@ def add_make_map_parser(commands: argparse._SubParsersAction[argparse.ArgumentPa
     add_settings(
         make, "a parameter of the kind, e.g. room_min=20 (repeatable; docs/procedural-maps.md)"
     )
+    maps = commands.add_parser(
+        "make-set", help="draw a set of procedural maps with a train/test split"
+    )
+    maps.add_argument("set_file", type=Path, help="set YAML file (docs/procedural-maps.md)")
+    maps.add_argument("--out", type=Path, required=True, help="folder for the maps and set.yaml")
 
 
 def map_size(text: str) -> tuple[int, int]:
@@ -265,6 +270,7 @@ COMMANDS: dict[str, str | Callable[[argparse.Namespace], int]] = {
     "bench": "mresim_phys.commands:bench_command",
     "view": "mresim_phys.viewer.command:view_command",
     "make-map": "mresim_phys.mapgen.command:make_map_command",
+    "make-set": "mresim_phys.mapgen.command:make_set_command",
     **SWEEP_COMMANDS,
 }
 

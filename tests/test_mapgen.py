@@ -22,6 +22,7 @@ from mresim_phys.cli import main
 from mresim_phys.mapgen.generate import GeneratedMap, generate
 from mresim_phys.mapgen.params import MapRequest
 from mresim_phys.mapgen.place import places
+from mresim_phys.mapgen.sets import SplitSpec, split_of
 
 KINDS = {"building": (300, 200), "office": (360, 160), "cave": (240, 240), "rubble": (300, 220)}
 
@@ -140,3 +141,72 @@ def test_the_docs_list_every_parameter_with_its_default() -> None:
         section = page.split(f"### `{kind}`", 1)[1].split("###", 1)[0]
         for name, field in model.model_fields.items():
             assert f"| `{name}` | `{field.default}` |" in section, (kind, name)
+
+
+@pytest.mark.parametrize(
+    "shape", ["loop", "corridor", "corner", "room", "loop+room", "corner+room"]
+)
+def test_blueprints_are_playable(shape: str) -> None:
+    request = MapRequest(kind="blueprint", width=240, height=160, params={"shape": shape})
+    check_playable(generate(request))
+
+
+def test_a_loop_blueprint_has_a_loop() -> None:
+    """The rock the ring goes round touches no outer wall: a robot can go round it."""
+    m = generate(MapRequest(kind="blueprint", width=240, height=160, params={"shape": "loop"}))
+    rock, count = ndimage.label(m.occupied)
+    outer = rock[0, 0]
+    assert count == 2 and outer != 0 and (rock[80, 120] not in (0, outer))
+
+
+def write_set(folder: Path, **fields: object) -> Path:
+    data = {
+        "name": "t",
+        "instances": [
+            {"kind": "building", "size": [200, 150], "seeds": 4},
+            {"kind": "blueprint", "size": [200, 150], "params": {"shape": "loop"}, "seeds": [3]},
+        ],
+        "split": {"test": 0.4, "seed": 1},
+        **fields,
+    }
+    path = folder / "set.yaml"
+    path.write_text(yaml.safe_dump(data))
+    return path
+
+
+def test_a_set_writes_every_instance_with_a_seeded_split(tmp_path: Path) -> None:
+    path = write_set(tmp_path)
+    assert main(["make-set", str(path), "--out", str(tmp_path / "a")]) == 0
+    assert main(["make-set", str(path), "--out", str(tmp_path / "b")]) == 0
+    index = yaml.safe_load((tmp_path / "a" / "set.yaml").read_text())
+    assert (tmp_path / "a" / "set.yaml").read_bytes() == (tmp_path / "b" / "set.yaml").read_bytes()
+    items = index["instances"]
+    assert len(items) == 5 and len({i["id"] for i in items}) == 5
+    assert (index["train"], index["test"]) == (3, 2)
+    for item in items:
+        assert (tmp_path / "a" / item["id"] / "map.png").is_file()
+        alone = MapRequest(
+            kind=item["kind"], seed=item["seed"], width=200, height=150, params=item["params"]
+        )
+        assert generate(alone).sha256 == item["grid_sha256"]
+    sides = {seed: split_of(20, SplitSpec(test=0.25, seed=seed)) for seed in range(4)}
+    assert all(s.count("test") == 5 for s in sides.values())
+    assert len({tuple(s) for s in sides.values()}) > 1  # the split moves with its seed
+    assert split_of(2, SplitSpec(test=0.01, seed=0)).count("test") == 1  # one each side
+
+
+@pytest.mark.parametrize(
+    ("instances", "named"),
+    [
+        ([{"kind": "castle", "size": [200, 150], "seeds": 2}], "instances.0.kind"),
+        ([{"kind": "building", "size": [200, 150], "seeds": 2, "params": {"rooms": 3}}], "rooms"),
+        ([{"kind": "building", "size": [42, 42], "seeds": 1}], "instances[0]"),
+    ],
+)
+def test_a_bad_set_file_is_one_paragraph_naming_the_entry_and_exit_2(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str], instances: object, named: str
+) -> None:
+    path = write_set(tmp_path, instances=instances)
+    assert main(["make-set", str(path), "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err
+    assert named in err and "set.yaml" in err and "Traceback" not in err

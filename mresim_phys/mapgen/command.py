@@ -1,4 +1,4 @@
-"""``mresim make-map`` (output edge): draw a procedural map and write its files.
+"""``mresim make-map`` and ``make-set`` (output edge): draw procedural maps, write their files.
 
 Every mistake (an unknown parameter, a value out of range, a map too small for what its
 parameters ask, no room for the robots) is one paragraph naming the parameter, exit 2.
@@ -11,8 +11,11 @@ import argparse
 from pydantic import ValidationError
 
 from mresim_phys.errors import MresimError
+from mresim_phys.mapgen.errors import describe
 from mresim_phys.mapgen.generate import generate, write_map
 from mresim_phys.mapgen.params import MapRequest
+from mresim_phys.mapgen.sets import SetSpec, make_set
+from mresim_phys.scenario.yamlfile import read_yaml_file
 
 
 def make_map_command(args: argparse.Namespace) -> int:
@@ -39,9 +42,19 @@ def make_map_command(args: argparse.Namespace) -> int:
     return 0
 
 
-def describe(exc: ValidationError) -> str:
-    """The first validation error as one line naming the parameter (``--set NAME``)."""
-    first = exc.errors()[0]
-    name = ".".join(str(part) for part in first["loc"]) or "parameters"
-    message = str(first["msg"]).removeprefix("Value error, ")
-    return f"{name}: {message} (see docs/procedural-maps.md for each kind's parameters)"
+def make_set_command(args: argparse.Namespace) -> int:
+    """Draw every instance of the set file ``args.set_file`` into ``args.out``."""
+    path = args.set_file
+    data = read_yaml_file(path, "Set file", MresimError)
+    try:
+        spec = SetSpec.model_validate(data)
+        index = make_set(spec, args.out)
+    except ValidationError as exc:
+        raise MresimError(f"{path}: {describe(exc)}") from None
+    except ValueError as exc:
+        raise MresimError(f"{path}: {exc}") from None
+    print(
+        f"wrote {len(index['instances'])} maps ({index['train']} train, {index['test']} test)"
+        f" and {args.out / 'set.yaml'}"
+    )
+    return 0

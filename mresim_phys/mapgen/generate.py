@@ -28,8 +28,10 @@ import cv2
 import numpy as np
 import yaml
 
+from mresim_phys.mapgen.blueprints import blueprint
 from mresim_phys.mapgen.open_ground import cave, rubble
 from mresim_phys.mapgen.params import (
+    BlueprintParams,
     BuildingParams,
     CaveParams,
     KindParams,
@@ -82,6 +84,8 @@ def draw(params: KindParams, size: tuple[int, int], rng: np.random.Generator) ->
         return office(params, *size, rng)
     if isinstance(params, CaveParams):
         return cave(params, *size, rng)
+    if isinstance(params, BlueprintParams):
+        return blueprint(params, *size)
     assert isinstance(params, RubbleParams)
     return rubble(params, *size, rng)
 

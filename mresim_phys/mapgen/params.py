@@ -11,11 +11,11 @@ from __future__ import annotations
 
 from typing import Any, ClassVar, Literal
 
-from pydantic import Field, model_validator
+from pydantic import Field, field_validator, model_validator
 
 from mresim_phys.strict import Strict
 
-Kind = Literal["building", "office", "cave", "rubble"]
+Kind = Literal["building", "office", "cave", "rubble", "blueprint"]
 MIN_SIZE, MAX_SIZE = 40, 4000  # cells per side
 
 
@@ -115,8 +115,39 @@ class RubbleParams(KindParams):
     fragment_max: int = Field(80, ge=4, le=4000, description="Longest wall fragment (cells).")
 
 
+class BlueprintParams(KindParams):
+    """A simple shape, or shapes joined by '+': loop, corridor, corner, room."""
+
+    KIND: ClassVar[str] = "blueprint"
+    shape: str = Field(
+        "loop", description="loop, corridor, corner or room, or several joined by '+'."
+    )
+    corridor: int = Field(12, ge=3, le=200, description="Corridor width (cells).")
+    room: float = Field(0.5, ge=0.1, le=0.9, description="A room's share of the map's sides.")
+
+    @field_validator("shape")
+    @classmethod
+    def _known_shapes(cls, shape: str) -> str:
+        parts = shape.split("+")
+        unknown = [s for s in parts if s not in ("loop", "corridor", "corner", "room")]
+        if unknown or not parts:
+            raise ValueError(
+                f"shape {shape!r}: each part is one of loop, corridor, corner, room (joined"
+                f" by '+'), not {unknown}"
+            )
+        return shape
+
+    def check_size(self, width: int, height: int) -> None:
+        need = 2 * (self.wall + 2 * self.corridor) + 4
+        if min(width, height) < need:
+            raise ValueError(
+                f"a {width}x{height} blueprint cannot hold a loop of corridor {self.corridor}:"
+                f" give at least {need} cells a side, or a narrower corridor"
+            )
+
+
 KINDS: dict[str, type[KindParams]] = {
-    p.KIND: p for p in (BuildingParams, OfficeParams, CaveParams, RubbleParams)
+    p.KIND: p for p in (BuildingParams, OfficeParams, CaveParams, RubbleParams, BlueprintParams)
 }
 
 
