@@ -90,8 +90,9 @@ def draw(params: KindParams, size: tuple[int, int], rng: np.random.Generator) ->
     return rubble(params, *size, rng)
 
 
-def write_map(made: GeneratedMap, folder: Path) -> list[Path]:
-    """``map.png``, ``map.yaml`` and ``scenario.yaml`` in ``folder`` (module docstring)."""
+def write_map(made: GeneratedMap, folder: Path, name: str | None = None) -> list[Path]:
+    """``map.png``, ``map.yaml`` and ``scenario.yaml`` (its scenario called ``name``,
+    default ``<kind>-<seed>``) in ``folder`` (module docstring)."""
     folder.mkdir(parents=True, exist_ok=True)
     image = np.where(made.occupied, 0, 255).astype(np.uint8)
     png = folder / "map.png"
@@ -99,7 +100,8 @@ def write_map(made: GeneratedMap, folder: Path) -> list[Path]:
         raise OSError(f"cannot write {png}")
     meta, scenario = folder / "map.yaml", folder / "scenario.yaml"
     meta.write_text(yaml.safe_dump(metadata(made), sort_keys=False), encoding="utf-8")
-    scenario.write_text(yaml.safe_dump(scenario_of(made), sort_keys=False), encoding="utf-8")
+    data = scenario_of(made) | ({"name": name} if name else {})
+    scenario.write_text(yaml.safe_dump(data, sort_keys=False), encoding="utf-8")
     return [png, meta, scenario]
 
 

@@ -120,7 +120,7 @@ def make_set(spec: SetSpec, folder: Path) -> dict[str, Any]:
     index: dict[str, Any] = {"name": spec.name, "generator": GENERATOR, "instances": []}
     for (owner, m), side in zip(made, sides, strict=True):
         name = instance_id(m.request, owner)
-        write_map(m, folder / name)
+        write_map(m, folder / name, name)
         r = m.request
         index["instances"].append({
             "id": name, "kind": r.kind, "seed": r.seed, "size": [r.width, r.height],

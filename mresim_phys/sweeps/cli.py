@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import sys
 from pathlib import Path
 
 from mresim_phys.arg_types import comma_separated, positive_float, positive_int, whole_number
@@ -119,6 +120,17 @@ def add_sweep_parsers(commands: argparse._SubParsersAction[argparse.ArgumentPars
         "--out", type=Path, help="folder for figures and report (default SWEEP_DIR/compare)"
     )
     add_compare_flags(compare)
+    bench = commands.add_parser(
+        "benchmark", help="run a benchmark suite, or --check a results folder"
+    )
+    bench.add_argument("suite", type=Path, nargs="?", help="suite YAML file (docs/benchmark.md)")
+    bench.add_argument(
+        "--check", type=Path, metavar="RESULTS", help="re-run and confirm a results folder"
+    )
+    bench.add_argument(
+        "--sample", type=int, default=5, help="runs --check re-runs (0: all; default 5)"
+    )
+    add_backend_flags(bench)
     robust = commands.add_parser(
         "robustness", help="strategies x k random robot failures x seeds, swept and compared"
     )
@@ -219,8 +231,29 @@ def robustness_command(args: argparse.Namespace) -> int:
     return status
 
 
+def benchmark_command(args: argparse.Namespace) -> int:
+    """``mresim benchmark``: run a suite into ``--out``, or ``--check`` a results folder
+    (exit 1 when a run differs)."""
+    from mresim_phys.errors import MresimError
+    from mresim_phys.sweeps.benchmark import check_results, run_benchmark
+
+    if args.check is not None:
+        problems = check_results(args.check, max(args.sample, 0))
+        for line in problems:
+            print(f"mresim: benchmark check: {line}", file=sys.stderr)
+        if not problems:
+            print(f"{args.check}: every run checked gives the recorded metrics.csv")
+        return 1 if problems else 0
+    if args.suite is None:
+        raise MresimError("benchmark: give a suite file, or --check RESULTS")
+    require_extra(args.dask is not None)
+    args.out = args.out or Path("benchmarks-out") / args.suite.stem
+    return run_benchmark(args.suite, args.out, args)
+
+
 SWEEP_COMMANDS = {
     "sweep": sweep_command,
+    "benchmark": benchmark_command,
     "compare": compare_command,
     "robustness": robustness_command,
 }

@@ -66,6 +66,8 @@ def flatten_summary(summary: dict[str, Any]) -> dict[str, Any]:
             row |= localization_columns(value)
         elif key == "meetings" and isinstance(value, dict):
             row |= meeting_columns(value)
+        elif key == "team" and isinstance(value, dict):  # metrics.team (output/team.py)
+            row |= {k: value.get(k) for k in ("overlap", "workload_cv", "longest_path")}
         elif not isinstance(value, (dict, list)):
             row[key] = value
     return row
