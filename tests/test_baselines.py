@@ -137,3 +137,46 @@ def test_the_baselines_explore_the_rooms(strategy: str) -> None:
     sim = Simulation.from_yaml(ROOMS, **{"team.strategy": strategy})
     record = sim.run()
     assert sim.stop_reason() == "known_at_base" and record.explored > 0.9
+
+
+OFFICE = ROOMS.parent / "02_office_frontier.yaml"
+
+
+def test_range_constrained_never_targets_a_frontier_out_of_the_bases_reach() -> None:
+    sim = Simulation.from_yaml(OFFICE, steps=300, **{"team.strategy": "range_constrained"})
+    seen: list[tuple[int, RobotView, Decision]] = []
+    watch(sim.robot("A"), sim, seen)
+    sim.run()
+    base = sim.base.position
+    targets = [d for _, _, d in seen if "target_cluster" in d.info]
+    assert len(targets) >= 5
+    for decision in targets:
+        frontiers = decision.info["frontiers"]
+        cells = frontiers.cells_rc[frontiers.cluster_of == decision.info["target_cluster"]]
+        far = np.hypot(cells[:, 1] + 0.5 - base[0], cells[:, 0] + 0.5 - base[1])
+        assert far.max() <= 150.0  # the robots' radio range
+    free = Simulation.from_yaml(OFFICE, steps=300)  # frontier goes beyond it
+    free.run()
+    assert max(math.dist(r.position, base) for r in free.robots) > 150.0
+
+
+def test_periodic_return_reports_to_the_base_every_period() -> None:
+    period = 40
+    overrides = {
+        "team.strategy": {"name": "periodic_return", "params": {"period": period}},
+        "team.comm_range": 60,
+        "base_station.comm_range": 60,
+    }
+    sim = Simulation.from_yaml(OFFICE, steps=400, **overrides)
+    seen: list[tuple[int, RobotView, Decision]] = []
+    watch(sim.robot("B"), sim, seen)
+    sim.run()
+    due = [(view, d) for _, view, d in seen if view.step - view.base_contact >= period]
+    assert len(due) >= 2
+    base = sim.base.position
+    for view, decision in due:
+        assert decision.info.get("reason") == "periodic report"
+        assert decision.goal is not None
+        assert math.dist(decision.goal, base) < math.dist(view.position, base)
+    explored = [d for _, view, d in seen if view.step - view.base_contact < period]
+    assert any("target_cluster" in d.info for d in explored)  # it explores between reports

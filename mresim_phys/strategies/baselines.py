@@ -19,20 +19,36 @@ initial random steps) with other parts (``strategies/parts.py``):
   "Coordinated multi-robot exploration using a segmentation of the environment", IROS
   2008, and of J. Hu et al., "Voronoi-based multi-robot autonomous exploration in unknown
   environments via deep reinforcement learning", IEEE T-VT 2020, by distance to robots.)
+
+And the original MRESim's two frontier variants its paper names (``frontiertype``
+RangeConstrained and PeriodicReturn, not implemented in its released code; a fork's
+PeriodicReturn returns every 100 cycles), on ``frontier``'s greedy auction:
+
+* ``range_constrained``: only frontiers within ``range`` (default: the robot's radio
+  range) of the base station, so the team stays within reach of it; with none left the
+  robot goes home, done;
+* ``periodic_return``: a robot ``period`` steps (100) out of contact with the base goes
+  back until it is in contact again, then explores on.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import ClassVar
 
 import numpy as np
 
 from mresim_phys.knowledge.frontiers import Frontiers
-from mresim_phys.strategies.base import RobotView
+from mresim_phys.strategies.base import Decision, RobotView, heading_for, plan_context
 from mresim_phys.strategies.catalog import STRATEGIES
-from mresim_phys.strategies.frontier import FrontierExploration
-from mresim_phys.strategies.params import NearestFrontierParams, StrategyParams, VoronoiParams
+from mresim_phys.strategies.frontier import FrontierExploration, default_parts
+from mresim_phys.strategies.params import (
+    NearestFrontierParams,
+    PeriodicReturnParams,
+    RangeConstrainedParams,
+    StrategyParams,
+    VoronoiParams,
+)
 from mresim_phys.strategies.parts import (
     AllFrontiers,
     FrontierFilter,
@@ -133,6 +149,57 @@ def nearest_parts(cell: FrontierFilter | None = None) -> FrontierParts:
         filter=cell or AllFrontiers(), ranking=NearestRanking(), allocation=OwnChoice(),
         done=NeverDone(),
     )  # fmt: skip
+
+
+@dataclass
+class NearBase:
+    """The frontier cells within ``range`` of the base station (None: the robot's radio
+    range)."""
+
+    range: float | None
+
+    def keep(self, view: RobotView, found: Frontiers) -> Frontiers:
+        """``found`` with only the cells within reach of the base."""
+        if len(found) == 0:
+            return found
+        reach = view.comm_range if self.range is None else self.range
+        x, y = view.base_position
+        cells = found.cells_rc
+        near = np.hypot(cells[:, 1] + 0.5 - x, cells[:, 0] + 0.5 - y) <= reach
+        return keep_cells(found, near)
+
+
+@STRATEGIES.register
+class RangeConstrained(FrontierExploration):
+    """Greedy frontier exploration within reach of the base station (the original's
+    RangeConstrained)."""
+
+    name = "range_constrained"
+    Params: ClassVar[type[StrategyParams]] = RangeConstrainedParams
+
+    def __init__(self, params: RangeConstrainedParams) -> None:
+        parts = default_parts(params)
+        super().__init__(params, replace(parts, filter=NearBase(params.range)))
+
+
+@STRATEGIES.register
+class PeriodicReturn(FrontierExploration):
+    """Greedy frontier exploration that reports to the base every ``period`` steps out of
+    contact (the original's PeriodicReturn)."""
+
+    name = "periodic_return"
+    Params: ClassVar[type[StrategyParams]] = PeriodicReturnParams
+    params: PeriodicReturnParams
+
+    def decide(self, view: RobotView) -> Decision:
+        """Head for the base while its report is due, else explore as ``frontier``."""
+        if view.step - view.base_contact >= self.params.period:
+            context = plan_context(view)
+            return heading_for(context, view.base_position, info={"reason": REPORT})
+        return super().decide(view)
+
+
+REPORT = "periodic report"  # Decision.info["reason"] of a robot going back to report
 
 
 @STRATEGIES.register

@@ -36,5 +36,7 @@ BUILT_IN: dict[str, tuple[str, type[BaseModel]]] = {
     "sector_rendezvous": ("sector:SectorRendezvous", p.SectorParams),
     "nearest_frontier": ("baselines:NearestFrontier", p.NearestFrontierParams),
     "voronoi": ("baselines:VoronoiExploration", p.VoronoiParams),
+    "range_constrained": ("baselines:RangeConstrained", p.RangeConstrainedParams),
+    "periodic_return": ("baselines:PeriodicReturn", p.PeriodicReturnParams),
 }
 STRATEGIES.enter("mresim_phys.strategies.", BUILT_IN)

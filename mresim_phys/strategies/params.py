@@ -135,6 +135,22 @@ class VoronoiParams(NearestFrontierParams):
     """Nearest-frontier parameters; ``teammate_memory`` says whose Voronoi cells count."""
 
 
+class RangeConstrainedParams(FrontierParams):
+    """Greedy frontier exploration's parameters and how far from the base it explores."""
+
+    range: float | None = Field(
+        None, gt=0, description="Cells from the base a frontier may be (null: its radio range)."
+    )
+
+
+class PeriodicReturnParams(FrontierParams):
+    """Greedy frontier exploration's parameters and how often a robot reports."""
+
+    period: int = Field(
+        100, ge=1, description="Steps out of contact with the base before it goes back."
+    )
+
+
 class RoleBasedParams(FrontierParams):
     """Greedy frontier exploration's parameters and the rendezvous rules (original values)."""
 
