@@ -132,7 +132,9 @@ def test_voronoi_takes_over_a_dead_robots_cell() -> None:
     assert sim.record.explored >= 0.9
 
 
-@pytest.mark.parametrize("strategy", ["nearest_frontier", "voronoi"])
+@pytest.mark.parametrize(
+    "strategy", ["nearest_frontier", "voronoi", "potential_field", "periodic_return"]
+)
 def test_the_baselines_explore_the_rooms(strategy: str) -> None:
     sim = Simulation.from_yaml(ROOMS, **{"team.strategy": strategy})
     record = sim.run()
@@ -143,7 +145,8 @@ OFFICE = ROOMS.parent / "02_office_frontier.yaml"
 
 
 def test_range_constrained_never_targets_a_frontier_out_of_the_bases_reach() -> None:
-    sim = Simulation.from_yaml(OFFICE, steps=300, **{"team.strategy": "range_constrained"})
+    strategy = {"name": "range_constrained", "params": {"range": 150}}
+    sim = Simulation.from_yaml(OFFICE, steps=300, **{"team.strategy": strategy})
     seen: list[tuple[int, RobotView, Decision]] = []
     watch(sim.robot("A"), sim, seen)
     sim.run()
@@ -154,7 +157,7 @@ def test_range_constrained_never_targets_a_frontier_out_of_the_bases_reach() -> 
         frontiers = decision.info["frontiers"]
         cells = frontiers.cells_rc[frontiers.cluster_of == decision.info["target_cluster"]]
         far = np.hypot(cells[:, 1] + 0.5 - base[0], cells[:, 0] + 0.5 - base[1])
-        assert far.max() <= 150.0  # the robots' radio range
+        assert far.max() <= 150.0
     free = Simulation.from_yaml(OFFICE, steps=300)  # frontier goes beyond it
     free.run()
     assert max(math.dist(r.position, base) for r in free.robots) > 150.0
@@ -180,3 +183,29 @@ def test_periodic_return_reports_to_the_base_every_period() -> None:
         assert math.dist(decision.goal, base) < math.dist(view.position, base)
     explored = [d for _, view, d in seen if view.step - view.base_contact < period]
     assert any("target_cluster" in d.info for d in explored)  # it explores between reports
+
+
+def test_potential_field_is_pushed_off_a_frontier_a_teammate_stands_by(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """Two frontiers, the first twice as attractive; a teammate beside it repels the robot
+    to the second, and with no repulsion it takes the first."""
+    from types import SimpleNamespace
+
+    from mresim_phys.knowledge.frontiers import Frontiers
+    from mresim_phys.strategies import baselines
+    from mresim_phys.strategies.parts import Offer
+
+    frontiers = Frontiers(
+        sizes=np.array([20, 10]), centroids=np.zeros((2, 2)),
+        cells_rc=np.array([[10, 10], [10, 90]]), cluster_of=np.array([0, 1]),
+    )  # fmt: skip
+    view = SimpleNamespace(sensor_range=100.0)
+    offer = Offer(view, None, frontiers, np.array([[10, 10], [10, 90]]),  # type: ignore[arg-type]
+                  np.array([10.0, 10.0]), np.array([0, 1]))  # fmt: skip
+    mate = SimpleNamespace(position=(12.0, 12.0))
+    monkeypatch.setattr(baselines, "auction_team", lambda view, memory: [mate])
+    assert baselines.PotentialChoice(None, 1.0, 500).choose(offer) == 1
+    assert baselines.PotentialChoice(None, 0.0, 500).choose(offer) == 0
+    monkeypatch.setattr(baselines, "auction_team", lambda view, memory: [])
+    assert baselines.PotentialChoice(None, 1.0, 500).choose(offer) == 0

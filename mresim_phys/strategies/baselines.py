@@ -24,11 +24,23 @@ And the original MRESim's two frontier variants its paper names (``frontiertype`
 RangeConstrained and PeriodicReturn, not implemented in its released code; a fork's
 PeriodicReturn returns every 100 cycles), on ``frontier``'s greedy auction:
 
-* ``range_constrained``: only frontiers within ``range`` (default: the robot's radio
-  range) of the base station, so the team stays within reach of it; with none left the
-  robot goes home, done;
+* ``range_constrained``: only frontiers within ``range`` (default: twice the robot's radio
+  range, the disk model's reach to a base of the same range) of the base station, so the
+  team stays within reach of it; with none left the robot goes home, done;
 * ``periodic_return``: a robot ``period`` steps (100) out of contact with the base goes
   back until it is in contact again, then explores on.
+
+And a potential-field explorer after MMPF (J. Yu, J. Tong, Y. Xu, Z. Xu, H. Dong, T. Yang,
+Y. Wang, "SMMR-Explore: SubMap-based multi-robot exploration system with multi-robot
+multi-target potential field exploration method", ICRA 2021):
+
+* ``potential_field``: every frontier attracts the robot by its size over its path cost
+  (the attractive potential of many targets), every teammate it heard from and does not
+  presume lost repels it from the frontiers near that teammate (a linear repulsive
+  potential, ``repulsion`` cells wide (default a quarter of its laser range), weighted
+  ``repulsion_weight``); the robot takes the
+  frontier where attraction minus repulsion is highest. The field is evaluated at the
+  frontiers' target cells, not descended cell by cell as MMPF's robots do.
 """
 
 from __future__ import annotations
@@ -45,6 +57,7 @@ from mresim_phys.strategies.frontier import FrontierExploration, default_parts
 from mresim_phys.strategies.params import (
     NearestFrontierParams,
     PeriodicReturnParams,
+    PotentialFieldParams,
     RangeConstrainedParams,
     StrategyParams,
     VoronoiParams,
@@ -153,8 +166,8 @@ def nearest_parts(cell: FrontierFilter | None = None) -> FrontierParts:
 
 @dataclass
 class NearBase:
-    """The frontier cells within ``range`` of the base station (None: the robot's radio
-    range)."""
+    """The frontier cells within ``range`` of the base station (None: twice the robot's
+    radio range, the disk model's reach to a base of the same range)."""
 
     range: float | None
 
@@ -162,7 +175,7 @@ class NearBase:
         """``found`` with only the cells within reach of the base."""
         if len(found) == 0:
             return found
-        reach = view.comm_range if self.range is None else self.range
+        reach = 2 * view.comm_range if self.range is None else self.range
         x, y = view.base_position
         cells = found.cells_rc
         near = np.hypot(cells[:, 1] + 0.5 - x, cells[:, 0] + 0.5 - y) <= reach
@@ -200,6 +213,44 @@ class PeriodicReturn(FrontierExploration):
 
 
 REPORT = "periodic report"  # Decision.info["reason"] of a robot going back to report
+
+
+@dataclass
+class PotentialChoice:
+    """The frontier where the attractive potential (size / path cost, scaled to the best
+    one's) less the teammates' repulsive potential (``weight * (1 - gap / radius)`` for
+    each teammate nearer than ``radius`` to its target) is highest."""
+
+    radius: float | None
+    weight: float
+    teammate_memory: int
+
+    def choose(self, offer: Offer) -> int:
+        """The candidate of highest potential."""
+        candidates = offer.candidates
+        sizes = offer.frontiers.sizes[candidates].astype(float)
+        costs = np.maximum(offer.costs[candidates], 1.0)
+        pull = sizes / costs
+        pull = pull / pull.max()
+        radius = self.radius or offer.view.sensor_range / 4
+        goals = offer.targets[candidates].astype(float) + 0.5  # (row, col) centres
+        push = np.zeros(len(candidates))
+        for mate in auction_team(offer.view, self.teammate_memory):
+            gap = np.hypot(goals[:, 1] - mate.position[0], goals[:, 0] - mate.position[1])
+            push += np.clip(1.0 - gap / radius, 0.0, None)
+        return int(candidates[int(np.argmax(pull - self.weight * push))])
+
+
+@STRATEGIES.register
+class PotentialField(FrontierExploration):
+    """Frontiers attract, teammates repel (after MMPF)."""
+
+    name = "potential_field"
+    Params: ClassVar[type[StrategyParams]] = PotentialFieldParams
+
+    def __init__(self, params: PotentialFieldParams) -> None:
+        choice = PotentialChoice(params.repulsion, params.repulsion_weight, params.teammate_memory)
+        super().__init__(params, replace(default_parts(params), allocation=choice))
 
 
 @STRATEGIES.register

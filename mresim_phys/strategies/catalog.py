@@ -38,5 +38,6 @@ BUILT_IN: dict[str, tuple[str, type[BaseModel]]] = {
     "voronoi": ("baselines:VoronoiExploration", p.VoronoiParams),
     "range_constrained": ("baselines:RangeConstrained", p.RangeConstrainedParams),
     "periodic_return": ("baselines:PeriodicReturn", p.PeriodicReturnParams),
+    "potential_field": ("baselines:PotentialField", p.PotentialFieldParams),
 }
 STRATEGIES.enter("mresim_phys.strategies.", BUILT_IN)

@@ -139,7 +139,10 @@ class RangeConstrainedParams(FrontierParams):
     """Greedy frontier exploration's parameters and how far from the base it explores."""
 
     range: float | None = Field(
-        None, gt=0, description="Cells from the base a frontier may be (null: its radio range)."
+        None,
+        gt=0,
+        description="Cells from the base a frontier may be (null: twice its radio range, the"
+        " disk model's reach to a base of the same range).",
     )
 
 
@@ -148,6 +151,18 @@ class PeriodicReturnParams(FrontierParams):
 
     period: int = Field(
         100, ge=1, description="Steps out of contact with the base before it goes back."
+    )
+
+
+class PotentialFieldParams(FrontierParams):
+    """Greedy frontier exploration's parameters and the teammates' repulsion."""
+
+    max_frontiers: int = Field(12, ge=1, description="Frontiers the robot weighs.")
+    repulsion: float | None = Field(
+        None, gt=0, description="Cells within which a teammate repels (null: 1/4 laser range)."
+    )
+    repulsion_weight: float = Field(
+        1.0, ge=0, le=100, description="A teammate's repulsion against the best frontier's pull."
     )
 
 
