@@ -209,3 +209,45 @@ def test_potential_field_is_pushed_off_a_frontier_a_teammate_stands_by(
     assert baselines.PotentialChoice(None, 0.0, 500).choose(offer) == 0
     monkeypatch.setattr(baselines, "auction_team", lambda view, memory: [])
     assert baselines.PotentialChoice(None, 1.0, 500).choose(offer) == 0
+
+
+def test_an_rrt_step_stops_at_walls_and_marks_the_first_unknown_cell() -> None:
+    from mresim_phys.strategies.rrt_frontier import step_towards
+    from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
+
+    belief = np.full((10, 30), FREE, dtype=np.uint8)
+    belief[:, 12] = OCCUPIED
+    belief[:, 25:] = UNKNOWN
+    assert step_towards(belief, (2.5, 5.5), (20.5, 5.5), 15.0)[0] == "wall"
+    assert step_towards(belief, (14.5, 5.5), (29.5, 5.5), 15.0) == ("frontier", (25.5, 5.5))
+    kind, end = step_towards(belief, (14.5, 5.5), (29.5, 5.5), 5.0)
+    assert kind == "node" and end == pytest.approx((19.5, 5.5))
+
+
+def test_rrt_frontier_targets_only_frontiers_its_trees_detected() -> None:
+    sim = Simulation.from_yaml(ROOMS, steps=80, **{"team.strategy": "rrt_frontier"})
+    robot = sim.robot("A")
+    strategy: Any = robot.strategy
+    decide = strategy.decide
+    checked = []
+
+    def recorded(view: RobotView) -> Decision:
+        decision: Decision = decide(view)
+        if "target_cluster" in decision.info:
+            frontiers = decision.info["frontiers"]
+            cells = frontiers.cells_rc[frontiers.cluster_of == decision.info["target_cluster"]]
+            points = np.asarray(strategy.detector.trees.detected)
+            gaps = np.hypot(
+                cells[:, None, 1] + 0.5 - points[None, :, 0],
+                cells[:, None, 0] + 0.5 - points[None, :, 1],
+            )
+            checked.append(bool((gaps <= strategy.params.detect_radius).any()))
+        return decision
+
+    strategy.decide = recorded
+    sim.run()
+    assert len(checked) >= 3 and all(checked)
+    nodes = np.array([(int(y), int(x)) for x, y in strategy.detector.trees.nodes])
+    assert len(nodes) > 50
+    assert (robot.belief[nodes[:, 0], nodes[:, 1]] == 1).all()  # FREE: on known free cells
+    assert sim.record.explored > 0.5

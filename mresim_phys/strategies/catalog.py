@@ -39,5 +39,6 @@ BUILT_IN: dict[str, tuple[str, type[BaseModel]]] = {
     "range_constrained": ("baselines:RangeConstrained", p.RangeConstrainedParams),
     "periodic_return": ("baselines:PeriodicReturn", p.PeriodicReturnParams),
     "potential_field": ("baselines:PotentialField", p.PotentialFieldParams),
+    "rrt_frontier": ("rrt_frontier:RRTFrontier", p.RRTFrontierParams),
 }
 STRATEGIES.enter("mresim_phys.strategies.", BUILT_IN)

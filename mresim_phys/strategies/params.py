@@ -166,6 +166,18 @@ class PotentialFieldParams(FrontierParams):
     )
 
 
+class RRTFrontierParams(FrontierParams):
+    """Greedy frontier exploration's parameters and its trees' growth."""
+
+    eta: float = Field(15.0, gt=0, le=1000, description="A tree's step (cells).")
+    global_steps: int = Field(150, ge=1, le=100_000, description="Global tree draws a decision.")
+    local_steps: int = Field(80, ge=0, le=100_000, description="Local tree draws a decision.")
+    detect_radius: float = Field(
+        10.0, gt=0, le=1000, description="Frontier cells this near a detected point count."
+    )
+    max_points: int = Field(500, ge=1, le=100_000, description="Detected points kept.")
+
+
 class RoleBasedParams(FrontierParams):
     """Greedy frontier exploration's parameters and the rendezvous rules (original values)."""
 
