@@ -210,3 +210,44 @@ def test_a_bad_set_file_is_one_paragraph_naming_the_entry_and_exit_2(
     assert main(["make-set", str(path), "--out", str(tmp_path / "o")]) == 2
     err = capsys.readouterr().err
     assert named in err and "set.yaml" in err and "Traceback" not in err
+
+
+def test_a_set_takes_map_files_with_seeded_places(tmp_path: Path) -> None:
+    """Real maps (the corpus, the original's maps fetched by the user) join a set as files:
+    the grid as read, the base and starts drawn from each seed, on places a body fits."""
+    root = Path(__file__).resolve().parent.parent / "maps"
+    data = {
+        "name": "files",
+        "instances": [
+            {"kind": "file", "map": str(root / "office.png"), "seeds": 2},
+            {"kind": "file", "map": "../maps/corpus/aws_small_house.yaml", "seeds": [0]},
+        ],
+        "split": {"test": 0.34, "seed": 0},
+    }
+    path = tmp_path / "sets" / "set.yaml"
+    path.parent.mkdir()
+    (tmp_path / "maps").symlink_to(root)
+    path.write_text(yaml.safe_dump(data))
+    assert main(["make-set", str(path), "--out", str(tmp_path / "out")]) == 0
+    index = yaml.safe_load((tmp_path / "out" / "set.yaml").read_text())
+    assert [i["kind"] for i in index["instances"]] == ["file"] * 3
+    metas = [
+        yaml.safe_load((tmp_path / "out" / i["id"] / "map.yaml").read_text())
+        for i in index["instances"]
+    ]
+    assert metas[0]["base"] != metas[1]["base"] or metas[0]["starts"] != metas[1]["starts"]
+    for item, meta in zip(index["instances"], metas, strict=True):
+        image = cv2.imread(str(tmp_path / "out" / item["id"] / "map.png"), cv2.IMREAD_GRAYSCALE)
+        room = places(image == 0, 2.0)
+        cells = [(int(y), int(x)) for x, y in [meta["base"], *meta["starts"]]]
+        assert all(room[r, c] for r, c in cells)
+        reach, _ = ndimage.label(room, structure=ndimage.generate_binary_structure(2, 1))
+        assert len({reach[r, c] for r, c in cells}) == 1
+
+
+def test_a_file_instance_without_its_map_is_refused(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    path = write_set(tmp_path, instances=[{"kind": "file", "seeds": 1}])
+    assert main(["make-set", str(path), "--out", str(tmp_path / "o")]) == 2
+    assert "map: FILE" in capsys.readouterr().err

@@ -48,7 +48,7 @@ def make_set_command(args: argparse.Namespace) -> int:
     data = read_yaml_file(path, "Set file", MresimError)
     try:
         spec = SetSpec.model_validate(data)
-        index = make_set(spec, args.out)
+        index = make_set(spec, args.out, path)
     except ValidationError as exc:
         raise MresimError(f"{path}: {describe(exc)}") from None
     except ValueError as exc:

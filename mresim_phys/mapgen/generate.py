@@ -42,6 +42,7 @@ from mresim_phys.mapgen.params import (
 from mresim_phys.mapgen.place import Point, base_and_starts
 from mresim_phys.mapgen.rooms import building, office
 from mresim_phys.rng import Streams
+from mresim_phys.strict import Strict
 from mresim_phys.types import BoolGrid
 
 GENERATOR = 1  # bumped whenever a request would give another map
@@ -52,7 +53,7 @@ class GeneratedMap:
     """A drawn map: its grid, parameters, base and starts."""
 
     request: MapRequest
-    params: KindParams
+    params: Strict  # the kind's parameters (a map file's: where it was read from)
     occupied: BoolGrid
     base: Point
     starts: list[Point]

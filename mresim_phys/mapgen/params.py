@@ -154,7 +154,7 @@ KINDS: dict[str, type[KindParams]] = {
 class MapRequest(Strict):
     """One ``make-map`` call: kind, seed, size, team to place and the kind's parameters."""
 
-    kind: Kind
+    kind: Kind | Literal["file"]  # file: a map read from disk (mapgen/sets.py)
     seed: int = Field(0, ge=0, le=2**63 - 1)
     width: int = Field(ge=MIN_SIZE, le=MAX_SIZE)
     height: int = Field(ge=MIN_SIZE, le=MAX_SIZE)
@@ -164,6 +164,8 @@ class MapRequest(Strict):
 
     def kind_params(self) -> KindParams:
         """The kind's parameters, validated (ValueError naming the parameter)."""
+        if self.kind == "file":
+            raise ValueError("a map file has no kind parameters")
         model = KINDS[self.kind]
         params = model.model_validate(self.params)
         params.check_size(self.width, self.height)

@@ -21,30 +21,45 @@ least one instance on each side when there are two or more.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import numpy as np
 import yaml
-from pydantic import Field, ValidationError
+from pydantic import Field, ValidationError, model_validator
 
+from mresim_phys.errors import MresimError
 from mresim_phys.mapgen.errors import describe
-from mresim_phys.mapgen.generate import GENERATOR, generate, write_map
+from mresim_phys.mapgen.generate import GENERATOR, GeneratedMap, generate, write_map
 from mresim_phys.mapgen.params import MAX_SIZE, MIN_SIZE, Kind, MapRequest
+from mresim_phys.mapgen.place import base_and_starts
 from mresim_phys.rng import Streams
+from mresim_phys.scenario.readers import load_map
 from mresim_phys.strict import Strict
 
 MAX_INSTANCES = 10_000
 
 
 class InstanceSpec(Strict):
-    """Maps of one kind, size and parameters, one per seed."""
+    """Maps of one kind, size and parameters, one per seed; or (``kind: file``) a map
+    file, its seeds placing the base and the starts."""
 
-    kind: Kind
-    size: tuple[int, int] = Field(description="[width, height] in cells.")
+    kind: Kind | Literal["file"]
+    size: tuple[int, int] | None = Field(None, description="[width, height] in cells.")
+    map: str | None = Field(
+        None, description="kind file: a map file (png, pgm + yaml, txt), relative to the set."
+    )
     seeds: int | list[int] = Field(
         description="How many seeds (0, 1, ...) or which ones.", union_mode="left_to_right"
     )
     params: dict[str, Any] = Field(default_factory=dict, description="The kind's parameters.")
+
+    @model_validator(mode="after")
+    def _source(self) -> InstanceSpec:
+        if (self.kind == "file") != (self.map is not None):
+            raise ValueError("give 'map: FILE' with kind file, and only with it")
+        if self.kind != "file" and self.size is None:
+            raise ValueError(f"a {self.kind} needs its size: [width, height]")
+        return self
 
     def seed_list(self) -> list[int]:
         """The seeds this entry draws."""
@@ -68,10 +83,12 @@ class SetSpec(Strict):
     split: SplitSpec = Field(default_factory=SplitSpec)
 
     def requests(self) -> list[MapRequest]:
-        """One map request per instance, in the file's order (ValueError: too many, or a
-        size out of range, naming the entry)."""
+        """One map request per procedural instance, in the file's order (ValueError: too
+        many, or a size out of range, naming the entry)."""
         out = []
         for i, entry in enumerate(self.instances):
+            if entry.size is None:
+                continue
             width, height = entry.size
             if not (MIN_SIZE <= width <= MAX_SIZE and MIN_SIZE <= height <= MAX_SIZE):
                 raise ValueError(
@@ -85,6 +102,34 @@ class SetSpec(Strict):
         if len(out) > MAX_INSTANCES:
             raise ValueError(f"instances: {len(out)} maps, more than {MAX_INSTANCES}")
         return out
+
+
+def from_file(path: Path, seed: int, spec: SetSpec, owner: int) -> GeneratedMap:
+    """A map file as an instance: its grid as read, the base and starts drawn from
+    ``seed`` (ValueError naming the entry when it cannot be read or has no room)."""
+    try:
+        loaded = load_map(path.resolve())
+    except MresimError as exc:
+        raise ValueError(f"instances[{owner}].map: {exc}") from None
+    rows, cols = loaded.occupied.shape
+    request = MapRequest.model_construct(
+        kind="file", seed=seed, width=cols, height=rows, robots=spec.robots,
+        radius=spec.radius, params={"map": str(path)},
+    )  # fmt: skip
+    occupied = np.asarray(loaded.occupied, dtype=bool)
+    try:
+        base, starts = base_and_starts(
+            occupied, spec.radius, spec.robots, Streams(seed).get("map-places")
+        )
+    except ValueError as exc:
+        raise ValueError(f"instances[{owner}] ({path.name}): {exc}") from None
+    return GeneratedMap(request, FileParams(map=str(path)), occupied, base, starts)
+
+
+class FileParams(Strict):
+    """A map file's 'parameters': where it was read from."""
+
+    map: str
 
 
 def instance_id(request: MapRequest, entry: int) -> str:
@@ -103,19 +148,25 @@ def split_of(count: int, spec: SplitSpec) -> list[str]:
     return [str(s) for s in sides]
 
 
-def make_set(spec: SetSpec, folder: Path) -> dict[str, Any]:
+def make_set(spec: SetSpec, folder: Path, source: Path | None = None) -> dict[str, Any]:
     """Draw and write every instance of ``spec`` into ``folder`` and its index, set.yaml
-    (ValueError naming the entry and parameter of an instance that cannot be drawn)."""
-    requests = spec.requests()
-    owners = [i for i, e in enumerate(spec.instances) for _ in e.seed_list()]
+    (ValueError naming the entry and parameter of an instance that cannot be drawn; map
+    files are relative to ``source``'s folder)."""
+    requests = iter(spec.requests())
     made = []
-    for owner, request in zip(owners, requests, strict=True):
-        try:
-            made.append((owner, generate(request)))
-        except ValidationError as exc:
-            raise ValueError(f"instances[{owner}].params.{describe(exc)}") from None
-        except ValueError as exc:
-            raise ValueError(f"instances[{owner}] (seed {request.seed}): {exc}") from None
+    for owner, entry in enumerate(spec.instances):
+        for seed in entry.seed_list():
+            if entry.map is not None:
+                base = Path(".") if source is None else source.parent
+                made.append((owner, from_file(base / entry.map, seed, spec, owner)))
+                continue
+            request = next(requests)
+            try:
+                made.append((owner, generate(request)))
+            except ValidationError as exc:
+                raise ValueError(f"instances[{owner}].params.{describe(exc)}") from None
+            except ValueError as exc:
+                raise ValueError(f"instances[{owner}] (seed {request.seed}): {exc}") from None
     sides = split_of(len(made), spec.split)
     index: dict[str, Any] = {"name": spec.name, "generator": GENERATOR, "instances": []}
     for (owner, m), side in zip(made, sides, strict=True):

@@ -81,8 +81,9 @@ def sha256_of(path: Path) -> str:
     return hashlib.sha256(path.read_bytes()).hexdigest()
 
 
-def load_suite(path: Path) -> tuple[SuiteSpec, SetSpec, str]:
-    """The suite, its set and the suite's text (MresimError naming the file and field)."""
+def load_suite(path: Path) -> tuple[SuiteSpec, SetSpec, str, Path]:
+    """The suite, its set, the suite's text and the set file (MresimError naming the file
+    and field)."""
     data = read_yaml_file(path, "Suite file", MresimError)
     try:
         suite = SuiteSpec.model_validate(data)
@@ -94,7 +95,7 @@ def load_suite(path: Path) -> tuple[SuiteSpec, SetSpec, str]:
         instances = SetSpec.model_validate(set_data)
     except ValidationError as exc:
         raise MresimError(f"{set_path}: {describe(exc)}") from None
-    return suite, instances, path.read_text(encoding="utf-8")
+    return suite, instances, path.read_text(encoding="utf-8"), set_path
 
 
 def study_of(suite: SuiteSpec, index: dict[str, Any], folder: Path) -> dict[str, Any]:
@@ -124,9 +125,9 @@ def run_benchmark(suite_path: Path, out: Path, sweep_flags: Any) -> int:
     from mresim_phys.sweeps.cli import sweep_and_report
     from mresim_phys.sweeps.study import parse_study
 
-    suite, instances, text = load_suite(suite_path)
+    suite, instances, text, set_path = load_suite(suite_path)
     try:
-        index = make_set(instances, out / "instances")
+        index = make_set(instances, out / "instances", set_path)
     except ValueError as exc:
         raise MresimError(f"{suite_path}: {exc}") from None
     data = study_of(suite, index, out.resolve())
