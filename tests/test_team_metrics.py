@@ -111,8 +111,11 @@ def test_the_team_columns_and_summary_replay_as_live(
     )
     header = (out / "metrics.csv").read_text().splitlines()[0].split(",")
     assert {"overlap", "workload_cv", "longest_path", "discovered_A"} <= set(header)
+    capsys.readouterr()
     assert main(["replay", str(out), "--metrics"]) == 0
     assert (out / "metrics-replayed.csv").read_bytes() == (out / "metrics.csv").read_bytes()
+    printed = capsys.readouterr().out
+    assert "team recomputed: identical" in printed and "DIFFERENT" not in printed
     summary = (out / "summary.json").read_text()
     assert '"team"' in summary and '"overlap"' in summary
 

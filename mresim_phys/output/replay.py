@@ -30,6 +30,7 @@ from mresim_phys.output.localization import PoseRecorder, replayed_localization
 from mresim_phys.output.readings import replayed_readings
 from mresim_phys.output.recorders import checked_layers, frame_recorder, given
 from mresim_phys.output.runlog import Replay, RunLog
+from mresim_phys.output.team import replayed_team
 from mresim_phys.output.video import chosen_video_path
 from mresim_phys.scenario.load import validate_scenario
 from mresim_phys.scenario.readers import read_yaml_mapping
@@ -178,6 +179,7 @@ def replay_metrics(log: RunLog, run_dir: Path) -> tuple[list[str], bool]:
     if last is not None and replay.coverage.connected is not None:
         reachable = replay.coverage.connected
         objects = replayed_localization(last, reachable, poses) | replayed_readings(last, reachable)
+        objects |= replayed_team(last)
         for key, value in objects.items():
             more, same = compare_object(key, value, run_dir, key)
             lines, same_health = [*lines, *more], same_health and same

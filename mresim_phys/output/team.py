@@ -4,15 +4,17 @@
   (``explored`` or ``known_at_base``) within ``within`` steps, from the milestones; a run
   that stopped before it (or never got there) did not succeed.
 * ``team`` (with ``metrics.team``): ``overlap``, ``workload_cv``, ``longest_path`` and each
-  robot's ``discovered`` (first) cells at the end (``discovery_feature.py``).
+  robot's ``discovered`` (first) cells at the end (``discovery_feature.py``);
+  ``mresim replay --metrics`` recomputes it from the log.
 """
 
 from __future__ import annotations
 
 from typing import TYPE_CHECKING, Any
 
-from mresim_phys.discovery_feature import DISCOVERY, overlap_of, workload_cv_of
+from mresim_phys.discovery_feature import DISCOVERY, Discovered, overlap_of, workload_cv_of
 from mresim_phys.scenario.run_specs import BudgetSpec
+from mresim_phys.snapshot import Snapshot
 from mresim_phys.tracking import Milestones
 
 if TYPE_CHECKING:
@@ -36,11 +38,24 @@ def team_summary(sim: Simulation) -> dict[str, Any]:
         out["success"] = succeeded(spec.budget, sim.milestones)
     if spec.team:
         values = {r.name: DISCOVERY.value_in(r.features) for r in sim.robots}
-        found = [v for v in values.values() if v is not None]
-        out["team"] = {
-            "overlap": overlap_of(found),
-            "workload_cv": workload_cv_of(found),
-            "longest_path": max((r.distance for r in sim.robots), default=0.0),
-            "discovered": {name: v.first for name, v in values.items() if v is not None},
-        }
+        out["team"] = team_object(values, [r.distance for r in sim.robots])
     return out
+
+
+def replayed_team(snap: Snapshot) -> dict[str, Any]:
+    """The ``team`` object recomputed from a replay's last step ({} without it)."""
+    values = {r.name: DISCOVERY.of(r) for r in snap.robots}
+    if not any(v is not None for v in values.values()):
+        return {}
+    return {"team": team_object(values, [r.distance for r in snap.robots])}
+
+
+def team_object(values: dict[str, Discovered | None], distances: list[float]) -> dict[str, Any]:
+    """The ``team`` object from each robot's discoveries and distance driven."""
+    found = [v for v in values.values() if v is not None]
+    return {
+        "overlap": overlap_of(found),
+        "workload_cv": workload_cv_of(found),
+        "longest_path": max(distances, default=0.0),
+        "discovered": {name: v.first for name, v in values.items() if v is not None},
+    }
