@@ -32,11 +32,11 @@ with the runs that differ.
 
 from __future__ import annotations
 
-import contextlib
 import hashlib
-import io
 import json
 import platform
+import subprocess
+import sys
 import tempfile
 from importlib.metadata import PackageNotFoundError, version
 from pathlib import Path
@@ -122,7 +122,7 @@ def study_of(suite: SuiteSpec, index: dict[str, Any], folder: Path) -> dict[str,
 
 def run_benchmark(suite_path: Path, out: Path, sweep_flags: Any) -> int:
     """Draw, sweep and tabulate a suite (module docstring); 1 if runs failed."""
-    from mresim_phys.sweeps.cli import sweep_and_report
+    from mresim_phys.sweeps.runner import SweepOptions, run_sweep
     from mresim_phys.sweeps.study import parse_study
 
     suite, instances, text, set_path = load_suite(suite_path)
@@ -135,10 +135,15 @@ def run_benchmark(suite_path: Path, out: Path, sweep_flags: Any) -> int:
     study_text = yaml.safe_dump(data, sort_keys=False)
     study_path.write_text(study_text, encoding="utf-8")
     study = parse_study(data, str(study_path))
-    sweep_flags.out = out / "sweep"
-    status: int = sweep_and_report(study, study_path, study_text, sweep_flags)
+    f = sweep_flags
+    options = SweepOptions(
+        out / "sweep", f.workers, f.dask, None, f.verbose, f.quiet, retry_failed=f.retry_failed
+    )
+    result = run_sweep(study, study_path, study_text, options)
+    if not f.quiet:
+        print(result.summary())
     write_results(out, suite, index, text)
-    return status
+    return 0 if result.complete else 1
 
 
 def results_table(out: Path, index: dict[str, Any]) -> pd.DataFrame:
@@ -235,10 +240,8 @@ def fmt(value: Any, spec: str) -> str:
 
 
 def check_results(folder: Path, sample: int) -> list[str]:
-    """Re-run ``sample`` runs of a benchmark (0: all) and compare (module docstring): the
-    problems found (empty: every run confirmed)."""
-    from mresim_phys.cli import main as mresim
-
+    """Re-run ``sample`` runs of a benchmark (0: all), each in a fresh process, and
+    compare (module docstring): the problems found (empty: every run confirmed)."""
     path = folder / "results.json"
     try:
         record = json.loads(path.read_text(encoding="utf-8"))
@@ -264,8 +267,11 @@ def check_results(folder: Path, sample: int) -> list[str]:
                 problems.append(f"{name}: metrics.csv is not the one results.json records")
             again = Path(scratch) / name
             args = ["run", str(run / "scenario.yaml"), "--out", str(again), "--quiet", "--no-plots"]
-            with contextlib.redirect_stderr(io.StringIO()):  # the runs' own warnings
-                code = mresim(args)
-            if code != 0 or sha256_of(again / "metrics.csv") != expected.get("metrics_sha256"):
+            done = subprocess.run(
+                [sys.executable, "-m", "mresim_phys.cli", *args], capture_output=True, check=False
+            )
+            metrics = again / "metrics.csv"
+            same = metrics.is_file() and sha256_of(metrics) == expected.get("metrics_sha256")
+            if done.returncode != 0 or not same:
                 problems.append(f"{name}: re-run gives another metrics.csv")
     return problems
