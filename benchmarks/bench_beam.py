@@ -17,13 +17,12 @@ Run from the repository root: ``python benchmarks/bench_beam.py [--rounds 3]``.
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
 from pathlib import Path
 from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from interleaved import phase_medians
+from interleaved import phase_medians, print_ratios
 
 from mresim_phys.output.bench import PRESETS, team_scenario
 
@@ -55,14 +54,7 @@ def main() -> None:
         runs(args.robots, args.steps), args.rounds, PRESET.warmup, args.steps, phases
     )
     print(f"library, {args.robots} robots, original settings, {args.rounds} interleaved rounds:")
-    for measure, by_run in medians.items():
-        exact, beam = statistics.median(by_run["exact"]), statistics.median(by_run["beam"])
-        rounds = " / ".join(f"{v:.2f}" for v in by_run["beam"])
-        bar = f" (bar <= {BAR})" if measure == "step" else ""
-        print(
-            f"  {measure:>8}: exact {exact:6.2f} ms, beam {beam:6.2f} ms,"
-            f" x{beam / exact:.2f}{bar}; beam rounds {rounds}"
-        )
+    print_ratios(medians, "exact", "beam", BAR)
 
 
 if __name__ == "__main__":

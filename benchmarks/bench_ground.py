@@ -17,13 +17,12 @@ Run from the repository root: ``python benchmarks/bench_ground.py [--rounds 3]``
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
 from pathlib import Path
 from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from interleaved import phase_medians
+from interleaved import phase_medians, print_ratios
 
 from mresim_phys.output.bench import PRESETS, team_scenario
 
@@ -63,14 +62,7 @@ def main() -> None:
     scenarios = runs(args.robots, args.steps, args.slow)
     medians = phase_medians(scenarios, args.rounds, PRESET.warmup, args.steps, ("planning",))
     print(f"library, {args.robots} robots, original settings, {args.rounds} interleaved rounds:")
-    for measure, by_run in medians.items():
-        plain, ground = statistics.median(by_run["plain"]), statistics.median(by_run["ground"])
-        rounds = " / ".join(f"{v:.2f}" for v in by_run["ground"])
-        bar = f" (bar <= {BAR})" if measure == "step" else ""
-        print(
-            f"  {measure:>8}: plain {plain:6.2f} ms, ground {ground:6.2f} ms,"
-            f" x{ground / plain:.2f}{bar}; ground rounds {rounds}"
-        )
+    print_ratios(medians, "plain", "ground", BAR)
 
 
 if __name__ == "__main__":

@@ -51,3 +51,18 @@ def phase_medians(
             for name in configurations:
                 medians[m][name].append(1e3 * statistics.median(times[m][name]))
     return medians
+
+
+def print_ratios(
+    medians: dict[str, dict[str, list[float]]], base: str, other: str, bar: float
+) -> None:
+    """Each measure's median ms per step of ``base`` and ``other`` (over the rounds), the
+    ratio (the bar shown on the whole step) and ``other``'s rounds."""
+    for measure, by_run in medians.items():
+        was, now = statistics.median(by_run[base]), statistics.median(by_run[other])
+        rounds = " / ".join(f"{v:.2f}" for v in by_run[other])
+        shown = f" (bar <= {bar})" if measure == "step" else ""
+        print(
+            f"  {measure:>8}: {base} {was:6.2f} ms, {other} {now:6.2f} ms,"
+            f" x{now / was:.2f}{shown}; {other} rounds {rounds}"
+        )

@@ -24,7 +24,7 @@ from numpy.typing import NDArray
 from mresim_phys.ground.spec import GroundSpec
 from mresim_phys.snapshot import GroundLayer
 from mresim_phys.types import BoolGrid, FloatArray
-from mresim_phys.world.footprints import region_cells
+from mresim_phys.world.footprints import regions_cells
 
 ClassGrid = NDArray[np.uint8]
 
@@ -95,12 +95,9 @@ def ground_of(spec: GroundSpec | None, shape: tuple[int, int]) -> Ground | None:
         image = read_colour(spec.image, shape)
         for name, rgb in spec.legend.items():
             grid[(image == np.array(rgb, dtype=np.uint8)).all(axis=2)] = names.index(name) + 1
-    for i, region in enumerate(spec.regions or []):
-        try:
-            cells = region_cells(region.region(), shape)
-        except ValueError as exc:
-            raise ValueError(f"ground.regions[{i}]: {exc}") from None
-        grid[cells] = names.index(region.ground) + 1
+    regions = spec.regions or []
+    for i, cells in regions_cells(regions, shape, "ground.regions"):
+        grid[cells] = names.index(regions[i].ground) + 1
     legend = spec.legend or {}
     colours = tuple(tuple(legend.get(n, palette(i))) for i, n in enumerate(names))
     defaults = tuple(spec.classes[n] for n in names)

@@ -19,6 +19,12 @@ Kind = Literal["building", "office", "cave", "rubble", "blueprint"]
 MIN_SIZE, MAX_SIZE = 40, 4000  # cells per side
 
 
+def check_door(door: int, wall: int, side: int, name: str) -> None:
+    """A door and a wall either side must fit the shortest wall of a room (``name``)."""
+    if door + 2 * wall > side:
+        raise ValueError(f"door ({door}) + 2 walls does not fit a {name} wall ({side})")
+
+
 class KindParams(Strict):
     """Parameters every kind has."""
 
@@ -49,8 +55,7 @@ class BuildingParams(KindParams):
                 f"room_max ({self.room_max}) must be at least 2 * room_min ({2 * self.room_min})"
                 " so a room too large can be split into two"
             )
-        if self.door + 2 * self.wall > self.room_min:
-            raise ValueError(f"door ({self.door}) + 2 walls does not fit a room_min wall")
+        check_door(self.door, self.wall, self.room_min, "room_min")
         return self
 
     def check_size(self, width: int, height: int) -> None:
@@ -78,8 +83,7 @@ class OfficeParams(KindParams):
     def _ordered(self) -> OfficeParams:
         if self.office_max < self.office_min:
             raise ValueError(f"office_max ({self.office_max}) is below office_min")
-        if self.door + 2 * self.wall > self.office_min:
-            raise ValueError(f"door ({self.door}) + 2 walls does not fit an office_min wall")
+        check_door(self.door, self.wall, self.office_min, "office_min")
         return self
 
     def check_size(self, width: int, height: int) -> None:

@@ -9,7 +9,9 @@ exist. Mask regions are images the size of the map (dark pixels are in).
 from __future__ import annotations
 
 import math
+from collections.abc import Iterator, Sequence
 from pathlib import Path
+from typing import Protocol
 
 import cv2
 import numpy as np
@@ -100,3 +102,21 @@ def read_mask(path: Path, shape: tuple[int, int]) -> BoolGrid:
     """The dark pixels (< 128) of the image at ``path``, which must be the map's size."""
     mask: BoolGrid = read_grey(path, shape, "mask image") < 128
     return mask
+
+
+class HasRegion(Protocol):
+    """A scenario entry with a region shape (terrain and ground regions)."""
+
+    def region(self) -> Region: ...
+
+
+def regions_cells(
+    entries: Sequence[HasRegion], shape: tuple[int, int], field: str
+) -> Iterator[tuple[int, BoolGrid]]:
+    """(index, cells) of each entry's region on a map of ``shape``, in order; a ValueError
+    naming ``field[i]`` for a region that covers no cell of the map."""
+    for i, entry in enumerate(entries):
+        try:
+            yield i, region_cells(entry.region(), shape)
+        except ValueError as exc:
+            raise ValueError(f"{field}[{i}]: {exc}") from None

@@ -24,7 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from mresim_phys.world.element_params import TerrainSpec
-from mresim_phys.world.footprints import read_grey, region_cells
+from mresim_phys.world.footprints import read_grey, regions_cells
 
 TerrainGrid = NDArray[np.float32]
 
@@ -41,12 +41,9 @@ def terrain_grid(spec: TerrainSpec | None, shape: tuple[int, int]) -> TerrainGri
     if spec.image is not None:
         return image_factors(spec.image, shape, spec.min_factor)
     grid = np.ones(shape, dtype=np.float32)
-    for i, region in enumerate(spec.regions or []):
-        try:
-            cells = region_cells(region.region(), shape)
-        except ValueError as exc:
-            raise ValueError(f"terrain.regions[{i}]: {exc}") from None
-        grid[cells] = np.float32(region.factor)
+    regions = spec.regions or []
+    for i, cells in regions_cells(regions, shape, "terrain.regions"):
+        grid[cells] = np.float32(regions[i].factor)
     return grid
 
 
