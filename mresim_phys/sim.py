@@ -156,9 +156,19 @@ class Simulation:
         ``actions`` maps robot names to decisions that replace their strategies' for
         this step (the robot follows the given path; its strategy is not asked).
         """
+        self.open_step()
+        return self.close_step(actions)
+
+    def open_step(self) -> None:
+        """Start the next step up to its decide phase: its events, then the robots' clocks
+        (a learning environment looks at who decides now between this and
+        :meth:`close_step`; ``mresim_phys/learn``)."""
         self.t += 1
         self.apply_events()
         tick(self.robots, self.t)
+
+    def close_step(self, actions: Mapping[str, Decision] | None = None) -> StepRecord:
+        """The rest of the step :meth:`open_step` started, from its decide phase on."""
         given, due = self.decide(actions or {})
         self.move_and_sense(given, due)
         self.world.place_robots([r.position for r in self.robots])

@@ -40,5 +40,6 @@ BUILT_IN: dict[str, tuple[str, type[BaseModel]]] = {
     "periodic_return": ("baselines:PeriodicReturn", p.PeriodicReturnParams),
     "potential_field": ("baselines:PotentialField", p.PotentialFieldParams),
     "rrt_frontier": ("rrt_frontier:RRTFrontier", p.RRTFrontierParams),
+    "policy": ("policy.strategy:PolicyStrategy", p.PolicyParams),
 }
 STRATEGIES.enter("mresim_phys.strategies.", BUILT_IN)

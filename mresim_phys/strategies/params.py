@@ -10,7 +10,7 @@ from __future__ import annotations
 
 from typing import Literal
 
-from pydantic import Field
+from pydantic import Field, model_validator
 
 from mresim_phys.plugin import PluginParams
 
@@ -268,3 +268,70 @@ class LeaderFollowerParams(FrontierParams):
     frontier_interval: int = Field(
         10, ge=1, description="Steps between the leader's frontier searches (the original: 10)."
     )
+
+
+class PolicyParams(StrategyParams):
+    """A trained policy's source and what it sees and does (docs/learning.md)."""
+
+    replan_interval: int = Field(
+        15, ge=1, description="Steps between decisions when nothing else makes one due."
+    )
+    policy: str | None = Field(
+        None,
+        description=(
+            "'package.module:attribute' of a callable taking the observation (a dict of"
+            " numpy arrays) and returning the action."
+        ),
+    )
+    onnx: str | None = Field(
+        None,
+        description=(
+            "An ONNX file (onnxruntime, the 'learn' extra) whose inputs are named after"
+            " observation keys; its first output is the action, or one score per slot."
+        ),
+    )
+    external: bool = Field(
+        False,
+        description=(
+            "Decisions come from a learning environment (mresim_phys.learn), which sets it;"
+            " a scenario gives policy or onnx instead."
+        ),
+    )
+    action: Literal["choice", "goal_cell", "velocity"] = Field(
+        "choice",
+        description=(
+            "What an action is: a slot of the candidate table (continue, frontiers, meetings,"
+            " the base), a goal point (fractions of the map's width and height) or a heading"
+            " and speed fraction, asked every step the robot acts."
+        ),
+    )
+    frontiers: int = Field(6, ge=1, le=32, description="Frontier slots of the candidate table.")
+    meet: int = Field(2, ge=0, le=8, description="Meeting slots (nearest known teammates).")
+    crop: int = Field(32, ge=8, le=256, description="Side (cells) of the egocentric crop.")
+    coarse: int = Field(32, ge=4, le=256, description="Side of the coarse whole-map view.")
+    teammates: int = Field(8, ge=0, le=256, description="Rows of the teammate table.")
+    age_scale: float = Field(
+        100.0, gt=0, description="Steps that scale ages (a report this old reads 1)."
+    )
+    give_up_radius: float = Field(
+        10.0,
+        gt=0,
+        description=(
+            "A frontier reached and faced in vain: its cells within this distance (cells)"
+            " count a try, as frontier's give_up_radius (strategies/giveup.py)."
+        ),
+    )
+
+    @model_validator(mode="after")
+    def _one_source(self) -> PolicyParams:
+        """Exactly one of policy, onnx and external."""
+        given = [k for k in ("policy", "onnx") if getattr(self, k) is not None]
+        if self.external:
+            given.append("external")
+        if len(given) != 1:
+            shown = " and ".join(given) if given else "none of them"
+            raise ValueError(
+                "the policy strategy takes its decisions from exactly one of policy"
+                f" ('package.module:attribute'), onnx (a file) and external; got {shown}"
+            )
+        return self

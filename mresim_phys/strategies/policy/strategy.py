@@ -1,0 +1,142 @@
+"""``policy`` (phase 4, decide): a robot whose decisions come from a trained policy or from a
+learning environment.
+
+When its decision is due (its ``replan_interval``, on reaching its target, after an error;
+every step it acts with ``velocity`` actions; never against its clock, ``clocks/``) the
+robot builds its observation from its view (``observe.py``), asks its policy for an action
+(``loaders.py``), or takes the one a learning environment left in :attr:`answer`, and
+heads where the action says (``actions.py``). Asked again within the same step (it reached
+its target with movement left), a robot with no new answer keeps its target. It is never
+``done``: a run of ``policy`` robots ends at its step cap or an ``explored`` stop rule.
+"""
+
+from __future__ import annotations
+
+from typing import Any, ClassVar
+
+import numpy as np
+
+from mresim_phys.plugin import Plugin
+from mresim_phys.strategies.base import Decision, PlanContext, RobotView, plan_context
+from mresim_phys.strategies.catalog import STRATEGIES
+from mresim_phys.strategies.giveup import Tried
+from mresim_phys.strategies.params import PolicyParams, StrategyParams
+from mresim_phys.strategies.policy.actions import (
+    Target,
+    choice_target,
+    goal_target,
+    toward,
+    velocity_decision,
+)
+from mresim_phys.strategies.policy.candidates import (
+    CONTINUE,
+    Candidates,
+    find_candidates,
+    slot_count,
+)
+from mresim_phys.strategies.policy.loaders import load_policy
+from mresim_phys.strategies.policy.observe import Observation, observe
+from mresim_phys.types import IntArray
+
+
+@STRATEGIES.register
+class PolicyStrategy(Plugin):
+    """Decisions from a policy (module docstring)."""
+
+    name = "policy"
+
+    Params: ClassVar[type[StrategyParams]] = PolicyParams
+    params: PolicyParams
+
+    def __init__(self, params: PolicyParams) -> None:
+        self.params = params
+        self.slots = slot_count(params.frontiers, params.meet)
+        slots = self.slots if params.action == "choice" else None
+        self.chooser = load_policy(params.policy, params.onnx, slots)
+        self.answer: Any = None  # a learning environment's action for the next decision
+        self.target: Target | None = None  # where it heads now, and the point it then faces
+        self.last_action: Any = None
+        self._looked: tuple[int, tuple[float, float], Candidates] | None = None
+        self._tried: Tried | None = None
+        self._chasing: IntArray | None = None  # the cells of the frontier it heads for
+
+    def observation(self, view: RobotView, asked: bool) -> Observation:
+        """What its policy sees now; ``asked``: whether its decision is asked now (the
+        candidate table is found only then: a robot not asked may only continue)."""
+        candidates = self.candidates(view, plan_context(view)) if asked else self.idle_table()
+        return observe(view, candidates, self.params, sorted(view.team_order), asked)
+
+    def candidates(self, view: RobotView, context: PlanContext) -> Candidates:
+        """The candidate table at ``view``, found once per step and position."""
+        looked = self._looked
+        if looked is not None and looked[0] == view.step and looked[1] == view.position:
+            return looked[2]
+        found = Candidates.empty(self.slots)
+        if self.params.action == "choice":
+            current = None if self.target is None else self.target[0]
+            p = self.params
+            found = find_candidates(view, context, p.frontiers, p.meet, current, self.tried(view))
+        self._looked = (view.step, view.position, found)
+        return found
+
+    def tried(self, view: RobotView) -> Tried:
+        """The frontiers it reached in vain (``giveup``); one it has just reached and still
+        holds counts a try."""
+        if self._tried is None:
+            self._tried = Tried.empty(view.belief.shape)
+        if view.reached_goal and self._chasing is not None:
+            self._tried.failed(self._chasing, view.position, self.params.give_up_radius)
+            self._chasing = None
+        return self._tried
+
+    def idle_table(self) -> Candidates:
+        """The table of a robot not asked: only ``continue``, at its target."""
+        table = Candidates.empty(self.slots)
+        if self.target is not None:
+            table.points[CONTINUE] = self.target[0]
+        return table
+
+    def decide(self, view: RobotView) -> Decision:
+        """Ask the policy (or take the environment's answer) and head where it says."""
+        context = plan_context(view)
+        candidates = self.candidates(view, context)
+        action = self.action(view, candidates)
+        self.last_action = action
+        if self.params.action == "velocity":
+            return velocity_decision(context, action)
+        if self.params.action == "choice":
+            self.target = choice_target(action, candidates, self.target)
+            self._chasing = chased(action, candidates, self._chasing)
+        else:
+            self.target = goal_target(action, view.belief.shape)
+        return toward(context, self.target, action)
+
+    def action(self, view: RobotView, candidates: Candidates) -> Any:
+        """The environment's answer if it left one, else the policy's; with neither (an
+        environment's robot asked again within a step): continue."""
+        if self.answer is not None:
+            action, self.answer = self.answer, None
+            return action
+        if self.chooser is None:
+            return CONTINUE if self.params.action == "choice" else self.held()
+        obs = observe(view, candidates, self.params, sorted(view.team_order), True)
+        return self.chooser(obs)
+
+    def held(self) -> Any:
+        """The last action again (goal and velocity actions), or standing still."""
+        if self.last_action is not None and self.params.action == "goal_cell":
+            return self.last_action
+        return np.zeros(2)
+
+    def replan_now(self, step: int, position: tuple[float, float], links: tuple[str, ...]) -> bool:
+        """With ``velocity`` actions, every step it acts."""
+        return self.params.action == "velocity"
+
+
+def chased(action: Any, candidates: Candidates, chasing: IntArray | None) -> IntArray | None:
+    """The frontier cells a choice ``action`` heads for: its slot's cluster (a frontier
+    slot), none (another valid slot), or still ``chasing`` (continue, or an invalid slot)."""
+    slot = int(np.asarray(action).reshape(-1)[0])
+    if slot == CONTINUE or not 0 <= slot < len(candidates.valid) or not candidates.valid[slot]:
+        return chasing
+    return candidates.clusters[slot] if slot < len(candidates.clusters) else None
