@@ -85,7 +85,7 @@ def episode_scenario(
     )
     data = with_policy(data, config.policy, learners, source)
     scenario = validate_scenario(data, source)
-    return resolve_mask_paths(resolve_map_path(scenario, folder, source), folder), names
+    return resolve_mask_paths(resolve_map_path(scenario, folder, source), folder, source), names
 
 
 def with_policy(

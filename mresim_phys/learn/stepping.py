@@ -66,6 +66,7 @@ class Episode:
         self.learners = {
             r.name: r for r in self.sim.robots if isinstance(r.strategy, PolicyStrategy)
         }
+        self.policies = {n: r.strategy for n, r in self.learners.items()}  # kept once they leave
         self.live = list(self.learners)  # in the team's order
         self.state = RewardState(
             self.sim.record.explored, self.sim.record.known_at_base,
@@ -77,14 +78,14 @@ class Episode:
 
     def strategy(self, name: str) -> PolicyStrategy:
         """The policy strategy of robot ``name``."""
-        strategy = self.learners[name].strategy
+        strategy = self.policies[name]
         assert isinstance(strategy, PolicyStrategy)
         return strategy
 
     def asked(self, name: str) -> bool:
         """Whether this step asks robot ``name`` for a decision (module docstring)."""
         robot = self.learners[name]
-        if self.over is not None or not robot.can_move or not acts(robot):
+        if self.over is not None or name not in self.live or not robot.can_move or not acts(robot):
             return False
         interval = self.strategy(name).params.replan_interval
         return may_decide(robot, self.sim.t) and wants_plan(robot, self.sim.t, interval)
@@ -102,7 +103,7 @@ class Episode:
                 self.strategy(name).answer = action
         record = self.sim.close_step()
         for name in self.learners:
-            self.strategy(name).answer = None
+            self.strategy(name).answer = None  # an answer is for this step only
         team, base = team_gains(self.state, record, self.sim.setup.free_area)
         outcome = Outcome()
         for name in list(self.live):
@@ -152,4 +153,5 @@ class Episode:
                     min(max(y / rows, 0.0), 1.0),
                     robot.alive,
                 )
-        return np.concatenate([g.reshape(-1) for g in grids] + [robots.reshape(-1)])
+        state = np.concatenate([g.reshape(-1) for g in grids] + [robots.reshape(-1)])
+        return np.clip(state, 0.0, 1.0)  # the shrinking's float error kept within [0, 1]

@@ -25,6 +25,7 @@ from mresim_phys.render.layers import parse_layers
 from mresim_phys.scenario.faults import paired_problem
 from mresim_phys.scenario.maps import MapSpec
 from mresim_phys.scenario.overrides import apply_overrides
+from mresim_phys.scenario.policies import policies_under
 from mresim_phys.scenario.radio_files import resolve_radio
 from mresim_phys.scenario.readers import read_yaml_mapping
 from mresim_phys.scenario.schema import (
@@ -60,7 +61,7 @@ def load_scenario(path: str | Path, **overrides: Any) -> Scenario:
         check_event_steps(scenario, str(source))
     scenario = resolve_map_path(scenario, folder, str(source))
     scenario = resolve_radio(scenario, folder, str(source))
-    return resolve_mask_paths(scenario, folder)
+    return resolve_mask_paths(scenario, folder, str(source))
 
 
 def own_in_cells(own: dict[str, Any], source: str, folder: Path) -> dict[str, Any]:
@@ -266,10 +267,12 @@ def absolute_map(spec: MapSpec, folder: Path, source: str, field: str) -> MapSpe
     return spec.model_copy(update={kind: str(path)})
 
 
-def resolve_mask_paths(scenario: Scenario, folder: Path) -> Scenario:
+def resolve_mask_paths(scenario: Scenario, folder: Path, source: str = "<scenario>") -> Scenario:
     """The scenario with the mask images of collapse events, random debris, terrain and
-    ground classes made absolute (relative paths are to the YAML file), so the run can be
-    built anywhere."""
+    ground classes, and the policy robots' ONNX files, made absolute (relative paths are to
+    the YAML file), so the run can be built anywhere; a missing policy file or callable is
+    a ScenarioError naming ``source`` (``scenario/policies.py``)."""
+    scenario = policies_under(scenario, folder, source)
     events = [e.under(folder) for e in scenario.events]
     debris = scenario.random_debris
     if debris is not None:

@@ -73,7 +73,8 @@ class RunSpec:
         """The run's scenario, validated, its paths resolved."""
         scenario = validate_scenario(self.data, self.source)
         folder = Path(self.source).resolve().parent
-        return resolve_mask_paths(resolve_map_path(scenario, folder, self.source), folder)
+        located = resolve_map_path(scenario, folder, self.source)
+        return resolve_mask_paths(located, folder, self.source)
 
 
 def combinations(study: Study) -> list[dict[str, Any]]:
@@ -120,7 +121,7 @@ def make_arm(index: int, path: Path, base: dict[str, Any], values: dict[str, Any
         scenario = validate_scenario(data, source)
     # what the schema cannot see (the map, a start or the base inside a wall, events off
     # the map): the arm's world is built once, as `mresim validate` does (~10-50 ms)
-    build_setup(resolve_mask_paths(resolve_map_path(scenario, folder, source), folder))
+    build_setup(resolve_mask_paths(resolve_map_path(scenario, folder, source), folder, source))
     return Arm(index, source, values, data, scenario)
 
 

@@ -15,6 +15,7 @@ from typing import Any
 
 import numpy as np
 
+from mresim_phys.errors import ScenarioError
 from mresim_phys.plugin import named_object
 
 Policy = Callable[[dict[str, np.ndarray]], Any]
@@ -23,7 +24,7 @@ ONNX_TYPES = {"tensor(float)": np.float32, "tensor(double)": np.float64,
               "tensor(int8)": np.int8, "tensor(uint8)": np.uint8}  # fmt: skip
 
 
-class PolicyLoadError(ValueError):
+class PolicyLoadError(ScenarioError):
     """A policy reference or file that cannot be used (the message says why)."""
 
 

@@ -15,3 +15,12 @@ def nearest_frontier(observation: dict[str, np.ndarray]) -> int:
     if len(frontier_slots):
         return int(frontier_slots[0])
     return len(mask) - 1 if mask[-1] else 0
+
+
+def least_cost(observation: dict[str, np.ndarray]) -> int:
+    """The valid slot of least path cost (``continue`` without a target costs the most);
+    ties: the first slot."""
+    scores = np.where(
+        observation["action_mask"].astype(bool), -observation["candidates"][:, 2], -np.inf
+    )
+    return int(np.argmax(scores))
