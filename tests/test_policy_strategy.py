@@ -13,13 +13,13 @@ import yaml
 
 from mresim_phys import Simulation
 from mresim_phys.errors import ScenarioError
+from mresim_phys.knowledge.frontiers import frontier_mask
 from mresim_phys.knowledge.teammates import TeammateInfo
 from mresim_phys.scenario.load import load_scenario
-from mresim_phys.strategies import RobotView, plan_context
+from mresim_phys.strategies import RobotView
 from mresim_phys.strategies.params import PolicyParams
 from mresim_phys.strategies.policy.candidates import CONTINUE, slot_count
 from mresim_phys.strategies.policy.loaders import OnnxPolicy
-from mresim_phys.strategies.policy.observe import classes
 from mresim_phys.strategies.policy.strategy import PolicyStrategy
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 
@@ -50,7 +50,7 @@ def test_the_table_ranks_frontiers_by_path_then_meetings_then_the_base() -> None
     mate = TeammateInfo("B", (60.5, 9.5), None, "active", "explorer", 8)
     view = corridor_view((30.5, 10.5), {"B": mate})
     strategy = external(frontiers=3, meet=1)
-    table = strategy.candidates(view, plan_context(view))
+    table = strategy.look(view)[1]
     assert len(table.valid) == slot_count(3, 1) == 6
     assert table.valid.tolist() == [True, True, True, False, True, True]
     assert table.points[1, 0] < 30 < table.points[2, 0]  # the left end is nearer
@@ -110,8 +110,10 @@ def test_a_scenario_runs_a_policy_and_its_observation_is_its_own_map(tmp_path: P
         sim.step()
     obs = strategy.observation(sim.view_of(robot), asked=True)
     x, y = (int(v) for v in robot.position)
-    crop = classes(robot.belief[y - 4 : y + 4, x - 4 : x + 4], np.zeros((8, 8), dtype=bool))
-    assert (obs["local"][:3, 12:20, 12:20] == crop[:3]).all()  # the crop is 32 wide
+    window = robot.belief[y - 4 : y + 4, x - 4 : x + 4]
+    frontier = frontier_mask(robot.belief)[y - 4 : y + 4, x - 4 : x + 4]
+    for k, layer in enumerate((window == FREE, window == OCCUPIED, window == UNKNOWN, frontier)):
+        assert (obs["local"][k, 12:20, 12:20] == layer).all()  # the crop is 32 wide
     assert obs["coarse"][2].sum() > 0  # its map still has unknown space, the truth has none
     record = sim.run()
     assert record.explored >= 0.9

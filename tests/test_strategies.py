@@ -19,7 +19,6 @@ from mresim_phys.strategies.params import FrontierParams
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
 from mresim_phys.world.sensing import Laser
 
-
 MINIMAL = {"policy": {"external": True}}  # a strategy's parameters that have no defaults
 
 

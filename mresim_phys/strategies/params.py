@@ -309,6 +309,9 @@ class PolicyParams(StrategyParams):
     meet: int = Field(2, ge=0, le=8, description="Meeting slots (nearest known teammates).")
     crop: int = Field(32, ge=8, le=256, description="Side (cells) of the egocentric crop.")
     coarse: int = Field(32, ge=4, le=256, description="Side of the coarse whole-map view.")
+    coarse_stride: int = Field(
+        2, ge=1, le=16, description="The coarse view samples every this-many rows and columns."
+    )
     teammates: int = Field(8, ge=0, le=256, description="Rows of the teammate table.")
     age_scale: float = Field(
         100.0, gt=0, description="Steps that scale ages (a report this old reads 1)."

@@ -6,8 +6,8 @@ A dict of fixed-size arrays (docs/learning.md has each one's meaning and range):
   world's axes kept (not turned with its heading); channels free, obstacle, unknown,
   frontier (0 or 1); cells beyond the map read as obstacle;
 * ``coarse`` (5, G, G) float32: its whole map shrunk to G x G, each cell the fraction of
-  free, obstacle, unknown and frontier cells under it, and a fifth channel marking where
-  the robot is;
+  free, obstacle, unknown and frontier cells under it (over every ``coarse_stride``-th row
+  and column: ``grids.py``), and a fifth channel marking where the robot is;
 * ``candidates`` (S, 4) float32: each slot's offset from the robot (dx, dy) and path cost,
   over the map's diagonal, and whether it is valid (``candidates.py``);
 * ``teammates`` (T, 5) float32: per teammate in the team's order (the robot left out), its
@@ -26,15 +26,13 @@ from __future__ import annotations
 
 from collections.abc import Sequence
 
-import cv2
 import numpy as np
 
-from mresim_phys.knowledge.frontiers import frontier_mask
 from mresim_phys.knowledge.teammates import BASE_NAME
 from mresim_phys.strategies.base import RobotView
 from mresim_phys.strategies.params import PolicyParams
 from mresim_phys.strategies.policy.candidates import Candidates
-from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
+from mresim_phys.strategies.policy.grids import coarse_fractions, crop_classes
 
 Observation = dict[str, np.ndarray]
 OWN_SIZE = 7
@@ -50,11 +48,10 @@ def observe(
 ) -> Observation:
     """The observation of ``view`` (module docstring); ``team`` the robots' names in order."""
     belief = view.belief
-    frontier = frontier_mask(belief)
     scale = float(np.hypot(*belief.shape))
     obs: Observation = {
-        "local": local_crop(belief, frontier, view.position, params.crop),
-        "coarse": coarse_view(belief, frontier, view.position, params.coarse),
+        "local": local_crop(belief, view.position, params.crop),
+        "coarse": coarse_view(belief, view.position, params.coarse, params.coarse_stride),
         "candidates": candidate_rows(candidates, view.position, scale),
         "teammates": teammate_rows(view, team, params, scale),
         "own": own_row(view, params.age_scale),
@@ -65,42 +62,24 @@ def observe(
     return obs
 
 
-def classes(belief: np.ndarray, frontier: np.ndarray) -> np.ndarray:
-    """(4, rows, cols) uint8: free, obstacle, unknown, frontier."""
-    return np.stack((belief == FREE, belief == OCCUPIED, belief == UNKNOWN, frontier)).view(
-        np.uint8
-    )
-
-
-def local_crop(
-    belief: np.ndarray, frontier: np.ndarray, position: tuple[float, float], side: int
-) -> np.ndarray:
+def local_crop(belief: np.ndarray, position: tuple[float, float], side: int) -> np.ndarray:
     """The (4, side, side) crop centred on the robot's cell; beyond the map: obstacle."""
-    rows, cols = belief.shape
     r0, c0 = int(position[1]) - side // 2, int(position[0]) - side // 2
-    out = np.zeros((4, side, side), dtype=np.uint8)
-    out[1] = 1
-    sr0, sr1 = max(r0, 0), min(r0 + side, rows)
-    sc0, sc1 = max(c0, 0), min(c0 + side, cols)
-    if sr0 < sr1 and sc0 < sc1:
-        window = classes(belief[sr0:sr1, sc0:sc1], frontier[sr0:sr1, sc0:sc1])
-        out[:, sr0 - r0 : sr1 - r0, sc0 - c0 : sc1 - c0] = window
-    return out
+    crop: np.ndarray = crop_classes(belief, r0, c0, side)
+    return crop
 
 
 def coarse_view(
-    belief: np.ndarray, frontier: np.ndarray, position: tuple[float, float], side: int
+    belief: np.ndarray, position: tuple[float, float], side: int, stride: int
 ) -> np.ndarray:
-    """(5, side, side) float32: the class fractions under each coarse cell, and the robot."""
-    image = np.dstack((belief == FREE, belief == OCCUPIED, belief == UNKNOWN, frontier))
-    image = image.view(np.uint8) * np.uint8(255)  # one 4-channel image: one resize
-    shrunk = cv2.resize(image, (side, side), interpolation=cv2.INTER_AREA)
+    """(5, side, side) float32: the class fractions under each coarse cell (over every
+    ``stride``-th row and column), and the robot."""
     out = np.zeros((5, side, side), dtype=np.float32)
-    out[:4] = shrunk.transpose(2, 0, 1) / np.float32(255)
+    out[:4] = coarse_fractions(belief, side, stride)
     rows, cols = belief.shape
-    r = min(int(position[1] / rows * side), side - 1)
-    c = min(int(position[0] / cols * side), side - 1)
-    out[4, max(r, 0), max(c, 0)] = 1.0
+    r = min(max(int(position[1] * side // rows), 0), side - 1)
+    c = min(max(int(position[0] * side // cols), 0), side - 1)
+    out[4, r, c] = 1.0
     return out
 
 

@@ -5,8 +5,10 @@ When its decision is due (its ``replan_interval``, on reaching its target, after
 every step it acts with ``velocity`` actions; never against its clock, ``clocks/``) the
 robot builds its observation from its view (``observe.py``), asks its policy for an action
 (``loaders.py``), or takes the one a learning environment left in :attr:`answer`, and
-heads where the action says (``actions.py``). Asked again within the same step (it reached
-its target with movement left), a robot with no new answer keeps its target. It is never
+heads where the action says (``actions.py``). It decides once a step, at the step's decide
+phase (``ONE_DECISION_PER_STEP``: a robot that reaches its target with movement left waits
+there for the next step), where an environment can ask for its action: a run with an
+environment answering and the same run with the policy inside are the same run. It is never
 ``done``: a run of ``policy`` robots ends at its step cap or an ``explored`` stop rule.
 """
 
@@ -44,6 +46,7 @@ class PolicyStrategy(Plugin):
     """Decisions from a policy (module docstring)."""
 
     name = "policy"
+    ONE_DECISION_PER_STEP = True  # never asked again within a step (motion.take_step)
 
     Params: ClassVar[type[StrategyParams]] = PolicyParams
     params: PolicyParams
@@ -56,28 +59,32 @@ class PolicyStrategy(Plugin):
         self.answer: Any = None  # a learning environment's action for the next decision
         self.target: Target | None = None  # where it heads now, and the point it then faces
         self.last_action: Any = None
-        self._looked: tuple[int, tuple[float, float], Candidates] | None = None
+        # the step, position, planning helpers and table of its last look (one a step)
+        self._looked: tuple[int, tuple[float, float], PlanContext, Candidates] | None = None
         self._tried: Tried | None = None
+        self._decided_at = -1  # the step of its last decision
         self._chasing: IntArray | None = None  # the cells of the frontier it heads for
 
     def observation(self, view: RobotView, asked: bool) -> Observation:
         """What its policy sees now; ``asked``: whether its decision is asked now (the
         candidate table is found only then: a robot not asked may only continue)."""
-        candidates = self.candidates(view, plan_context(view)) if asked else self.idle_table()
+        candidates = self.look(view)[1] if asked else self.idle_table()
         return observe(view, candidates, self.params, sorted(view.team_order), asked)
 
-    def candidates(self, view: RobotView, context: PlanContext) -> Candidates:
-        """The candidate table at ``view``, found once per step and position."""
+    def look(self, view: RobotView) -> tuple[PlanContext, Candidates]:
+        """The planning helpers and candidate table at ``view``, found once per step and
+        position (an environment's look before the step's decide phase serves it too:
+        the robot's map does not change in between)."""
         looked = self._looked
         if looked is not None and looked[0] == view.step and looked[1] == view.position:
-            return looked[2]
-        found = Candidates.empty(self.slots)
+            return looked[2], looked[3]
+        context, found = plan_context(view), Candidates.empty(self.slots)
         if self.params.action == "choice":
             current = None if self.target is None else self.target[0]
-            p = self.params
-            found = find_candidates(view, context, p.frontiers, p.meet, current, self.tried(view))
-        self._looked = (view.step, view.position, found)
-        return found
+            p, tried = self.params, self.tried(view)
+            found = find_candidates(view, context, p.frontiers, p.meet, current, tried)
+        self._looked = (view.step, view.position, context, found)
+        return context, found
 
     def tried(self, view: RobotView) -> Tried:
         """The frontiers it reached in vain (``giveup``); one it has just reached and still
@@ -98,8 +105,7 @@ class PolicyStrategy(Plugin):
 
     def decide(self, view: RobotView) -> Decision:
         """Ask the policy (or take the environment's answer) and head where it says."""
-        context = plan_context(view)
-        candidates = self.candidates(view, context)
+        context, candidates = self.look(view)
         action = self.action(view, candidates)
         self.last_action = action
         if self.params.action == "velocity":
@@ -112,8 +118,11 @@ class PolicyStrategy(Plugin):
         return toward(context, self.target, action)
 
     def action(self, view: RobotView, candidates: Candidates) -> Any:
-        """The environment's answer if it left one, else the policy's; with neither (an
-        environment's robot asked again within a step): continue."""
+        """One decision a step: the environment's answer if it left one, else the policy's;
+        asked again within the step (or with neither): continue."""
+        if self._decided_at == view.step:
+            return CONTINUE if self.params.action == "choice" else self.held()
+        self._decided_at = view.step
         if self.answer is not None:
             action, self.answer = self.answer, None
             return action
