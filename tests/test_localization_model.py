@@ -130,3 +130,23 @@ def test_a_teammate_seen_on_a_link_pulls_a_lost_robot_back() -> None:
     assert math.dist(by_sure.mean[:2], truth[:2]) < 1.0
     assert abs(wrap(by_sure.mean[2] - truth[2])) < 0.05
     assert by_sure.position_sigma() < by_vague.position_sigma() < off.position_sigma()
+
+
+def test_the_closed_form_2x2_eigen_decomposition_rebuilds_its_matrix() -> None:
+    """Scan matching's spread (``scan_match._eigh2``): LAPACK's values and projections, in
+    arithmetic that gives the same bits on every CPU."""
+    from mresim_phys.localization.scan_match import _eigh2
+
+    rng = np.random.default_rng(0)
+    for k in range(300):
+        half = rng.normal(size=(2, 2))
+        m = half @ half.T
+        if k % 5 == 0:
+            m[0, 1] = m[1, 0] = 0.0
+        values, vectors = _eigh2(m[0, 0], m[0, 1], m[1, 1])
+        expected, columns = np.linalg.eigh(m)
+        assert values == pytest.approx(expected, abs=1e-12)
+        assert np.allclose(vectors @ np.diag(values) @ vectors.T, m)
+        for a in range(2):
+            projection = np.outer(vectors[:, a], vectors[:, a])
+            assert np.allclose(projection, np.outer(columns[:, a], columns[:, a]), atol=1e-8)

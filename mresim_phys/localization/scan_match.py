@@ -233,13 +233,33 @@ def _two_passes(
     scores = _scores(field, centre[0], centre[1], centre[2], ranges, angles, fine_offsets,
                      fine_turns, floor)  # fmt: skip
     _, mean, cov = _moments(scores, fine_offsets, fine_turns)
-    values, vectors = np.linalg.eigh(rough[:2, :2])  # the coarse spread beyond its grid
-    for a in range(2):
+    values, vectors = _eigh2(rough[0, 0], rough[0, 1], rough[1, 1])  # the coarse spread
+    for a in range(2):  # beyond its grid
         if values[a] > spread[0]:
             cov[:2, :2] += values[a] * np.outer(vectors[:, a], vectors[:, a])
     if rough[2, 2] > spread[1]:
         cov[2, 2] += rough[2, 2]
     return centre + mean, cov, scores.max()
+
+
+@njit(cache=True, nogil=True)
+def _eigh2(a: float, b: float, c: float) -> tuple[FloatArray, FloatArray]:
+    """Eigenvalues (ascending) and unit eigenvectors (columns) of the symmetric matrix
+    [[a, b], [b, c]], in closed form: the same bits on every CPU, where LAPACK's ``eigh``
+    differs in the last bits between CPUs (its kernels are chosen per CPU), which moved a
+    scan-matching run's pose errors between machines."""
+    half, mid = 0.5 * (a - c), 0.5 * (a + c)
+    root = np.sqrt(half * half + b * b)
+    values = np.array([mid - root, mid + root])
+    vectors = np.eye(2)
+    if b != 0.0:
+        for k in range(2):
+            x, y = values[k] - c, b
+            norm = np.sqrt(x * x + y * y)
+            vectors[0, k], vectors[1, k] = x / norm, y / norm
+    elif a > c:  # diagonal: the larger value belongs to the first axis
+        vectors[0, 0], vectors[1, 0], vectors[0, 1], vectors[1, 1] = 0.0, 1.0, 1.0, 0.0
+    return values, vectors
 
 
 @njit(cache=True, nogil=True)
