@@ -22,6 +22,7 @@ from mresim_phys.strategies.policy.reference import nearest_frontier
 
 SCENARIOS = Path(__file__).resolve().parent.parent / "scenarios"
 QUICKSTART = str(SCENARIOS / "01_quickstart.yaml")
+NEAREST = "mresim_phys.strategies.policy.reference:nearest_frontier"
 
 
 def with_team(tmp_path: Path, **team: Any) -> str:
@@ -211,3 +212,28 @@ def test_goal_and_velocity_actions_step_the_robot() -> None:
         for _ in range(5):
             env.step(np.array(sample, dtype=np.float32))
         assert env.live_episode().learners["A"].position[0] > start[0] + 3
+
+
+def test_the_environments_run_is_the_run_with_the_policy_inside(tmp_path: Path) -> None:
+    """The same decisions, with or without the learning wrapper: the same run."""
+    from mresim_phys import Simulation
+    from mresim_phys.scenario.load import load_scenario
+
+    inside = with_team(tmp_path, strategy={"name": "policy", "params": {"policy": NEAREST}})
+    bare = Simulation(load_scenario(inside))
+    env = MresimParallelEnv(QUICKSTART)
+    obs, _ = env.reset(seed=1)  # the scenario's own seed
+    while env.agents:
+        obs, *_ = env.step({a: nearest_frontier(obs[a]) for a in env.agents})
+        sim = env.live_episode().sim
+        while bare.record.step < sim.record.step:
+            bare.step()
+        assert bare.record == sim.record
+    assert sim.record.step > 20
+
+
+def test_a_policy_run_replays_as_it_ran(tmp_path: Path) -> None:
+    from test_dynamic_render import assert_replay_equals_live
+
+    scenario = with_team(tmp_path, strategy={"name": "policy", "params": {"policy": NEAREST}})
+    assert_replay_equals_live(Path(scenario), tmp_path / "run", (10, 40))

@@ -44,10 +44,9 @@ def possible_robots(config: EnvConfig) -> list[str]:
     for path in config.scenarios:
         data = base_data(path)
         if config.robots is not None:
-            source = str(path)
-            located = resolve_map_path(
-                validate_scenario(data, source), path.resolve().parent, source
-            )
+            source, folder = str(path), path.resolve().parent
+            scenario = validate_scenario(data, source, folder)
+            located = resolve_map_path(scenario, folder, source)
             data = resize_team(data, located, max(config.robots), source)
         names += [str(r["name"]) for r in data.get("robots") or [] if str(r["name"]) not in names]
     return names

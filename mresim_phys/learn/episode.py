@@ -76,15 +76,15 @@ def episode_scenario(
         data["faults"] = copy.deepcopy(config.faults)
     folder = path.resolve().parent
     if choice.robots is not None:
-        located = resolve_map_path(validate_scenario(data, source), folder, source)
+        located = resolve_map_path(validate_scenario(data, source, folder), folder, source)
         data = resize_team(data, located, choice.robots, source)
     names = [str(r["name"]) for r in data.get("robots") or []]
-    steps = int(validate_scenario(data, source).steps)
+    steps = int(validate_scenario(data, source, folder).steps)
     data = with_failures(
         data, names, choice.failures, choice.seed, steps, config.failure_window, source
     )
     data = with_policy(data, config.policy, learners, source)
-    scenario = validate_scenario(data, source)
+    scenario = validate_scenario(data, source, folder)
     return resolve_mask_paths(resolve_map_path(scenario, folder, source), folder, source), names
 
 

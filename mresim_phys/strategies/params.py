@@ -286,8 +286,9 @@ class PolicyParams(StrategyParams):
     onnx: str | None = Field(
         None,
         description=(
-            "An ONNX file (onnxruntime, the 'learn' extra) whose inputs are named after"
-            " observation keys; its first output is the action, or one score per slot."
+            "An ONNX file (onnxruntime, the 'learn' extra; a relative path is to the scenario"
+            " file) whose inputs are named after observation keys; its first output is the"
+            " action, or one score per slot."
         ),
     )
     external: bool = Field(

@@ -43,7 +43,8 @@ from mresim_phys.types import IntArray
 
 @STRATEGIES.register
 class PolicyStrategy(Plugin):
-    """Decisions from a policy (module docstring)."""
+    """A trained policy's decisions (a callable, an ONNX file) or a learning environment's;
+    exactly one of policy, onnx and external (docs/learning.md)."""
 
     name = "policy"
     ONE_DECISION_PER_STEP = True  # never asked again within a step (motion.take_step)
