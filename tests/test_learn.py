@@ -237,3 +237,31 @@ def test_a_policy_run_replays_as_it_ran(tmp_path: Path) -> None:
 
     scenario = with_team(tmp_path, strategy={"name": "policy", "params": {"policy": NEAREST}})
     assert_replay_equals_live(Path(scenario), tmp_path / "run", (10, 40))
+
+
+def test_episodes_draw_maps_from_an_instance_sets_split(tmp_path: Path) -> None:
+    from mresim_phys.cli import main
+
+    spec = {
+        "name": "tiny",
+        "instances": [{"kind": "building", "size": [200, 140], "seeds": 3},
+                      {"kind": "cave", "size": [160, 160], "seeds": 2}],
+        "robots": 3, "radius": 2.0, "split": {"test": 0.4, "seed": 0},
+    }  # fmt: skip
+    (tmp_path / "spec.yaml").write_text(yaml.safe_dump(spec))
+    assert main(["make-set", str(tmp_path / "spec.yaml"), "--out", str(tmp_path / "maps")]) == 0
+    index = yaml.safe_load((tmp_path / "maps" / "set.yaml").read_text())
+    train = {i["id"] for i in index["instances"] if i["split"] == "train"}
+    env = MresimParallelEnv(str(tmp_path / "maps"), split="train", steps=10, robots=(2, 3))
+    assert {p.parent.name for p in env.config.scenarios} == train
+    drawn = set()
+    for seed in range(8):
+        _, infos = env.reset(seed=seed)
+        drawn.add(Path(next(iter(infos.values()))["scenario"]).parent.name)
+        assert len(env.agents) in (2, 3)
+    assert drawn <= train and len(drawn) > 1
+    with pytest.raises(MresimError, match=r"without set\.yaml"):
+        MresimParallelEnv(str(tmp_path))
+    (tmp_path / "set.yaml").write_text(yaml.safe_dump(spec))  # a set's spec, not its index
+    with pytest.raises(MresimError, match="not the index"):
+        MresimParallelEnv(str(tmp_path))

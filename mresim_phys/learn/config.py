@@ -9,6 +9,7 @@ from typing import Any, Literal
 from pydantic import Field, ValidationError, field_validator
 
 from mresim_phys.errors import MresimError
+from mresim_phys.scenario.readers import read_yaml_mapping
 from mresim_phys.strict import Strict
 
 
@@ -26,7 +27,12 @@ class EnvConfig(Strict):
     """A learning environment (docs/learning.md)."""
 
     scenarios: tuple[Path, ...] = Field(
-        min_length=1, description="Scenario files; one per episode."
+        min_length=1,
+        description="Scenario files, or folders of instance sets (mresim make-set); each"
+        " episode draws one.",
+    )
+    split: Literal["all", "train", "test"] = Field(
+        "all", description="The instances of a set's split that episodes draw from."
     )
     robots: tuple[int, ...] | None = Field(
         None, description="Team sizes an episode draws from (default: each scenario's team)."
@@ -78,9 +84,39 @@ def env_config(source: str, **given: Any) -> EnvConfig:
     if isinstance(given.get("scenarios"), (str, Path)):
         given["scenarios"] = (given["scenarios"],)
     try:
-        return EnvConfig.model_validate(given)
+        config = EnvConfig.model_validate(given)
     except ValidationError as exc:
         raise MresimError(f"{source}: {described(exc)} (docs/learning.md)") from None
+    files = [f for path in config.scenarios for f in scenario_files(path, config.split, source)]
+    if not files:
+        raise MresimError(f"{source}: scenarios: no {config.split} instance in {config.scenarios}")
+    return config.model_copy(update={"scenarios": tuple(files)})
+
+
+def scenario_files(path: Path, split: str, source: str) -> list[Path]:
+    """``path`` if it is a scenario file; the instances of ``split`` of an instance set's
+    folder (its ``set.yaml``: each instance's ``scenario.yaml``)."""
+    if not path.is_dir():
+        if not path.is_file():
+            raise MresimError(f"{source}: scenarios: no such file or folder {path}")
+        return [path]
+    index_path = path / "set.yaml"
+    if not index_path.is_file():
+        raise MresimError(
+            f"{source}: scenarios: {path} is a folder without set.yaml (an instance set"
+            " written by mresim make-set); give scenario files or a set's folder"
+        )
+    index = read_yaml_mapping(index_path)
+    instances = index.get("instances")
+    if not isinstance(instances, list) or not all(
+        isinstance(i, dict) and "id" in i for i in instances
+    ):
+        raise MresimError(
+            f"{source}: scenarios: {index_path} is not the index mresim make-set writes"
+            " (instances with an id each)"
+        )
+    chosen = [i for i in instances if split in ("all", i.get("split"))]
+    return [path / str(i["id"]) / "scenario.yaml" for i in chosen]
 
 
 def described(exc: ValidationError) -> str:
