@@ -121,6 +121,15 @@ def make_parser() -> argparse.ArgumentParser:
     replay.add_argument(
         "--metrics", action="store_true", help="recompute metrics.csv from the log and compare"
     )
+    export = commands.add_parser(
+        "export-map", help="write a robot's, the base's or the true map as a ROS map (YAML + PGM)"
+    )
+    export.add_argument("run_dir", type=Path, help="a run folder written by 'mresim run'")
+    export.add_argument(
+        "--map", default="base", help="a robot's name, 'base' or 'truth' (default: base)"
+    )
+    export.add_argument("--step", type=int, help="the logged step (default: the last)")
+    export.add_argument("--out", type=Path, help="folder for the files (default: RUN_DIR/maps)")
     add_view_parser(commands)
     add_make_map_parser(commands)
     plot = commands.add_parser("plot", help="plot one or more runs' metrics")
@@ -266,6 +275,7 @@ COMMANDS: dict[str, str | Callable[[argparse.Namespace], int]] = {
     "validate": "mresim_phys.validation:validate_command",
     "import-team": "mresim_phys.commands:import_team_command",
     "replay": "mresim_phys.commands:replay_command",
+    "export-map": "mresim_phys.output.rosmap:export_map_command",
     "plot": "mresim_phys.commands:plot_command",
     "bench": "mresim_phys.commands:bench_command",
     "view": "mresim_phys.viewer.command:view_command",
