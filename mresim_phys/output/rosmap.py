@@ -66,7 +66,8 @@ def read_ros_belief(yaml_path: Path) -> BeliefGrid:
 
 def truth_codes(occupied: BoolGrid) -> BeliefGrid:
     """The truth as map codes: every cell known."""
-    return np.where(occupied, OCCUPIED, FREE).astype(np.uint8)
+    codes: BeliefGrid = np.where(occupied, OCCUPIED, FREE).astype(np.uint8)
+    return codes
 
 
 def map_at(log: RunLog, which: str, step: int | None) -> tuple[BeliefGrid, int]:
