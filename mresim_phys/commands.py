@@ -9,11 +9,11 @@ runs: it brings the simulator (numba, pymunk, OpenCV). ``mresim validate`` witho
 from __future__ import annotations
 
 import argparse
+import sys
 from collections.abc import Callable
 from pathlib import Path
 
 import yaml
-from tqdm import tqdm
 
 from mresim_phys.errors import MresimError
 from mresim_phys.metrics import StepRecord
@@ -22,6 +22,7 @@ from mresim_phys.output.explorable_report import print_team_report
 from mresim_phys.output.files import write_text_atomic
 from mresim_phys.output.health import print_warnings
 from mresim_phys.output.plots import plot_runs
+from mresim_phys.output.progress import first_run_note, progress_bar
 from mresim_phys.output.recorders import default_run_dir
 from mresim_phys.output.replay import replay_run
 from mresim_phys.output.session import INTERRUPTED, Outcome, run_session
@@ -59,6 +60,9 @@ def run_command(args: argparse.Namespace) -> int:
     if args.view:
         return viewer.view_run(args)
     linger = getattr(args, "program", False)  # see main()
+    note = None if args.quiet else first_run_note()
+    if note is not None:
+        print(note, file=sys.stderr, flush=True)
     with stop_on_signals(StopRequest(notice=not args.quiet), linger=linger) as stop:
         sim = Simulation.from_yaml(
             args.scenario,
@@ -92,7 +96,8 @@ def run_with_bar(
     """run_session under a tqdm progress bar whose total is the steps run when a stop rule
     ends the run early."""
     scenario = sim.scenario
-    with tqdm(total=scenario.steps, disable=args.quiet, unit="step", desc=scenario.name) as bar:
+    bar = progress_bar(total=scenario.steps, disable=args.quiet, unit="step", desc=scenario.name)
+    with bar:
 
         def progress(record: StepRecord) -> None:
             bar.update(0 if record.step == 0 else 1)

@@ -94,6 +94,7 @@ class Simulation:
         self.world, self.base, self.robots = s.world, s.base, s.robots
         self.coverage, self.network, self.rules = s.coverage, s.network, s.rules
         self.t = 0
+        self.ignored_actions: tuple[str, ...] = ()  # decisions for robots that cannot move
         self.phase_times: dict[str, float] = dict.fromkeys(PHASES, 0.0)
         self.events_now: list[str] = []
         self.comm = self.network.idle(len(self.agents))
@@ -217,7 +218,8 @@ class Simulation:
         """Decide phase: supplied decisions are adopted; returns (given, due).
 
         ``given``: the robots that follow a caller's decision this step (their strategies
-        are not asked); ``due``: the robots whose replan is due, asked by
+        are not asked; a decision for a robot that failed, or whose drive did, is ignored
+        and named in ``ignored_actions``); ``due``: the robots whose replan is due, asked by
         :meth:`move_and_sense` before they move (a replan reads only the robot's own
         knowledge, so asking then is the same as asking now). A robot with a clock
         (``clocks/gate.py``) decides only on its steps and within its decision period; a
@@ -226,6 +228,9 @@ class Simulation:
         unknown = sorted(set(actions) - {r.name for r in self.robots}) if actions else []
         if unknown:
             raise ValueError(f"actions name robots the team does not have: {unknown}")
+        self.ignored_actions = tuple(
+            r.name for r in self.robots if r.name in actions and not r.can_move
+        )
         return decide_phase(self.robots, actions, self.t)
 
     def move_and_sense(self, given: set[str], due: set[str]) -> None:

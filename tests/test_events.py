@@ -212,3 +212,16 @@ def test_a_cells_window_outside_the_map_is_a_clear_error(scenario_file: Scenario
     path = scenario_file(events=[{"step": 2, "cells": [70, 50, 90, 70]}])
     with pytest.raises(ScenarioError, match=r"events\[0\]\.cells.*80x60 map"):
         Simulation.from_yaml(path)
+
+
+def test_a_decision_for_a_failed_robot_is_ignored_and_named(scenario_file: ScenarioFile) -> None:
+    """``step(actions=...)`` for a robot that has failed moves nothing and says so."""
+    sim = Simulation.from_yaml(scenario_file(events=[{"step": 1, "fail": "A"}]))
+    sim.step()
+    where = sim.robot("A").position
+    go = Decision(path=np.array([[where[0] + 5.0, where[1]]]), goal=(where[0] + 5.0, where[1]))
+    sim.step(actions={"A": go, "B": Decision()})
+    assert sim.ignored_actions == ("A",)
+    assert sim.robot("A").position == where
+    sim.step(actions={"B": Decision()})
+    assert sim.ignored_actions == ()

@@ -18,8 +18,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from tqdm import tqdm
-
+from mresim_phys.output.progress import progress_bar
 from mresim_phys.sweeps.executors import Backend, BackendLost, execute, make_backend
 from mresim_phys.sweeps.expand import RunSpec, expand_runs, fingerprints
 from mresim_phys.sweeps.lock import SweepLock
@@ -165,7 +164,7 @@ def run_all(
     """Run ``todo`` under one progress bar, noting each finished run in ``manifest``; how
     many finished, and why the backend could not go on (None: it ran them all)."""
     counts = {FAILED: len(manifest.failed()), LOST: len(manifest.lost()), "ran": 0}
-    with tqdm(
+    with progress_bar(
         total=len(runs),
         initial=len(runs) - len(todo),
         unit="run",
