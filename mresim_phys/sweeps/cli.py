@@ -54,6 +54,16 @@ def window(text: str) -> tuple[float, float]:
     return low, high
 
 
+def shard_arg(text: str) -> tuple[int, int]:
+    """``--shard i/N``."""
+    from mresim_phys.sweeps.shards import parse_shard
+
+    try:
+        return parse_shard(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+
+
 def add_backend_flags(parser: argparse.ArgumentParser) -> None:
     """--workers / --dask, --out, --verbose, --quiet."""
     where = parser.add_mutually_exclusive_group()
@@ -107,6 +117,13 @@ def add_sweep_parsers(commands: argparse._SubParsersAction[argparse.ArgumentPars
     add_backend_flags(sweep)
     sweep.add_argument(
         "--video-for", metavar="EXPR", help="write videos of the runs it selects, e.g. 'seed < 2'"
+    )
+    sweep.add_argument(
+        "--shard",
+        type=shard_arg,
+        metavar="i/N",
+        help="run only slice i of N (0 <= i < N) into OUT/shards/ (a job array's task;"
+        " default in a SLURM array task: its SLURM_ARRAY_TASK_ID of SLURM_ARRAY_TASK_COUNT)",
     )
     compare = commands.add_parser("compare", help="figures and report of a sweep")
     compare.add_argument("sweep_dir", type=Path, help="a folder written by 'mresim sweep'")
@@ -175,8 +192,14 @@ def sweep_command(args: argparse.Namespace) -> int:
 def sweep_and_report(study: Study, path: Path, text: str, args: argparse.Namespace) -> int:
     """Run the sweep, print its summary; 1 if some runs failed or were lost."""
     from mresim_phys.sweeps.runner import SweepOptions, run_sweep
+    from mresim_phys.sweeps.shards import shard_from_env
 
     out = args.out or Path("sweeps") / study.name
+    shard = getattr(args, "shard", None)
+    if shard is None and hasattr(args, "shard"):  # `mresim sweep` in a SLURM array task
+        shard = shard_from_env()
+        if shard is not None and not args.quiet:
+            print(f"mresim sweep: SLURM array task: shard {shard[0]}/{shard[1]}", file=sys.stderr)
     options = SweepOptions(
         out,
         args.workers,
@@ -185,6 +208,7 @@ def sweep_and_report(study: Study, path: Path, text: str, args: argparse.Namespa
         args.verbose,
         args.quiet,
         retry_failed=args.retry_failed,
+        shard=shard,
     )
     result = run_sweep(study, path, text, options)
     if not args.quiet:

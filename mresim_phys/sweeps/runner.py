@@ -24,6 +24,7 @@ from mresim_phys.sweeps.expand import RunSpec, expand_runs, fingerprints
 from mresim_phys.sweeps.lock import SweepLock
 from mresim_phys.sweeps.manifest import Manifest, check_folder, clean_leftovers, open_sweep
 from mresim_phys.sweeps.select import run_names, selector
+from mresim_phys.sweeps.shards import shard_folder, slice_of
 from mresim_phys.sweeps.study import Study, StudyError
 from mresim_phys.sweeps.tables import write_runs, write_steps
 from mresim_phys.sweeps.worker import FAILED, LOST, VIDEOS
@@ -41,6 +42,7 @@ class SweepOptions:
     quiet: bool = False
     backend: Backend | None = None  # a backend made by the caller (it closes it itself)
     retry_failed: bool = False  # run the runs that failed of their own error again
+    shard: tuple[int, int] | None = None  # (i, N): only that slice, into OUT/shards (shards.py)
 
 
 @dataclass
@@ -110,6 +112,9 @@ def run_sweep(
 ) -> SweepResult:
     """Run every missing run of ``study`` into ``options.out`` and write its tables."""
     runs = with_videos(expand_runs(study, study_path), options.video_for, options.out)
+    if options.shard is not None:
+        runs = slice_of(runs, *options.shard)
+        options = dataclasses.replace(options, out=shard_folder(options.out, *options.shard))
     hashes = fingerprints(runs)
     try:
         check_folder(options.out, study.name, hashes)

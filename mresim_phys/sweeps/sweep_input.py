@@ -19,6 +19,7 @@ import pandas as pd
 
 from mresim_phys.errors import MresimError
 from mresim_phys.sweeps.manifest import SWEEP_FILE
+from mresim_phys.sweeps.shards import SHARDS, missing_shards, note_missing, shard_folders
 from mresim_phys.sweeps.tables import RUNS_TABLE, STEPS_TABLE
 from mresim_phys.sweeps.worker import DONE
 
@@ -61,6 +62,8 @@ def damaged(path: Path, what: str) -> MresimError:
 def read_sweep(folder: Path) -> Sweep:
     """The sweep in ``folder``; MresimError if it is none, or its files are damaged."""
     folder = Path(folder)
+    if not (folder / SWEEP_FILE).is_file() and (folder / SHARDS).is_dir():
+        return read_shards(folder)
     paths = [folder / SWEEP_FILE, folder / RUNS_TABLE, folder / STEPS_TABLE]
     missing = [p.name for p in paths if not p.is_file()]
     if missing:
@@ -74,6 +77,27 @@ def read_sweep(folder: Path) -> Sweep:
     if not (runs["status"] == DONE).any():
         raise MresimError(f"{folder}: no run of the sweep finished; nothing to compare.")
     check_steps(paths[2], steps)
+    return Sweep(folder, runs, steps, info)
+
+
+def read_shards(folder: Path) -> Sweep:
+    """The union of the finished shards of a sharded sweep (``sweeps/shards.py``): their
+    runs and steps tables, one study; the shards missing are named on stderr."""
+    done = [p for p in shard_folders(folder) if (p / RUNS_TABLE).is_file()]
+    if not done:
+        raise MresimError(f"{folder}: no shard of the sweep has finished; nothing to compare.")
+    parts = [read_sweep(p) for p in done]
+    names = {str(p.info.get("study")) for p in parts}
+    if len(names) > 1:
+        raise MresimError(f"{folder / SHARDS}: shards of different studies ({sorted(names)})")
+    runs = pd.concat([p.runs for p in parts], ignore_index=True)
+    repeated = runs["run_id"][runs["run_id"].duplicated()].tolist()
+    if repeated:
+        raise damaged(folder / SHARDS, f"runs {repeated[:3]} are in more than one shard")
+    steps = pd.concat([p.steps for p in parts], ignore_index=True)
+    note_missing(folder, missing_shards(folder, done))
+    info = dict(parts[0].info)
+    info["runs"] = {k: v for p in parts for k, v in (p.info.get("runs") or {}).items()}
     return Sweep(folder, runs, steps, info)
 
 
