@@ -185,7 +185,12 @@ def add_render_flags(parser: argparse.ArgumentParser) -> None:
         const=True,
         default=None,
         metavar="PATH",
-        help="write a video (default videos/<name>-seed<seed>.mp4; .webm too)",
+        help="write a video (default videos/<name>-seed<seed>.mp4, H.264; .webm too)",
+    )
+    parser.add_argument(
+        "--codec",
+        choices=("h264", "mp4v", "vp8", "mjpg"),
+        help="video codec (default from the extension: .mp4 H.264, .webm VP8)",
     )
     parser.add_argument("--fps", type=positive_float, help="video frames per second")
     parser.add_argument("--every", type=positive_int, help="one frame every N steps")

@@ -30,6 +30,7 @@ def render_overrides(args: argparse.Namespace) -> dict[str, Any]:
         "layers": args.layers,
         "scale": args.scale,
         "snapshots": args.snapshot,
+        "codec": getattr(args, "codec", None),
     }
     if getattr(args, "no_log", False):
         given["log"] = False

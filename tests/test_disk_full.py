@@ -194,7 +194,7 @@ def test_a_video_the_encoder_failed_silently_is_not_given_its_name(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.setattr(cv2, "VideoWriter", SilentWriter)
-    video = VideoRecorder(tmp_path / "x.mp4", 10, (32, 24))
+    video = VideoRecorder(tmp_path / "x.mp4", 10, (32, 24), fourcc="mp4v")  # OpenCV's encoder
     for _ in range(3):
         video.write(np.zeros((24, 32, 3), np.uint8))
     with pytest.raises(WriteError, match=r"x\.mp4: the encoder failed silently \(0 of the 3"):

@@ -6,8 +6,10 @@ import math
 from dataclasses import replace
 from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
+import yaml
 
 from mresim_phys import Simulation
 from mresim_phys.localization.feature import PoseBelief
@@ -20,6 +22,7 @@ from mresim_phys.render import (
     LayerSpec,
     Renderer,
     Style,
+    frame_scale,
     parse_layers,
 )
 from mresim_phys.render.pose import ellipse_axes
@@ -421,3 +424,22 @@ def test_the_legend_names_the_believed_pose_only_where_it_is_drawn() -> None:
     assert (shown != render(snap, "default,-localization", 8.0)[band]).any()
     hidden = render(snap, "default,A:-localization", 8.0)[band]
     assert (render(plain, "default", 8.0)[band] == hidden).all()
+
+
+def test_the_upscale_of_small_maps_is_render_min_side(tmp_path: Path) -> None:
+    """A 160x120 map is drawn at 640x480 by default, at its own size with min_side 0."""
+    from mresim_phys.cli import main
+
+    assert frame_scale((120, 160), 1.0) == 4.0 and frame_scale((120, 160), 1.0, 0) == 1.0
+    assert frame_scale((120, 160), 1.0, 320) == 2.0 and frame_scale((600, 800), 1.0) == 1.0
+    scenario = Path(__file__).resolve().parent.parent / "scenarios" / "01_quickstart.yaml"
+    for side, size in ((640, (480, 640)), (0, (120, 160))):
+        out = tmp_path / str(side)
+        data = yaml.safe_load(scenario.read_text())
+        data["map"]["image"] = str((scenario.parent / data["map"]["image"]).resolve())
+        data["render"] = {"min_side": side}
+        data["steps"] = 5
+        path = tmp_path / f"s{side}.yaml"
+        path.write_text(yaml.safe_dump(data))
+        assert main(["run", str(path), "--out", str(out), "--quiet", "--no-plots", "--no-log"]) == 0
+        assert cv2.imread(str(out / "final.png")).shape[:2] == size

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import subprocess
+from collections.abc import Iterator
 from pathlib import Path
 
 import cv2
@@ -163,7 +165,7 @@ def test_encoding_failures_surface_on_close(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
     monkeypatch.setattr(cv2, "VideoWriter", FailingWriter)
-    video = VideoRecorder(tmp_path / "x.mp4", 10, (WIDTH, HEIGHT))
+    video = VideoRecorder(tmp_path / "x.mp4", 10, (WIDTH, HEIGHT), fourcc="mp4v")
     video.write(frames(1)[0])
     with pytest.raises(MresimError, match="encoding failed: no space"):
         video.close()
@@ -183,3 +185,42 @@ def test_write_png(tmp_path: Path) -> None:
 
 def test_default_video_path() -> None:
     assert default_video_path("quickstart", 7) == Path("videos/quickstart-seed7.mp4")
+
+
+def test_an_mp4_is_h264_yuv420p_with_its_index_first(tmp_path: Path) -> None:
+    """What browsers play: H.264, 4:2:0, the moov atom before the frames (faststart)."""
+    import imageio_ffmpeg
+
+    path = tmp_path / "x.mp4"
+    with VideoRecorder(path, 10, (WIDTH, HEIGHT)) as video:
+        for frame in frames(12):
+            video.write(frame)
+    assert len(read_back(path)) == 12
+    capture = cv2.VideoCapture(str(path))
+    fourcc = int(capture.get(cv2.CAP_PROP_FOURCC)).to_bytes(4, "little")
+    capture.release()
+    assert fourcc in (b"h264", b"avc1")
+    data = path.read_bytes()
+    assert 0 < data.find(b"moov") < data.find(b"mdat")
+    probe = subprocess.run(
+        [imageio_ffmpeg.get_ffmpeg_exe(), "-hide_banner", "-i", str(path)],
+        capture_output=True, text=True, check=False,
+    )  # fmt: skip
+    assert "h264" in probe.stderr and "yuv420p" in probe.stderr
+
+
+def test_an_ffmpeg_that_stops_fails_the_video_and_leaves_no_file(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    import imageio_ffmpeg
+
+    def broken(*args: object, **kwargs: object) -> Iterator[None]:
+        yield None  # started
+        raise BrokenPipeError("ffmpeg exited")
+
+    monkeypatch.setattr(imageio_ffmpeg, "write_frames", broken)
+    video = VideoRecorder(tmp_path / "x.mp4", 10, (WIDTH, HEIGHT))
+    video.write(frames(1)[0])
+    with pytest.raises(MresimError, match="ffmpeg stopped"):
+        video.close()
+    assert list(tmp_path.iterdir()) == []

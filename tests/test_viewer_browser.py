@@ -234,3 +234,23 @@ def test_a_live_run_pauses_steps_and_stops_from_the_page(
         except subprocess.TimeoutExpired:  # never leave a server behind
             child.kill()
             child.communicate()
+
+
+def test_a_runs_video_plays_in_chromium(page: Page, tmp_path: Path) -> None:
+    """The default .mp4 (H.264, yuv420p, faststart) loads and plays in Chromium; OpenCV's
+    mp4v, the old default, has no supported source there."""
+    path = write_scenario(tmp_path, steps=30)
+    for name, codec in (("h264.mp4", []), ("mp4v.mp4", ["--codec", "mp4v"])):
+        flags = ["--video", str(tmp_path / name), *codec, "--quiet", "--no-plots", "--no-log"]
+        assert main(["run", str(path), "--out", str(tmp_path / name.split(".")[0]), *flags]) == 0
+    html = tmp_path / "page.html"
+    html.write_text(
+        '<video id="h" src="h264.mp4" muted></video><video id="m" src="mp4v.mp4" muted></video>'
+    )
+    page.goto(html.as_uri())
+    page.wait_for_function("document.getElementById('h').readyState >= 2", timeout=15000)
+    assert page.evaluate("document.getElementById('h').videoWidth") > 0
+    page.evaluate("document.getElementById('h').play()")
+    page.wait_for_function("document.getElementById('h').currentTime > 0.3", timeout=15000)
+    page.wait_for_function("document.getElementById('m').error !== null", timeout=15000)
+    assert page.evaluate("document.getElementById('m').error.code") == 4  # not supported

@@ -37,6 +37,7 @@ from mresim_phys.output.files import PendingFile, write_json_atomic, write_text_
 from mresim_phys.output.localization import PoseRecorder
 from mresim_phys.output.logwriter import RunLogWriter
 from mresim_phys.output.video import (
+    CODECS,
     VideoRecorder,
     chosen_video_path,
     default_video_path,
@@ -323,8 +324,10 @@ def frame_recorder(
     png_prefix: str = "",
 ) -> FrameRecorder:
     """A FrameRecorder of maps of ``shape`` with ``spec``'s scale, fps, every and PNG steps."""
-    renderer = Renderer(shape, layers, frame_scale(shape, spec.scale), regions=regions)
-    writer = VideoRecorder(video, spec.fps, renderer.size) if video is not None else None
+    scale = frame_scale(shape, spec.scale, spec.min_side)
+    renderer = Renderer(shape, layers, scale, regions=regions)
+    fourcc = None if spec.codec is None else CODECS[spec.codec]
+    writer = None if video is None else VideoRecorder(video, spec.fps, renderer.size, fourcc)
     steps = spec.snapshots
     return FrameRecorder(renderer, writer, spec.every, steps, png_dir, final_png, png_prefix)
 

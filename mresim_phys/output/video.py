@@ -4,11 +4,12 @@
 one background thread encodes them (OpenCV releases the GIL while it encodes), so on a
 machine with a free core the simulation steps on while the last frame is encoded (an mp4v
 800x600 frame costs ~2 ms of one core: the codec is single-threaded); at most
-``QUEUED_FRAMES`` frames wait, then ``write`` blocks. The codec follows the file extension:
-``.mp4`` -> ``mp4v``, ``.webm`` -> ``VP80``, ``.avi`` -> ``MJPG``. opencv-python-headless
-ships no H.264 encoder; re-encode an mp4v file with an external ffmpeg if a browser needs
-H.264. Frames go to a temporary sibling of the video file (``output.files``), renamed onto
-its name at :meth:`VideoRecorder.close`, so a video file is always a finished one.
+``QUEUED_FRAMES`` frames wait, then ``write`` blocks. The codec follows the file extension,
+or ``render.codec``: ``.mp4`` -> H.264 (``h264``: piped to the ffmpeg imageio-ffmpeg ships,
+``output/h264.py``; browsers play it), or ``mp4v`` (OpenCV's, which browsers do not play),
+``.webm`` -> VP8 (``vp8``), ``.avi`` -> ``mjpg``. Frames go to a temporary sibling of the
+video file (``output.files``), renamed onto its name at :meth:`VideoRecorder.close`, so a
+video file is always a finished one.
 
 OpenCV's encoder reports no write errors (a full disk only logs a warning per frame and
 leaves a file without its index), so :meth:`VideoRecorder.close` reads the finished file
@@ -24,6 +25,7 @@ import queue
 import threading
 from pathlib import Path
 from types import TracebackType
+from typing import Any
 
 import cv2
 import numpy as np
@@ -38,8 +40,11 @@ from mresim_phys.output.files import (
     probe_cause,
     temp_sibling,
 )
+from mresim_phys.output.h264 import FfmpegWriter
 
-FOURCC = {".mp4": "mp4v", ".webm": "VP80", ".avi": "MJPG"}
+FOURCC = {".mp4": "h264", ".webm": "VP80", ".avi": "MJPG"}  # the extension's default
+CODECS = {"h264": "h264", "mp4v": "mp4v", "vp8": "VP80", "mjpg": "MJPG"}  # render.codec
+H264 = "h264"  # not an OpenCV fourcc: output/h264.py's ffmpeg
 QUEUED_FRAMES = 4  # frames waiting for the background encoder (~1.4 MB each at 800x600)
 
 
@@ -153,13 +158,10 @@ class VideoRecorder:
         self.fourcc = fourcc or FOURCC[suffix]
         make_parent(self.path)
         self.partial = temp_sibling(self.path)  # renamed onto path by close()
-        code = cv2.VideoWriter.fourcc(*self.fourcc)
         self._failure: str | None = None
         quiet_opencv.enter()
         try:
-            self._writer: cv2.VideoWriter | None = cv2.VideoWriter(
-                str(self.partial), code, self.fps, self.frame_size
-            )
+            self._writer: Any = self._open_writer()
         except BaseException:
             quiet_opencv.leave()
             raise
@@ -175,6 +177,13 @@ class VideoRecorder:
                 target=self._encode, args=(self._writer, self._queue), daemon=True
             )
             self._encoder.start()
+
+    def _open_writer(self) -> Any:
+        """OpenCV's writer of the codec, or ffmpeg's for H.264."""
+        if self.fourcc == H264:
+            return FfmpegWriter(self.partial, self.fps, self.frame_size)
+        code = cv2.VideoWriter.fourcc(*self.fourcc)
+        return cv2.VideoWriter(str(self.partial), code, self.fps, self.frame_size)
 
     def write(self, frame: np.ndarray) -> None:
         """Append one (height, width, 3) uint8 BGR frame.
@@ -198,7 +207,7 @@ class VideoRecorder:
             self._queue.put(frame.copy())  # the caller may reuse its frame at once
         self.frames_written += 1
 
-    def _encode(self, writer: cv2.VideoWriter, frames: queue.Queue[np.ndarray | None]) -> None:
+    def _encode(self, writer: Any, frames: queue.Queue[np.ndarray | None]) -> None:
         """The background thread: encode queued frames until the ``None`` sentinel."""
         while (frame := frames.get()) is not None:
             if self._failure is None:
@@ -206,6 +215,8 @@ class VideoRecorder:
                     writer.write(frame)
                 except cv2.error as exc:  # reported by the next write or close
                     self._failure = exc.msg or str(exc)
+                except MresimError as exc:  # ffmpeg stopped
+                    self._failure = str(exc)
 
     def _raise_failure(self) -> None:
         if self._failure is not None:
@@ -218,16 +229,18 @@ class VideoRecorder:
             return WriteError(self.path, cause)
         return MresimError(
             f"cannot open video {self.path} with codec {self.fourcc!r}: the path may be "
-            "unwritable, or the codec is missing from this OpenCV build (H.264 is not "
-            "available in opencv-python-headless); use .mp4 (mp4v) or .webm (VP8)"
+            "unwritable, or the codec is missing from this OpenCV build; use .mp4 (H.264, or"
+            " codec mp4v) or .webm (VP8)"
         )
 
-    def _release(self, writer: cv2.VideoWriter) -> None:
+    def _release(self, writer: Any) -> None:
         """Release the writer (the file is then as complete as it gets)."""
         try:
             writer.release()
         except cv2.error as exc:  # reported by close
             self._failure = self._failure or exc.msg or str(exc)
+        except MresimError as exc:  # ffmpeg failed
+            self._failure = self._failure or str(exc)
         finally:
             quiet_opencv.leave()
 

@@ -48,12 +48,14 @@ _AREA = cv2.INTER_AREA
 MIN_FRAME_SIDE = 640  # output pixels: the longer side of a run's frames is at least this
 
 
-def frame_scale(truth_shape: tuple[int, int], scale: float) -> float:
+def frame_scale(
+    truth_shape: tuple[int, int], scale: float, min_side: int = MIN_FRAME_SIDE
+) -> float:
     """``scale`` times the smallest whole factor that makes the frame's longer side at least
-    :data:`MIN_FRAME_SIDE` pixels, so the header and legend fit on small maps (a 160x120
-    map at scale 1 is drawn at scale 4, 640x480)."""
+    ``min_side`` pixels, so the header and legend fit on small maps (a 160x120 map at scale
+    1 is drawn at scale 4, 640x480; ``render.min_side``, 0: exactly ``scale``)."""
     longer = max(truth_shape) * scale
-    return scale * max(1, math.ceil(MIN_FRAME_SIDE / longer)) if longer > 0 else scale
+    return scale * max(1, math.ceil(min_side / longer)) if longer > 0 else scale
 
 
 class Renderer:

@@ -116,6 +116,23 @@ class RenderSpec(Strict):
         "default", description="Layers to draw, e.g. 'default', 'all', 'default,B:free_space'."
     )
     scale: float = Field(1.0, gt=0, le=8, description="Frame scale (2 = twice the map size).")
+    min_side: int = Field(
+        640,
+        ge=0,
+        le=4096,
+        description=(
+            "Frames of a small map are drawn larger, by the smallest whole factor times"
+            " scale that makes their longer side at least this many pixels, so the header"
+            " and legend fit (a 160x120 map: 640x480); 0: exactly scale."
+        ),
+    )
+    codec: Literal["h264", "mp4v", "vp8", "mjpg"] | None = Field(
+        None,
+        description=(
+            "Video codec (default from the extension: .mp4 H.264, which browsers play;"
+            " .webm VP8; .avi MJPG). mp4v: OpenCV's MPEG-4, which browsers do not play."
+        ),
+    )
     snapshots: list[Annotated[int, Field(ge=0)]] = Field(
         default_factory=list,
         description="Steps at which to write PNG frames (0 .. steps).",
