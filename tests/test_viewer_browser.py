@@ -254,3 +254,82 @@ def test_a_runs_video_plays_in_chromium(page: Page, tmp_path: Path) -> None:
     page.wait_for_function("document.getElementById('h').currentTime > 0.3", timeout=15000)
     page.wait_for_function("document.getElementById('m').error !== null", timeout=15000)
     assert page.evaluate("document.getElementById('m').error.code") == 4  # not supported
+
+
+def test_the_wheel_zooms_about_the_cursor_drag_pans_and_hover_follows(
+    page: Page, server: ViewerServer
+) -> None:
+    open_viewer(page, server.url)
+    scrub(page, 5)
+    view = page.locator("#view").bounding_box()
+    cx, cy = view["x"] + 100, view["y"] + 80
+    page.mouse.move(cx, cy)
+    for _ in range(4):
+        page.mouse.wheel(0, -100)
+    zoom = page.evaluate("window.viewer.view.zoom")
+    assert zoom == pytest.approx(1.25**4)
+    assert page.evaluate("frame.style.imageRendering") == "pixelated"  # crisp from 2x
+    box = page.locator("#frame").bounding_box()
+    # the point under the cursor stays under it
+    size = page.evaluate("[frame.width, frame.height]")
+    assert (
+        box["width"] == pytest.approx(zoom * view["width"] * 1.0, rel=0.05)
+        or box["width"] > view["width"]
+    )
+    page.mouse.down()
+    page.mouse.move(cx - 50, cy - 30)
+    page.mouse.up()
+    moved = page.evaluate("[window.viewer.view.x, window.viewer.view.y]")
+    assert moved[0] < 0 and moved[1] < 0
+    robot = page.evaluate("window.viewer.agents.find(a => a.name === 'A')")
+    box = page.locator("#frame").bounding_box()
+    x = box["x"] + robot["px"][0] * box["width"] / size[0]
+    y = box["y"] + robot["px"][1] * box["height"] / size[1]
+    page.mouse.move(x, y)
+    assert "A (robot)" in page.inner_text("#hover")  # hover finds it where it is drawn now
+    page.keyboard.press("z")
+    assert page.evaluate("[window.viewer.view.zoom, frame.style.imageRendering]") == [1, "auto"]
+    page.keyboard.press("+")
+    assert page.evaluate("window.viewer.view.zoom") == pytest.approx(1.25)
+    assert page.errors == []
+
+
+def test_the_robot_table_shows_colours_and_marks_a_failed_robot(
+    page: Page, server: ViewerServer
+) -> None:
+    open_viewer(page, server.url)
+    colours = page.evaluate("window.viewer.info.colours")
+    assert len(colours) == 3 and len(set(colours)) == 3  # the base and two robots
+    cell = "document.querySelector('#robots tr:nth-child(5) td.name')"  # after base and A
+    swatch = page.evaluate(f"getComputedStyle({cell}).borderLeftColor")
+    b, g, r = (int(colours[2][i : i + 2], 16) for i in (5, 3, 1))
+    assert swatch == f"rgb({r}, {g}, {b})"  # robot B's colour, as frames draw it
+    scrub(page, 30)
+    assert page.inner_text("#status-B") == "failed"
+    assert "failed" in (page.get_attribute("#status-B", "class") or "")
+    assert page.inner_text("#status-A") != "failed"
+
+
+def test_every_robot_under_the_cursor_is_listed(page: Page, server: ViewerServer) -> None:
+    open_viewer(page, server.url)
+    scrub(page, 0)
+    page.evaluate(
+        "window.viewer.agents = window.viewer.agents.map(a => a.kind === 'robot'"
+        " ? {...a, px: [40, 40]} : a)"
+    )  # both robots drawn on one spot, as robots that meet are
+    box = page.locator("#frame").bounding_box()
+    size = page.evaluate("[frame.width, frame.height]")
+    page.mouse.move(box["x"] + 40 * box["width"] / size[0], box["y"] + 40 * box["height"] / size[1])
+    text = page.inner_text("#hover")
+    assert "A (robot)" in text and "B (robot)" in text
+
+
+def test_events_are_marked_on_the_chart(page: Page, server: ViewerServer) -> None:
+    open_viewer(page, server.url)
+    scrub(page, 39)
+    steps = page.evaluate("window.viewer.info.steps")
+    width = page.evaluate("document.getElementById('chart').width")
+    x = round(12 / max(steps - 1, 1) * width)
+    chart = "document.getElementById('chart').getContext('2d')"
+    pixel = page.evaluate(f"Array.from({chart}.getImageData({x}, 3, 1, 1).data)")
+    assert pixel[:3] == [204, 51, 51] and pixel[3] > 0  # the red tick of B's failure at step 12

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from mresim_phys.render.layers import DEFAULT_ROBOT, GLOBAL_LAYERS, ROBOT_LAYERS, LayerSpec
+from mresim_phys.render.style import DEFAULT_STYLE
 
 OPS = ("frame", "play", "pause", "step", "stop", "speed")
 MAX_SPEED = 10_000.0  # steps per second
@@ -157,6 +158,17 @@ def layers_json(layers: LayerSpec, names: list[str]) -> dict[str, Any]:
     }
 
 
+def agent_colours(kinds: list[str]) -> list[str]:
+    """Each agent's colour in frames, as ``#rrggbb``: the base's, then the robots' in order
+    (``render/draw.py``)."""
+    out, robots = [], 0
+    for kind in kinds:
+        b, g, r = DEFAULT_STYLE.base if kind != "robot" else DEFAULT_STYLE.robot_colour(robots)
+        robots += kind == "robot"
+        out.append(f"#{r:02x}{g:02x}{b:02x}")
+    return out
+
+
 def info_message(
     mode: str,
     names: list[str],
@@ -171,6 +183,7 @@ def info_message(
         "mode": mode,
         "names": names,
         "kinds": kinds,
+        "colours": agent_colours(kinds),
         "global_layers": list(GLOBAL_LAYERS),
         "robot_layers": list(ROBOT_LAYERS),
         "layers": layers_json(layers, names),

@@ -8,6 +8,7 @@ const state = {
   speed: 10, inflight: false, dirty: false, header: null, agents: [], frames: 0,
   timeline: { steps: [], explored: [], known_at_base: [], events: [] },
   lastAdvance: 0, timer: null, socket: null,
+  view: { zoom: 1, x: 0, y: 0 }, drag: null,
 };
 window.viewer = state; // for tests and the curious
 
@@ -74,6 +75,7 @@ async function onPng(blob) {
   $("status").textContent = header.events.length ? header.events.join(", ") : "";
   state.inflight = false;
   updateControls();
+  updateStatus();
   drawChart();
   if (state.dirty) { state.dirty = false; requestFrame(); return; }
   if (live() && state.playing) { schedule(50); return; }
@@ -177,16 +179,45 @@ function buildPanel() {
     th.textContent = k < 10 ? `${(k + 1) % 10} ${name}` : name;
     head.append(th);
   });
+  const status = document.createElement("th");
+  status.textContent = "status";
+  head.append(status);
   const rows = [["*", "all robots"], ...info.names.map((n) => [n, n])];
   for (const [agent, label] of rows) {
     const row = table.insertRow();
     const cell = row.insertCell(); cell.className = "name"; cell.textContent = label;
+    const k = info.names.indexOf(agent);
+    if (k >= 0 && info.colours) cell.style.borderLeftColor = info.colours[k];
     for (const name of info.robot_layers) {
       const td = row.insertCell();
       const on = agent === "*" ? allHave(name) : layers.robots[agent].includes(name);
       const id = agent === "*" ? `all-${name}` : `layer-${agent}-${name}`;
       td.append(checkbox(id, on, (v) => setRobotLayer(agent, name, v), `${label}: ${name}`));
     }
+    const mark = row.insertCell(); mark.className = "status";
+    if (agent !== "*") mark.id = `status-${agent}`;
+  }
+}
+
+// a robot's status in the table: failed, done (its state), stuck (or fruitless), idle or
+// waiting (its run-health activity), else what it does
+function statusOf(a) {
+  if (a.kind !== "robot") return ["", ""];
+  const activity = a.health || "";
+  if (a.state === "failed") return ["failed", "failed"];
+  if (a.state === "done") return ["done", activity && activity !== "idle" ? `done, ${activity}` : "done"];
+  if (activity === "stuck" || activity === "fruitless") return ["stuck", activity];
+  if (activity === "idle" || activity === "waiting") return [activity, activity];
+  return ["", activity || a.state];
+}
+
+function updateStatus() {
+  for (const a of state.agents) {
+    const cell = $(`status-${a.name}`);
+    if (!cell) continue;
+    const [cls, text] = statusOf(a);
+    cell.className = `status ${cls}`;
+    cell.textContent = text;
   }
 }
 
@@ -245,20 +276,32 @@ function drawChart() {
   };
   line(tl.explored, "#1f5fbf");
   line(tl.known_at_base, "#d9780b");
+  ctx.strokeStyle = "#c33"; // events (doors, collapses, failures), as on the timeline
+  for (const [n] of tl.events) {
+    const ex = Math.round((n / total) * w) + 0.5;
+    ctx.beginPath(); ctx.moveTo(ex, 0); ctx.lineTo(ex, 10); ctx.stroke();
+  }
   const x = Math.round((state.n / total) * w) + 0.5;
   ctx.strokeStyle = "#000"; ctx.beginPath(); ctx.moveTo(x, 0); ctx.lineTo(x, h); ctx.stroke();
 }
 
 function onHover(ev) {
   const canvas = $("frame"), tip = $("hover");
-  const rect = canvas.getBoundingClientRect();
+  const rect = canvas.getBoundingClientRect(), view = $("view").getBoundingClientRect();
   const fx = ((ev.clientX - rect.left) * canvas.width) / rect.width;
   const fy = ((ev.clientY - rect.top) * canvas.height) / rect.height;
-  const hit = state.agents.find((a) => Math.hypot(a.px[0] - fx, a.px[1] - fy) <= a.r + 4);
-  if (!hit) { tip.hidden = true; return; }
+  const hits = state.agents.filter((a) => Math.hypot(a.px[0] - fx, a.px[1] - fy) <= a.r + 4);
+  if (!hits.length || state.drag) { tip.hidden = true; return; }
+  tip.textContent = hits.map(hoverText).join("\n\n");
+  tip.style.left = `${ev.clientX - view.left + 12}px`;
+  tip.style.top = `${ev.clientY - view.top + 12}px`;
+  tip.hidden = false;
+}
+
+function hoverText(hit) {
   const battery = hit.battery === null ? "none" : `${(100 * hit.battery).toFixed(1)} %`;
   const contact = hit.base_contact < 0 ? "never" : `step ${hit.base_contact}`;
-  tip.textContent = [
+  return [
     `${hit.name} (${hit.kind})`, `state      ${hit.state}${hit.parts ? " (" + hit.parts.join(", ") + " broken)" : ""}`,
     `activity   ${hit.health || "-"}`,
     `role       ${hit.role}`, `travelled  ${hit.distance} cells`, `path left  ${hit.path_left} cells`,
@@ -267,9 +310,46 @@ function onHover(ev) {
     ...(hit.localization ? [believedLine(hit.localization)] : []),
     ...(hit.meetings ? hit.meetings.map(meetingLine) : []),
   ].join("\n");
-  tip.style.left = `${ev.clientX - rect.left + 12}px`;
-  tip.style.top = `${ev.clientY - rect.top + 12}px`;
-  tip.hidden = false;
+}
+
+// zoom and pan: a CSS transform of the frame inside #view; pixels stay crisp (pixelated)
+// from 2x, smooth when the frame is shown smaller than drawn
+function applyView() {
+  const v = state.view, canvas = $("frame");
+  canvas.style.transform = `translate(${v.x}px, ${v.y}px) scale(${v.zoom})`;
+  canvas.style.imageRendering = v.zoom >= 2 ? "pixelated" : "auto";
+  $("zoom").textContent = `zoom ${v.zoom.toFixed(v.zoom < 10 ? 1 : 0)}x`;
+}
+
+function zoomAt(factor, cx, cy) {
+  const v = state.view, zoom = Math.min(32, Math.max(1, v.zoom * factor));
+  v.x = cx - ((cx - v.x) * zoom) / v.zoom; v.y = cy - ((cy - v.y) * zoom) / v.zoom;
+  v.zoom = zoom;
+  if (zoom === 1) { v.x = 0; v.y = 0; }
+  applyView();
+}
+
+function zoomCentre(factor) {
+  const box = $("view").getBoundingClientRect();
+  zoomAt(factor, box.width / 2, box.height / 2);
+}
+
+function panBy(dx, dy) { state.view.x += dx; state.view.y += dy; applyView(); }
+
+function resetView() { state.view = { zoom: 1, x: 0, y: 0 }; applyView(); }
+
+function onWheel(ev) {
+  ev.preventDefault();
+  const box = $("view").getBoundingClientRect();
+  zoomAt(ev.deltaY < 0 ? 1.25 : 0.8, ev.clientX - box.left, ev.clientY - box.top);
+}
+
+function onDrag(ev) {
+  if (ev.type === "mousedown") { state.drag = { x: ev.clientX, y: ev.clientY }; $("view").classList.add("dragging"); return; }
+  if (!state.drag) return;
+  if (ev.type === "mouseup" || ev.type === "mouseleave") { state.drag = null; $("view").classList.remove("dragging"); return; }
+  panBy(ev.clientX - state.drag.x, ev.clientY - state.drag.y);
+  state.drag = { x: ev.clientX, y: ev.clientY };
 }
 
 function believedLine(b) {
@@ -285,9 +365,14 @@ function meetingLine(m) {
 
 function onKey(ev) {
   if (ev.target.tagName === "SELECT") return;
-  if (ev.key === " ") { ev.preventDefault(); setPlaying(!state.playing); }
+  const pan = { ArrowLeft: [40, 0], ArrowRight: [-40, 0], ArrowUp: [0, 40], ArrowDown: [0, -40] };
+  if (ev.shiftKey && pan[ev.key]) { ev.preventDefault(); panBy(...pan[ev.key]); }
+  else if (ev.key === " ") { ev.preventDefault(); setPlaying(!state.playing); }
   else if (ev.key === "ArrowRight") { ev.preventDefault(); stepBy(1); }
   else if (ev.key === "ArrowLeft") { ev.preventDefault(); stepBy(-1); }
+  else if (ev.key === "+" || ev.key === "=") { zoomCentre(1.25); }
+  else if (ev.key === "-") { zoomCentre(0.8); }
+  else if (ev.key === "z") { resetView(); }
   else if (/^[0-9]$/.test(ev.key)) { toggleColumn((Number(ev.key) + 9) % 10); }
 }
 
@@ -307,6 +392,9 @@ function init() {
   });
   $("frame").addEventListener("mousemove", onHover);
   $("frame").addEventListener("mouseleave", () => { $("hover").hidden = true; });
+  const view = $("view");
+  view.addEventListener("wheel", onWheel, { passive: false });
+  for (const type of ["mousedown", "mousemove", "mouseup", "mouseleave"]) view.addEventListener(type, onDrag);
   document.addEventListener("keydown", onKey);
   state.speed = Number($("speed").value);
   connect();
