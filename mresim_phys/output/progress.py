@@ -61,5 +61,5 @@ def first_run_note() -> str | None:
         return None
     return (
         "mresim: compiling the simulator's kernels for this machine (the first run after an"
-        " install: about 20 s more; later runs load them from numba's cache)"
+        " install: about 45 s more on 2 cores; later runs load them from numba's cache)"
     )
