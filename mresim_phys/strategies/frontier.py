@@ -47,7 +47,7 @@ from mresim_phys.strategies.base import (
     return_to_base,
 )
 from mresim_phys.strategies.catalog import STRATEGIES
-from mresim_phys.strategies.giveup import Tried
+from mresim_phys.strategies.giveup import Tried, tried_after_arrival
 from mresim_phys.strategies.params import FrontierParams, StrategyParams
 from mresim_phys.strategies.parts import (
     AllFrontiers,
@@ -140,11 +140,10 @@ class FrontierExploration(Plugin):
     def _tried_cells(self, view: RobotView) -> Tried:
         """What this robot tried in vain (``giveup``); a frontier it has just reached and
         still holds counts a try."""
-        if self._tried is None:
-            self._tried = Tried.empty(view.belief.shape)
-        if view.reached_goal and self._chasing is not None:
-            self._tried.failed(self._chasing, view.position, self.params.give_up_radius)
-            self._chasing = None
+        self._tried, self._chasing = tried_after_arrival(
+            self._tried, view.belief.shape, view.reached_goal, self._chasing, view.position,
+            self.params.give_up_radius,
+        )  # fmt: skip
         return self._tried
 
     def _frontiers(self, view: RobotView, context: PlanContext, tried: BoolGrid) -> Frontiers:

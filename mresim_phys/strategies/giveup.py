@@ -77,3 +77,22 @@ class Tried:
         """``passable`` without the tried spots."""
         out: BoolGrid = passable & ~self.spots
         return out
+
+
+def tried_after_arrival(
+    tried: Tried | None,
+    shape: tuple[int, ...],
+    reached_goal: bool,
+    chasing: IntArray | None,
+    position: tuple[float, float],
+    radius: float,
+) -> tuple[Tried, IntArray | None]:
+    """(tried, chasing) once a robot is asked again: its record (made for a map of
+    ``shape`` on first use), a frontier it has just reached and still holds counting a try
+    within ``radius`` (and no longer chased)."""
+    if tried is None:
+        tried = Tried.empty(shape)
+    if reached_goal and chasing is not None:
+        tried.failed(chasing, position, radius)
+        chasing = None
+    return tried, chasing

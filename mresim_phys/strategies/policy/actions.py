@@ -24,10 +24,18 @@ from mresim_phys.strategies.policy.candidates import CONTINUE, SNAP, Candidates
 Target = tuple[tuple[float, float], tuple[float, float] | None]  # (place, point to face)
 
 
-def choice_target(action: Any, candidates: Candidates, current: Target | None) -> Target | None:
-    """The place a choice ``action`` heads for and the point it then faces (None: stand)."""
+def chosen_slot(action: Any, candidates: Candidates) -> int | None:
+    """The valid slot a choice ``action`` names, other than ``continue`` (None: continue)."""
     slot = int(np.asarray(action).reshape(-1)[0])
     if slot == CONTINUE or not 0 <= slot < len(candidates.valid) or not candidates.valid[slot]:
+        return None
+    return slot
+
+
+def choice_target(action: Any, candidates: Candidates, current: Target | None) -> Target | None:
+    """The place a choice ``action`` heads for and the point it then faces (None: stand)."""
+    slot = chosen_slot(action, candidates)
+    if slot is None:
         return current
     x, y = candidates.points[slot]
     lx, ly = candidates.looks[slot]

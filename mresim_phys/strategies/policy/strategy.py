@@ -21,11 +21,12 @@ import numpy as np
 from mresim_phys.plugin import Plugin
 from mresim_phys.strategies.base import Decision, PlanContext, RobotView, plan_context
 from mresim_phys.strategies.catalog import STRATEGIES
-from mresim_phys.strategies.giveup import Tried
+from mresim_phys.strategies.giveup import Tried, tried_after_arrival
 from mresim_phys.strategies.params import PolicyParams, StrategyParams
 from mresim_phys.strategies.policy.actions import (
     Target,
     choice_target,
+    chosen_slot,
     goal_target,
     toward,
     velocity_decision,
@@ -90,11 +91,10 @@ class PolicyStrategy(Plugin):
     def tried(self, view: RobotView) -> Tried:
         """The frontiers it reached in vain (``giveup``); one it has just reached and still
         holds counts a try."""
-        if self._tried is None:
-            self._tried = Tried.empty(view.belief.shape)
-        if view.reached_goal and self._chasing is not None:
-            self._tried.failed(self._chasing, view.position, self.params.give_up_radius)
-            self._chasing = None
+        self._tried, self._chasing = tried_after_arrival(
+            self._tried, view.belief.shape, view.reached_goal, self._chasing, view.position,
+            self.params.give_up_radius,
+        )  # fmt: skip
         return self._tried
 
     def idle_table(self) -> Candidates:
@@ -146,7 +146,7 @@ class PolicyStrategy(Plugin):
 def chased(action: Any, candidates: Candidates, chasing: IntArray | None) -> IntArray | None:
     """The frontier cells a choice ``action`` heads for: its slot's cluster (a frontier
     slot), none (another valid slot), or still ``chasing`` (continue, or an invalid slot)."""
-    slot = int(np.asarray(action).reshape(-1)[0])
-    if slot == CONTINUE or not 0 <= slot < len(candidates.valid) or not candidates.valid[slot]:
+    slot = chosen_slot(action, candidates)
+    if slot is None:
         return chasing
     return candidates.clusters[slot] if slot < len(candidates.clusters) else None
