@@ -1,5 +1,5 @@
 """Command line (output edge): ``mresim run | validate | replay | view | plot | bench |
-make-map | make-set`` (and ``sweep | compare | robustness``, from ``sweeps/cli.py``).
+warmup | make-map | make-set`` (and ``sweep | compare | robustness``, from ``sweeps/cli.py``).
 
 Argument parsing and dispatch only, with light imports: each command's work
 (``commands.py``, ``validation.py``, ``viewer/command.py``, ``sweeps/cli.py``) is imported
@@ -135,6 +135,16 @@ def make_parser() -> argparse.ArgumentParser:
     plot = commands.add_parser("plot", help="plot one or more runs' metrics")
     plot.add_argument("run_dirs", type=Path, nargs="+", help="run folders")
     plot.add_argument("--out", type=Path, help="folder for the PNGs (default: the run's plots/)")
+    warmup = commands.add_parser(
+        "warmup", help="compile the simulator's kernels once (after an install)"
+    )
+    warmup.add_argument(
+        "--workers", type=positive_int, help="profiles compiled at once (default: the cores)"
+    )
+    warmup.add_argument(
+        "--profiles", type=profile_names, help="comma-separated profiles (default: all)"
+    )
+    warmup.add_argument("--list", action="store_true", help="list the profiles and stop")
     bench = commands.add_parser("bench", help="median ms per step for 4, 8, 16 robots")
     bench.add_argument(
         "--robots",
@@ -207,6 +217,11 @@ def add_render_flags(parser: argparse.ArgumentParser) -> None:
 def step_list(text: str) -> list[int]:
     """argparse type: comma-separated step numbers."""
     return [non_negative_int(part) for part in text.split(",") if part.strip()]
+
+
+def profile_names(text: str) -> list[str]:
+    """argparse type of ``mresim warmup --profiles``: comma-separated names."""
+    return comma_separated(text, str.strip, "profile names such as core,radio")
 
 
 def robot_counts(text: str) -> tuple[int, ...]:
@@ -283,6 +298,7 @@ COMMANDS: dict[str, str | Callable[[argparse.Namespace], int]] = {
     "export-map": "mresim_phys.output.rosmap:export_map_command",
     "plot": "mresim_phys.commands:plot_command",
     "bench": "mresim_phys.commands:bench_command",
+    "warmup": "mresim_phys.output.warmup:warmup_command",
     "view": "mresim_phys.viewer.command:view_command",
     "make-map": "mresim_phys.mapgen.command:make_map_command",
     "make-set": "mresim_phys.mapgen.command:make_set_command",

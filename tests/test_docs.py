@@ -50,7 +50,7 @@ def test_scenario_reference_is_current() -> None:
 def test_readme_commands_are_the_ones_ci_runs() -> None:
     readme = (ROOT / "README.md").read_text(encoding="utf-8")
     assert 'pip install -e ".[test]" && pytest' in readme
-    assert "pip install -e . && mresim run scenarios/01_quickstart.yaml" in readme
+    assert "pip install -e . && mresim warmup && mresim run scenarios/01_quickstart.yaml" in readme
     assert (ROOT / "scenarios/01_quickstart.yaml").exists()
     ci = (ROOT / ".ci/run").read_text()
     assert 'pip install -e ".[test,dev]"' in ci  # the README's install, plus the checkers

@@ -4,13 +4,12 @@ carriage returns piling up in a log; a first run without compiled kernels says s
 from __future__ import annotations
 
 import io
+import os
 import subprocess
 import sys
 from pathlib import Path
 
-import pytest
-
-from mresim_phys.output.progress import LineWriter, first_run_note, kernels_cached
+from mresim_phys.output.progress import LineWriter
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -36,11 +35,22 @@ def test_the_line_writer_drops_redraws_and_repeats() -> None:
     assert out.getvalue() == "a: 10%\na: 20%\n"
 
 
-def test_a_first_run_says_it_compiles(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path))
-    assert not kernels_cached()
-    note = first_run_note()
-    assert note is not None and "compiling" in note
-    (tmp_path / "sub").mkdir()
-    (tmp_path / "sub" / "kernel.nbi").write_bytes(b"")
-    assert kernels_cached() and first_run_note() is None
+def test_a_first_run_says_it_compiles(tmp_path: Path) -> None:
+    """numba decides its cache folder when it loads (here NUMBA_CACHE_DIR): a fresh process."""
+    probe = (
+        "from mresim_phys.output.progress import first_run_note, kernel_cache, kernels_cached\n"
+        "print(kernel_cache(), kernels_cached(), first_run_note() is not None)"
+    )
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path)}
+
+    def ask() -> list[str]:
+        done = subprocess.run(
+            [sys.executable, "-c", probe], env=env, capture_output=True, text=True, check=True
+        )
+        return done.stdout.split()
+
+    folder, cached, note = ask()
+    assert Path(folder).is_relative_to(tmp_path) and (cached, note) == ("False", "True")
+    Path(folder).mkdir(parents=True, exist_ok=True)
+    (Path(folder) / "raycast.cast_fan-1.py311.nbi").write_bytes(b"")
+    assert ask()[1:] == ["True", "False"]

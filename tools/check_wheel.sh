@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # A package, not a checkout (issue 36, part 7): build the wheel, install it into a fresh
-# venv outside the repository, and from there run the quickstart, validate every shipped
+# venv outside the repository, and from there run `mresim warmup` and the quickstart (which
+# must then compile no kernel), validate every shipped
 # scenario and check the package data (maps the package draws, the viewer's assets) are in
-# it. Run by .ci/run; by hand: tools/check_wheel.sh (about 2 minutes).
+# it. Run by .ci/run; by hand: tools/check_wheel.sh (about 4 minutes).
 set -euo pipefail
 repo="$(cd "$(dirname "$0")/.." && pwd)"
 work="$(mktemp -d)"
@@ -23,8 +24,19 @@ data = [p.name for p in (res.files("mresim_phys") / "data").iterdir() if p.name.
 assert data, "mresim_phys/data/*.png missing from the wheel"
 print(f"wheel: {mresim_phys.__file__}; viewer assets {names}; data {sorted(data)}")
 PY
-"$work/venv/bin/mresim" run "$repo/scenarios/01_quickstart.yaml" --out "$work/run" --quiet
+# the README's first command: compile the kernels once, then the quickstart compiles none
+"$work/venv/bin/mresim" warmup
+started=$(date +%s.%N)
+NUMBA_DEBUG_CACHE=1 "$work/venv/bin/mresim" run "$repo/scenarios/01_quickstart.yaml" \
+    --out "$work/run" --quiet > "$work/quickstart.log"
+seconds=$(python3 -c "print(round($(date +%s.%N) - $started, 1))")
 test -s "$work/run/metrics.csv" && test -s "$work/run/final.png"
+if grep -q "data saved" "$work/quickstart.log"; then
+    echo "wheel: the quickstart compiled kernels that mresim warmup had not:" >&2
+    grep "data saved" "$work/quickstart.log" >&2
+    exit 1
+fi
+echo "wheel: after mresim warmup the quickstart compiled no kernel and took $seconds s"
 for scenario in "$repo"/scenarios/*.yaml; do
     "$work/venv/bin/mresim" validate "$scenario" > /dev/null
 done

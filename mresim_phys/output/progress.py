@@ -9,7 +9,6 @@ are not cached yet (the first run after an install compiles them: docs/performan
 
 from __future__ import annotations
 
-import os
 import sys
 from pathlib import Path
 from typing import Any, TextIO
@@ -46,13 +45,18 @@ def progress_bar(**options: Any) -> tqdm[Any]:
     return tqdm(file=LineWriter(stream), mininterval=LOG_INTERVAL, ascii=True, **options)
 
 
+def kernel_cache() -> Path:
+    """The folder where numba keeps the compiled kernels of one module of this package
+    (``world/``): beside the modules when that folder is writable, else numba's user-wide
+    cache folder, or under ``NUMBA_CACHE_DIR`` (numba's own choice, asked of a kernel)."""
+    from mresim_phys.world.raycast import cast_fan
+
+    return Path(str(cast_fan.stats.cache_path))
+
+
 def kernels_cached() -> bool:
-    """Whether numba's cache holds compiled kernels of this package (its index files, in
-    ``NUMBA_CACHE_DIR`` or beside the modules)."""
-    package = Path(__file__).resolve().parent.parent
-    folder = os.environ.get("NUMBA_CACHE_DIR")
-    where = Path(folder) if folder else package
-    return where.is_dir() and next(where.rglob("*.nbi"), None) is not None
+    """Whether numba's cache holds compiled kernels of this package (its index files)."""
+    return any(kernel_cache().glob("*.nbi"))
 
 
 def first_run_note() -> str | None:
@@ -61,5 +65,6 @@ def first_run_note() -> str | None:
         return None
     return (
         "mresim: compiling the simulator's kernels for this machine (the first run after an"
-        " install: about 45 s more on 2 cores; later runs load them from numba's cache)"
+        " install: about 45 s more on 2 cores; later runs load them from numba's cache;"
+        " `mresim warmup` compiles every kernel at once)"
     )
