@@ -41,6 +41,7 @@ import numpy as np
 
 from mresim_phys import meeting_board as meetings_board
 from mresim_phys.features import FEATURES
+from mresim_phys.output.logdiff import diff_into
 from mresim_phys.snapshot import AgentSnapshot, CommSummary, Snapshot, read_only
 from mresim_phys.types import FloatArray, IntArray
 
@@ -223,19 +224,6 @@ def field_defaults(cls: type) -> dict[str, Callable[[], Any]]:
     return out
 
 
-def diff_into(copy: np.ndarray, grid: np.ndarray) -> IntArray:
-    """Sorted flat indices where ``grid`` (uint8 or bool) differs from ``copy``; ``copy`` is
-    then updated to match. Compares 8 bytes at a time, then the bytes of differing words."""
-    cur = np.ascontiguousarray(grid).reshape(-1).view(np.uint8)
-    n = copy.size - copy.size % 8
-    words = np.flatnonzero(copy[:n].view(np.uint64) != cur[:n].view(np.uint64))
-    candidates = (words[:, None] * 8 + np.arange(8)).ravel()
-    hits = candidates[copy[candidates] != cur[candidates]]
-    idx = np.concatenate((hits, n + np.flatnonzero(copy[n:] != cur[n:])))
-    copy[idx] = cur[idx]
-    return idx
-
-
 def segment(chunk: Chunk, name: str, k: int) -> slice:
     """Entry ``k`` of a chunk's variable-length ``name`` arrays (``<name>_off``)."""
     return slice(int(chunk[f"{name}_off"][k]), int(chunk[f"{name}_off"][k + 1]))
@@ -268,10 +256,11 @@ class GridField:
         if self.optional:
             parts[f"{self.name}_on"].append(np.array([grid is not None]))
         if grid is None:
-            idx = np.zeros(0, np.int64)
+            idx = gaps = np.zeros(0, np.int64)
         else:
-            idx = diff_into(copy, np.asarray(grid, dtype=np.uint8 if self.values else bool))
-        parts[f"{self.name}_idx"].append(np.diff(idx, prepend=0))  # gaps compress well
+            grid = np.asarray(grid, dtype=np.uint8 if self.values else bool)
+            idx, gaps = diff_into(copy, grid)
+        parts[f"{self.name}_idx"].append(gaps)  # gaps compress well
         if self.values:
             parts[f"{self.name}_val"].append(copy[idx])
 

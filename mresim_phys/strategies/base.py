@@ -43,6 +43,7 @@ from mresim_phys.planning.fields import (
     passable_cells,
     snap_to_passable,
 )
+from mresim_phys.planning.goals import nearest_reached
 from mresim_phys.planning.grid import Box, bbox, remember_window
 from mresim_phys.planning.topological import TopologicalPlanner
 from mresim_phys.strategies.params import StrategyParams
@@ -323,13 +324,10 @@ class PlanContext:
 
     def path_towards(self, x: float, y: float) -> FloatArray:
         """Path to the reachable cell nearest (straight-line) to world point (x, y)."""
-        costs = self.field.costs
-        rows, cols = np.nonzero(np.isfinite(costs))
-        if len(rows) == 0:
+        row, col = nearest_reached(self.field.costs, float(x), float(y))
+        if row < 0:
             return np.zeros((0, 2))
-        d2 = (cols + 0.5 - x) ** 2 + (rows + 0.5 - y) ** 2
-        best = int(np.lexsort((costs[rows, cols], d2))[0])
-        return self.plan_to(int(rows[best]), int(cols[best]))
+        return self.plan_to(row, col)
 
 
 def plan_context(view: RobotView) -> PlanContext:
