@@ -33,7 +33,8 @@ STUDY = ROOT / "studies" / "rooms_robustness.yaml"
 def sweep_seconds(tree: Path, study: Path, shard: str, workers: int) -> tuple[float, int]:
     """Wall seconds of one ``mresim sweep`` of ``shard`` with the code of ``tree``, and the
     number of runs it finished."""
-    env = {**os.environ, "PYTHONPATH": str(tree), "NUMBA_CACHE_DIR": str(tree / ".numba")}
+    cache = Path(tempfile.gettempdir()) / f"mresim-bench-numba-{tree.name}"
+    env = {**os.environ, "PYTHONPATH": str(tree), "NUMBA_CACHE_DIR": str(cache)}
     with tempfile.TemporaryDirectory() as out:
         command = [sys.executable, "-m", "mresim_phys.launch", "sweep", str(study)]
         command += ["--shard", shard, "--workers", str(workers), "--out", out]
