@@ -1,6 +1,6 @@
 """Sweeps on a job array (``sweeps/shards.py``): three shards run at once into one sweep
-folder, every run exactly once; compare reads their union and names a missing shard; a
-SLURM array task finds its shard in its environment."""
+folder, every run exactly once; compare reads their union (a shard whose runs all failed
+included) and names a missing shard; a SLURM array task finds its shard in its environment."""
 
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pandas as pd
 import pytest
 import yaml
 
@@ -55,6 +56,13 @@ def test_three_shards_at_once_run_every_run_exactly_once(
     (out / "shards" / "1-of-3" / "runs.parquet").unlink()  # as if shard 1 had not finished
     assert len(read_sweep(out).runs) == len(expected) - len(slice_of(expected, 1, 3))
     assert "shards 1-of-3 have not finished" in capsys.readouterr().err
+    table = out / "shards" / "0-of-3" / "runs.parquet"
+    runs = pd.read_parquet(table)
+    runs["status"] = "failed"  # as if every run of shard 0 had failed: the others compare
+    runs.to_parquet(table)
+    union = read_sweep(out).runs
+    assert set(union.loc[union["status"] == "failed", "run_id"]) == set(slice_of(expected, 0, 3))
+    assert (union["status"] == "done").sum() == len(slice_of(expected, 2, 3))
 
 
 def test_a_shard_is_i_of_n_from_the_flag_or_a_slurm_array_task() -> None:

@@ -76,7 +76,7 @@ def shard_folders(out: Path) -> list[Path]:
     return found
 
 
-def missing_shards(out: Path, present: list[Path]) -> list[str]:
+def missing_shards(present: list[Path]) -> list[str]:
     """The shard names of the count in ``present`` that have no finished folder."""
     if not present:
         return []

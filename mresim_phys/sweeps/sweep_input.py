@@ -64,6 +64,14 @@ def read_sweep(folder: Path) -> Sweep:
     folder = Path(folder)
     if not (folder / SWEEP_FILE).is_file() and (folder / SHARDS).is_dir():
         return read_shards(folder)
+    sweep = read_tables(folder)
+    if not (sweep.runs["status"] == DONE).any():
+        raise MresimError(f"{folder}: no run of the sweep finished; nothing to compare.")
+    return sweep
+
+
+def read_tables(folder: Path) -> Sweep:
+    """The tables of one sweep folder, checked (its runs may all have failed: a shard)."""
     paths = [folder / SWEEP_FILE, folder / RUNS_TABLE, folder / STEPS_TABLE]
     missing = [p.name for p in paths if not p.is_file()]
     if missing:
@@ -74,8 +82,6 @@ def read_sweep(folder: Path) -> Sweep:
     info = read_info(paths[0])
     runs, steps = read_table(paths[1]), read_table(paths[2])
     check_runs(paths[1], runs, info)
-    if not (runs["status"] == DONE).any():
-        raise MresimError(f"{folder}: no run of the sweep finished; nothing to compare.")
     check_steps(paths[2], steps)
     return Sweep(folder, runs, steps, info)
 
@@ -86,7 +92,7 @@ def read_shards(folder: Path) -> Sweep:
     done = [p for p in shard_folders(folder) if (p / RUNS_TABLE).is_file()]
     if not done:
         raise MresimError(f"{folder}: no shard of the sweep has finished; nothing to compare.")
-    parts = [read_sweep(p) for p in done]
+    parts = [read_tables(p) for p in done]  # a shard whose runs all failed still counts
     names = {str(p.info.get("study")) for p in parts}
     if len(names) > 1:
         raise MresimError(f"{folder / SHARDS}: shards of different studies ({sorted(names)})")
@@ -94,8 +100,10 @@ def read_shards(folder: Path) -> Sweep:
     repeated = runs["run_id"][runs["run_id"].duplicated()].tolist()
     if repeated:
         raise damaged(folder / SHARDS, f"runs {repeated[:3]} are in more than one shard")
+    if not (runs["status"] == DONE).any():
+        raise MresimError(f"{folder}: no run of the sweep finished; nothing to compare.")
     steps = pd.concat([p.steps for p in parts], ignore_index=True)
-    note_missing(folder, missing_shards(folder, done))
+    note_missing(folder, missing_shards(done))
     info = dict(parts[0].info)
     info["runs"] = {k: v for p in parts for k, v in (p.info.get("runs") or {}).items()}
     return Sweep(folder, runs, steps, info)
