@@ -197,6 +197,8 @@ def test_the_step_cap_truncates_and_reset_options_fix_the_episode() -> None:
         ({"failure_window": (0.5, 0.2)}, "failure_window"),
         ({"policy": {"frontiers": 0}}, "policy: frontiers"),
         ({"policy": {"action": "teleport"}}, "policy: action"),
+        ({"robots": (0, 2)}, "robots: .*team sizes >= 1"),
+        ({"failures": (-1,)}, "failures: .*counts >= 0"),
     ],
 )
 def test_a_bad_configuration_names_its_field(options: dict[str, Any], message: str) -> None:

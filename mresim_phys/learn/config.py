@@ -70,10 +70,17 @@ class EnvConfig(Strict):
             raise ValueError("give two fractions 0 <= first <= second <= 1")
         return value
 
-    @field_validator("robots", "failures")
+    @field_validator("robots")
     @classmethod
-    def _counts(cls, value: tuple[int, ...] | None) -> tuple[int, ...] | None:
-        if value is not None and (not value or min(value) < 0):
+    def _sizes(cls, value: tuple[int, ...] | None) -> tuple[int, ...] | None:
+        if value is not None and (not value or min(value) < 1):
+            raise ValueError("give one or more team sizes >= 1")
+        return value
+
+    @field_validator("failures")
+    @classmethod
+    def _counts(cls, value: tuple[int, ...]) -> tuple[int, ...]:
+        if not value or min(value) < 0:
             raise ValueError("give one or more counts >= 0")
         return value
 
