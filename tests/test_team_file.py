@@ -72,3 +72,32 @@ def test_a_bad_team_file_exits_2_naming_the_line(
     code, _ = import_team(tmp_path, text)
     err = capsys.readouterr().err
     assert code == 2 and message in err and "Traceback" not in err
+
+
+def test_the_benchmark_times_a_team_file_as_import_team_reads_it(tmp_path: Path) -> None:
+    """``time_team(..., team_file=)``: the original's starts (stacked, as its library
+    teams are), headings and PropModel1, with the benchmark's run settings."""
+    from mresim_phys.errors import MresimError
+    from mresim_phys.output.bench import PRESETS, team_file_scenario, time_team
+    from mresim_phys.scenario.load import validate_scenario
+
+    team = tmp_path / "2robots_library"
+    team.write_text(
+        "1 BaseStation 380 520 0.0 0 200 1000 BaseStation 1 1\n"
+        "2 A 390 520 0.0 200 200 1000 Explorer 1 1\n"
+        "3 B 390 520 3.14 200 200 1000 Explorer 1 1\n"
+    )
+    preset = PRESETS["original"]
+    data = team_file_scenario(team, preset.map_path, 7, threads=2)
+    sim = Simulation(validate_scenario(data))
+    assert [r.position for r in sim.robots] == [(390.5, 520.5)] * 2
+    assert sim.scenario.communication.model == "path_loss"
+    assert (data["steps"], data["stop"]["all_done"], data["simulation"]) == (
+        7,
+        False,
+        {"threads": 2},
+    )
+    (result,) = time_team(2, preset.map_path, 0, 1, preset, team_file=team)
+    assert result.robots == 2 and result.median_ms > 0
+    with pytest.raises(MresimError, match="has 2 robots, not 3"):
+        time_team(3, preset.map_path, 0, 1, preset, team_file=team)

@@ -16,7 +16,10 @@ stepped in turn in one process; with threads the phase columns add up every thre
 Robots start in rows of eight beside the base (:func:`row_starts`); a start that would
 touch a wall, and every robot past the rows' room, goes to the nearest free spot (every
 ``SPACING`` cells, clear of walls by the robot's radius, reachable from the first start)
-by a search over the map (:func:`team_starts`), so teams of any size fit.
+by a search over the map (:func:`team_starts`), so teams of any size fit. Or the team is
+one of the original MRESim's team files, as ``mresim import-team`` reads it (its starts,
+headings, ranges and PropModel1 as ``path_loss``; :func:`team_file_scenario`), for timing
+beside the original itself (``benchmarks/bench_against.py --original``).
 """
 
 from __future__ import annotations
@@ -33,6 +36,7 @@ import numpy as np
 from mresim_phys.errors import MresimError
 from mresim_phys.scenario.load import validate_scenario
 from mresim_phys.scenario.readers import load_image_map
+from mresim_phys.scenario.team_file import read_team_file
 from mresim_phys.sim import PHASES, Simulation
 from mresim_phys.types import BoolGrid
 from mresim_phys.world.maps import connected_to, seed_cells
@@ -167,26 +171,50 @@ def team_scenario(
     relay strategies (``role_based``, ``role_switch``) the robots pair up in order, the first
     of each two a relay under the base, the second its explorer."""
     starts = team_starts(robots, load_image_map(map_path).occupied, preset)
-    name, _, rendezvous = strategy.partition(":")
-    spec: str | dict[str, Any] = name
-    if rendezvous:
-        spec = {"name": name, "params": {"rendezvous": rendezvous}}
     team = [{"name": f"R{i}", "start": list(s)} for i, s in enumerate(starts)]
-    if name in RELAY_STRATEGIES:
+    if strategy.partition(":")[0] in RELAY_STRATEGIES:
         for i, robot in enumerate(team):
             pair = {"parent": f"R{i - 1}"} if i % 2 else {"role": "relay", "parent": "base"}
             robot.update(pair)
     return {
         "name": f"bench-{robots}",
+        **run_settings(steps, threads),
+        "map": {"image": str(map_path)},
+        "base_station": {"position": list(preset.base), "comm_range": preset.team["comm_range"]},
+        "team": {**preset.team, "strategy": strategy_spec(strategy)},
+        "robots": team,
+    }
+
+
+def strategy_spec(strategy: str) -> str | dict[str, Any]:
+    """The scenario's strategy of ``name`` or ``name:rendezvous``."""
+    name, _, rendezvous = strategy.partition(":")
+    return {"name": name, "params": {"rendezvous": rendezvous}} if rendezvous else name
+
+
+def run_settings(steps: int, threads: int | Literal["auto"]) -> dict[str, Any]:
+    """A timed run's fields: seed 1, ``steps`` steps, no early stop."""
+    return {
         "seed": 1,
         "steps": steps,
         "stop": {"all_done": False, "stalled_for": None},
-        "map": {"image": str(map_path)},
-        "base_station": {"position": list(preset.base), "comm_range": preset.team["comm_range"]},
-        "team": {**preset.team, "strategy": spec},
-        "robots": team,
         "simulation": {"threads": threads},
     }
+
+
+def team_file_scenario(
+    team_file: Path,
+    map_path: Path,
+    steps: int,
+    threads: int | Literal["auto"] = 1,
+    strategy: str = "frontier",
+) -> dict[str, Any]:
+    """The original MRESim's team file on ``map_path`` as ``mresim import-team`` reads it
+    (its base, starts, headings, ranges and PropModel1 as ``path_loss``), run as
+    :func:`team_scenario`'s teams are."""
+    data = read_team_file(team_file, str(map_path))
+    data["team"]["strategy"] = strategy_spec(strategy)
+    return data | run_settings(steps, threads)
 
 
 class StepTimes:
@@ -231,14 +259,24 @@ def time_team(
     preset: Preset = OFFICE,
     threads: Sequence[int | Literal["auto"]] = (1,),
     strategies: Sequence[str] = ("frontier",),
+    team_file: Path | None = None,
 ) -> list[BenchResult]:
-    """Run warm-up steps, then time ``measured`` steps of a team of ``robots``, once per
-    (strategy, thread count): the runs step in turn, alternating which goes first, so a
-    busy spell on a shared machine hits them alike."""
+    """Run warm-up steps, then time ``measured`` steps of a team of ``robots`` (the preset's
+    team, or the original's ``team_file``: :func:`team_file_scenario`, with ``robots``
+    robots), once per (strategy, thread count): the runs step in turn, alternating which
+    goes first, so a busy spell on a shared machine hits them alike."""
     variants = [(name, count) for name in strategies for count in threads]
     timers = []
     for name, count in variants:
-        data = team_scenario(robots, map_path, warmup + measured, preset, count, name)
+        steps = warmup + measured
+        if team_file is None:
+            data = team_scenario(robots, map_path, steps, preset, count, name)
+        else:
+            data = team_file_scenario(team_file, map_path, steps, count, name)
+            if len(data["robots"]) != robots:
+                raise MresimError(
+                    f"team file {team_file} has {len(data['robots'])} robots, not {robots}"
+                )
         timers.append(StepTimes(Simulation(validate_scenario(data))))
     for timer in timers:
         for _ in range(warmup):
