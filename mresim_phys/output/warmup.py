@@ -18,7 +18,6 @@ It prints each profile's seconds and where the cache is.
 from __future__ import annotations
 
 import argparse
-import os
 import subprocess
 import sys
 import tempfile
@@ -30,6 +29,7 @@ from pathlib import Path
 
 from mresim_phys.errors import MresimError
 from mresim_phys.output.progress import kernel_cache
+from mresim_phys.parallel import usable_cores
 
 CORE = "core"
 
@@ -103,11 +103,6 @@ def cache_folder() -> str:
     return str(module_cache.parent)
 
 
-def default_workers() -> int:
-    """One profile per core this process may use."""
-    return max(len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else 1, 1)
-
-
 def report(results: list[Warmed], total: float) -> str:
     """The lines ``mresim warmup`` prints."""
     lines = [f"  {w.name:<12} {w.seconds:6.1f} s" for w in results if w.status == 0]
@@ -140,7 +135,7 @@ def warmup_command(args: argparse.Namespace) -> int:
             print(f"{name:<12} {_first_comment(path)}")
         return 0
     started = time.perf_counter()
-    results = warm_up(args.profiles, args.workers or default_workers())
+    results = warm_up(args.profiles, args.workers or usable_cores())
     print(report(results, time.perf_counter() - started))
     problem = failures(results)
     if problem:

@@ -33,6 +33,7 @@ from concurrent.futures import FIRST_COMPLETED, ProcessPoolExecutor, wait
 from typing import Any, Protocol
 
 from mresim_phys.errors import MresimError
+from mresim_phys.parallel import usable_cores
 from mresim_phys.sweeps.dask_connect import connect
 from mresim_phys.sweeps.expand import RunSpec
 from mresim_phys.sweeps.lifeline import start_time, worker_init
@@ -69,10 +70,7 @@ class Backend(Protocol):
 
 def default_workers() -> int:
     """Workers by default: the cores this process may use."""
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:  # not on Linux
-        return os.cpu_count() or 1
+    return usable_cores()
 
 
 def worker_context() -> multiprocessing.context.BaseContext:

@@ -65,9 +65,14 @@ def read_sweep(folder: Path) -> Sweep:
     if not (folder / SWEEP_FILE).is_file() and (folder / SHARDS).is_dir():
         return read_shards(folder)
     sweep = read_tables(folder)
-    if not (sweep.runs["status"] == DONE).any():
-        raise MresimError(f"{folder}: no run of the sweep finished; nothing to compare.")
+    require_done(folder, sweep.runs)
     return sweep
+
+
+def require_done(folder: Path, runs: pd.DataFrame) -> None:
+    """A sweep compare can read has at least one finished run."""
+    if not (runs["status"] == DONE).any():
+        raise MresimError(f"{folder}: no run of the sweep finished; nothing to compare.")
 
 
 def read_tables(folder: Path) -> Sweep:
@@ -100,8 +105,7 @@ def read_shards(folder: Path) -> Sweep:
     repeated = runs["run_id"][runs["run_id"].duplicated()].tolist()
     if repeated:
         raise damaged(folder / SHARDS, f"runs {repeated[:3]} are in more than one shard")
-    if not (runs["status"] == DONE).any():
-        raise MresimError(f"{folder}: no run of the sweep finished; nothing to compare.")
+    require_done(folder, runs)
     steps = pd.concat([p.steps for p in parts], ignore_index=True)
     note_missing(folder, missing_shards(done))
     info = dict(parts[0].info)
