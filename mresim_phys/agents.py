@@ -30,7 +30,7 @@ from mresim_phys.localization.feature import believed_pose
 from mresim_phys.localization.odometry import Pose
 from mresim_phys.planning import Planner
 from mresim_phys.strategies.base import Decision, Strategy
-from mresim_phys.types import UNKNOWN, BeliefGrid, BoolGrid, FloatArray
+from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray
 from mresim_phys.world.sensing import Laser
 
 RobotState = Literal["active", "error", "done", "failed"]
@@ -48,8 +48,9 @@ class Body:
 
 
 def empty_belief(shape: tuple[int, int]) -> tuple[BeliefGrid, BoolGrid]:
-    """A fresh all-unknown belief grid and an empty safe-space grid."""
-    return np.full(shape, UNKNOWN, dtype=np.uint8), np.zeros(shape, dtype=bool)
+    """A fresh all-unknown belief grid and an empty safe-space grid: zeros (UNKNOWN is 0),
+    so the operating system maps a page of them only once a cell in it is written."""
+    return np.zeros(shape, dtype=np.uint8), np.zeros(shape, dtype=bool)
 
 
 ESCAPED = 1.0  # cells from where a bump taught it nothing: it plans as usual again

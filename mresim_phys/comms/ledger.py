@@ -1,10 +1,11 @@
 """Knowledge ledger (phase 6, bookkeeping): what changed in whose map, and when.
 
 Maps travel as deltas. Every agent's cells carry the *tick* at which they last
-changed: tick ``2t`` for what the agent sensed during step ``t``, ``2t + 1`` for
-what it received in step ``t``'s exchange. For every ordered pair the ledger keeps
-the tick up to which the receiver holds everything the sender had
-(``synced[i, j]``), so a transmission carries only the cells whose tick is newer.
+changed: tick ``2t + 1`` for what the agent sensed during step ``t``, ``2t + 2`` for
+what it received in step ``t``'s exchange, ``NEVER`` (0) for a cell never stamped. For
+every ordered pair the ledger keeps the tick up to which the receiver holds everything
+the sender had (``synced[i, j]``, ``NEVER`` at first), so a transmission carries only
+the cells whose tick is newer.
 Occupancy grids only ever grow (UNKNOWN < FREE < OCCUPIED, safe space only gains
 cells), which is why merging deltas ends in exactly the maps a full exchange
 gives (tests/test_comms.py checks it step by step). With 'latest' beliefs a cell may
@@ -16,6 +17,11 @@ Changes are found without full-grid passes: the simulation reports the window
 of every scan (:meth:`Ledger.note`), and each agent's windows are compared with
 the copy taken at its last stamping; a short list of (tick, box) per agent tells a
 transmission which part of the grid can hold newer cells.
+
+Every per-cell grid starts as zeros (``NEVER``, and origin 0: the origin of a cell never
+stamped is never read), so the operating system maps a page of it only when a cell in it is
+first written: an agent's ledger takes memory for the part of the map it holds, not for the
+whole map (a campus of 4000 x 4000 cells costs 112 MB an agent otherwise).
 """
 
 from __future__ import annotations
@@ -29,6 +35,7 @@ from mresim_phys.types import BeliefGrid, BoolGrid
 
 Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)
 OWN = -1  # origin of a cell value the agent sensed itself
+NEVER = 0  # the tick of a cell never stamped, and of a pair never synchronised
 MAX_BOXES = 96  # per agent; the oldest two are merged beyond this (a superset stays correct)
 
 
@@ -41,12 +48,12 @@ def union_box(a: Box | None, b: Box | None) -> Box | None:
 
 def sensed_tick(step: int) -> int:
     """The tick of what an agent sensed during ``step``."""
-    return 2 * step
+    return 2 * step + 1
 
 
 def received_tick(step: int) -> int:
     """The tick of what an agent received in ``step``'s exchange."""
-    return 2 * step + 1
+    return 2 * step + 2
 
 
 class Ledger:
@@ -54,16 +61,16 @@ class Ledger:
 
     def __init__(self, shape: tuple[int, int], n: int, latest: bool = False) -> None:
         self.latest = latest  # cells carry their observation step; the newer value wins
-        self.stamps = [np.full(shape, -1, dtype=np.int32) for _ in range(n)]
+        self.stamps = [np.zeros(shape, dtype=np.int32) for _ in range(n)]  # NEVER
         # the newest stamp in each tile of an agent's grid (``deltas.TILE``)
-        self.tiles = [np.full(tile_shape(shape), -1, dtype=np.int32) for _ in range(n)]
+        self.tiles = [np.zeros(tile_shape(shape), dtype=np.int32) for _ in range(n)]
         self.copies = [np.zeros(shape, dtype=np.uint8) for _ in range(n)]
-        self.origins = [np.full(shape, OWN, dtype=np.int16) for _ in range(n)]
+        self.origins = [np.zeros(shape, dtype=np.int16) for _ in range(n)]
         self.box_ticks = np.zeros((n, MAX_BOXES + 1), dtype=np.int64)
         self.boxes = np.zeros((n, MAX_BOXES + 1, 4), dtype=np.int64)
         self.box_count = np.zeros(n, dtype=np.int64)
         self.pending: list[Box | None] = [None] * n
-        self.synced = np.full((n, n), -1, dtype=np.int64)
+        self.synced = np.full((n, n), NEVER, dtype=np.int64)
         self.log: ChangeLog | None = None  # kept for bounded links (:meth:`keep_log`)
 
     def keep_log(self) -> None:

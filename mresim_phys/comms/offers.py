@@ -20,7 +20,7 @@ from mresim_phys.agents import Agent
 from mresim_phys.comms.changelog import PairGrids, as_row, select_listed, still_news
 from mresim_phys.comms.deltas import Cells, select_cells
 from mresim_phys.comms.exchange import Edge
-from mresim_phys.comms.ledger import Ledger
+from mresim_phys.comms.ledger import NEVER, Ledger
 from mresim_phys.comms.send_order import NO_TIER, cut_nearest
 from mresim_phys.knowledge.latest import LATEST
 from mresim_phys.strategies.base import ChoosesSendOrder
@@ -46,7 +46,7 @@ class Offers:
         to ``tick``."""
         sender, receiver = edge
         ledger = self.ledger
-        since = max(self.scanned.get(edge, -1), int(ledger.synced[sender, receiver]))
+        since = max(self.scanned.get(edge, NEVER), int(ledger.synced[sender, receiver]))
         grids = PairGrids(
             ledger.stamps[sender], ledger.origins[sender], ledger.copies[sender],
             ledger.copies[receiver], LATEST.state_of(agents[sender].features),
@@ -140,7 +140,7 @@ class Offers:
         if self.priority == "nearest" or chosen is not None:
             return cut_nearest(index, cols, x, y, count, stamps.reshape(-1), NO_TIER)
         # base_first: what the base lacks (as far as the sender knows) first
-        known_upto = int(self.ledger.synced[sender, 0]) if sender != 0 else -1
+        known_upto = int(self.ledger.synced[sender, 0]) if sender != 0 else NEVER
         return cut_nearest(index, cols, x, y, count, stamps.reshape(-1), known_upto)
 
 
