@@ -21,10 +21,12 @@ transmission which part of the grid can hold newer cells.
 Every per-cell grid starts as zeros (``NEVER``, and origin 0: the origin of a cell never
 stamped is never read), so the operating system maps a page of it only when a cell in it is
 first written: an agent's ledger takes memory for the part of the map it holds, not for the
-whole map (a campus of 4000 x 4000 cells costs 112 MB an agent otherwise).
+whole map (a campus of 4000 x 4000 cells would cost 96 MB an agent otherwise).
 """
 
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -34,7 +36,7 @@ from mresim_phys.comms.deltas import Cells, merge_cells, stamp_changes, tile_sha
 from mresim_phys.types import BeliefGrid, BoolGrid
 
 Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)
-OWN = -1  # origin of a cell value the agent sensed itself
+OWN = -1  # origin of a cell value the agent sensed itself (255 in a one-byte grid)
 NEVER = 0  # the tick of a cell never stamped, and of a pair never synchronised
 MAX_BOXES = 96  # per agent; the oldest two are merged beyond this (a superset stays correct)
 
@@ -44,6 +46,13 @@ def union_box(a: Box | None, b: Box | None) -> Box | None:
     if a is None or b is None:
         return a or b
     return min(a[0], b[0]), max(a[1], b[1]), min(a[2], b[2]), max(a[3], b[3])
+
+
+def origin_type(n: int) -> type[np.integer[Any]]:
+    """The dtype of the origins of ``n`` agents' cells: one byte while every index and
+    ``OWN`` (stored as 255) fit in it, two bytes beyond (the kernels write ``OWN`` as -1,
+    which a byte holds as 255)."""
+    return np.uint8 if n <= np.iinfo(np.uint8).max else np.int16
 
 
 def sensed_tick(step: int) -> int:
@@ -65,7 +74,7 @@ class Ledger:
         # the newest stamp in each tile of an agent's grid (``deltas.TILE``)
         self.tiles = [np.zeros(tile_shape(shape), dtype=np.int32) for _ in range(n)]
         self.copies = [np.zeros(shape, dtype=np.uint8) for _ in range(n)]
-        self.origins = [np.zeros(shape, dtype=np.int16) for _ in range(n)]
+        self.origins = [np.zeros(shape, dtype=origin_type(n)) for _ in range(n)]
         self.box_ticks = np.zeros((n, MAX_BOXES + 1), dtype=np.int64)
         self.boxes = np.zeros((n, MAX_BOXES + 1, 4), dtype=np.int64)
         self.box_count = np.zeros(n, dtype=np.int64)
