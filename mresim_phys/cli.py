@@ -33,7 +33,8 @@ from mresim_phys.sweeps.cli import SWEEP_COMMANDS, add_sweep_parsers
 from mresim_phys.viewer.flags import add_run_view_flags, add_view_parser
 
 EXIT_USER_ERROR = 2
-BENCH_PRESETS = ("office", "original", "rooms")  # output/bench.py's PRESETS (tested equal)
+# output/bench.py's PRESETS (tested equal)
+BENCH_PRESETS = ("office", "original", "rooms", "campus")
 EXIT_INTERRUPTED = 130  # Ctrl-C outside a run's own handling (128 + SIGINT)
 LAYERS_HELP = (
     "comma-separated layers applied in order: 'default', 'all', NAME to add, -NAME to remove,"
@@ -158,13 +159,18 @@ def make_parser() -> argparse.ArgumentParser:
         default="office",
         help="office: speed 3, laser 100, comm 150 on the office floor (default); original:"
         " the original MRESim's settings (speed 10, laser 200, comm 200, radius 0.5) on its"
-        " library layout; rooms: the same on its rooms layout",
+        " library layout; rooms: the same on its rooms layout; campus: the same with disk"
+        " comm on a generated 4000x4000 building (drawn once, then cached)",
     )
     bench.add_argument(
-        "--warmup", type=non_negative_int, help="untimed steps (default: office 50, others 10)"
+        "--warmup",
+        type=non_negative_int,
+        help="untimed steps (default: office 50, campus 5, others 10)",
     )
     bench.add_argument(
-        "--steps", type=positive_int, help="timed steps (default: office 200, others 100)"
+        "--steps",
+        type=positive_int,
+        help="timed steps (default: office 200, campus 20, others 100)",
     )
     bench.add_argument("--map", type=Path, help="another 800x600 floor plan for the preset")
     bench.add_argument(

@@ -3,8 +3,9 @@
 Builds a frontier-exploration team of 4, 8 and 16 robots (or any size) from a preset
 (:data:`PRESETS`): ``office`` (speed 3, radius 2, range 100, disk comm 150 on the 800x600
 office floor), or the original MRESim's settings (speed 10, laser 200, comm 200, point-like
-robots of radius 0.5) on its ``library`` or ``rooms`` layout; runs warm-up steps, then times
-each step and reports the median and 90th percentile per step and the median
+robots of radius 0.5) on its ``library`` or ``rooms`` layout, or those settings with disk
+comm on a ``campus``, a generated 4000 x 4000 building (``output/campus.py``); runs warm-up
+steps, then times each step and reports the median and 90th percentile per step and the median
 cost of each phase per step (sensing = ray casting, mapping = map updates,
 planning = strategy decisions incl. frontiers and distance fields,
 communication = links and merges, metrics; "motion" is the rest: path following
@@ -25,7 +26,8 @@ beside the original itself (``benchmarks/bench_against.py --original``).
 from __future__ import annotations
 
 import statistics
-from collections.abc import Sequence
+import sys
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from time import perf_counter
@@ -34,6 +36,7 @@ from typing import Any, Literal
 import numpy as np
 
 from mresim_phys.errors import MresimError
+from mresim_phys.output.campus import campus_map
 from mresim_phys.scenario.load import validate_scenario
 from mresim_phys.scenario.readers import load_image_map
 from mresim_phys.scenario.team_file import read_team_file
@@ -58,11 +61,13 @@ class Preset:
     team: dict[str, Any]
     warmup: int
     steps: int
+    communication: dict[str, Any] | None = None  # the scenario's, when not the default
+    make_map: Callable[[], Path] | None = None  # draws the map (not shipped) on first use
 
     @property
     def map_path(self) -> Path:
-        """The preset's map, shipped with the package."""
-        return PACKAGE_DATA / self.map_file
+        """The preset's map, shipped with the package (or drawn and cached: ``campus``)."""
+        return self.make_map() if self.make_map is not None else PACKAGE_DATA / self.map_file
 
     @property
     def radius(self) -> float:
@@ -92,6 +97,10 @@ PRESETS = {
         "original", "library.png", (380.5, 520.5), (390.5, 520.5), ORIGINAL_TEAM, 10, 100
     ),
     "rooms": Preset("rooms", "rooms.png", (370.5, 520.5), (350.5, 520.5), ORIGINAL_TEAM, 10, 100),
+    # issue 37's scale: a 4000 x 4000 building (output/campus.py), disk comm 200, laser 200
+    "campus": Preset(
+        "campus", "", (4.5, 4.5), (9.5, 4.5), ORIGINAL_TEAM, 5, 20, {"model": "disk"}, campus_map
+    ),
 }
 OFFICE = PRESETS["office"]
 DEFAULT_MAP = OFFICE.map_path
@@ -183,6 +192,7 @@ def team_scenario(
         "base_station": {"position": list(preset.base), "comm_range": preset.team["comm_range"]},
         "team": {**preset.team, "strategy": strategy_spec(strategy)},
         "robots": team,
+        **({"communication": preset.communication} if preset.communication else {}),
     }
 
 
@@ -304,7 +314,20 @@ def report(results: Sequence[BenchResult], map_path: Path, preset: Preset = OFFI
     lines.append("(phase columns are per-step medians; they need not add up to the median;")
     lines.append(" with threads they add up the time spent on every thread; sensing holds the map")
     lines.append(" update of scans without range noise, cast and folded in one call)")
+    peak = peak_resident_mb()
+    if peak is not None:
+        lines.append(f"peak resident memory of this process: {peak:.0f} MB")
     return "\n".join(lines)
+
+
+def peak_resident_mb() -> float | None:
+    """This process's peak resident memory in MB (None where the platform does not say)."""
+    try:
+        import resource
+    except ImportError:  # not on Windows
+        return None
+    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    return peak / 2**20 if sys.platform == "darwin" else peak / 2**10  # bytes on macOS
 
 
 def run_bench(
