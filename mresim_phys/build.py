@@ -40,6 +40,7 @@ from mresim_phys.discovery_feature import give_discovery
 from mresim_phys.faults.runtime import Faults, build_faults
 from mresim_phys.ground.grid import Ground
 from mresim_phys.knowledge.coverage import Coverage
+from mresim_phys.knowledge.known_area import KNOWN_AREA, KnownArea
 from mresim_phys.knowledge.latest import LatestCoverage, give_stamps
 from mresim_phys.knowledge.teammates import BASE_NAME
 from mresim_phys.localization.feature import LOCALIZATION, localize
@@ -114,7 +115,8 @@ def make_robot(spec: RobotSpec, index: int, streams: Streams, shape: tuple[int, 
         planner=PLANNERS.make(spec.planner.name, spec.planner.params),
         heading=math.radians(spec.heading_deg),
         rng=streams.of_robot("strategy", spec.name),
-        features={} if spec.sensor.beam is None else {READINGS.key: ReadingCounts.on(shape)},
+        features={KNOWN_AREA.key: KnownArea()}
+        | ({} if spec.sensor.beam is None else {READINGS.key: ReadingCounts.on(shape)}),
     )
 
 

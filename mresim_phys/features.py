@@ -185,5 +185,6 @@ FEATURES = FeatureList(
         "observed": "mresim_phys.knowledge.latest:LATEST",
         "health": "mresim_phys.knowledge.activity:HEALTH",
         "lost": "mresim_phys.knowledge.teammates:LOST",
+        "known_area": "mresim_phys.knowledge.known_area:KNOWN_AREA",  # not recorded
     }
 )

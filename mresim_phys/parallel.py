@@ -41,8 +41,10 @@ from dataclasses import dataclass, field
 from functools import partial
 from typing import Generic, Literal, TypeVar, cast
 
+from mresim_phys.agents import Agent
 from mresim_phys.comms.exchange import run_in_turn
 from mresim_phys.comms.ledger import Box, union_box
+from mresim_phys.knowledge.known_area import KNOWN_AREA, KnownArea
 from mresim_phys.knowledge.mapping import Update
 from mresim_phys.types import BeliefGrid
 
@@ -57,6 +59,12 @@ class Effects:
     belief: BeliefGrid | None = None  # the robot's map, once a scan changed it
     window: Box | None = None  # the union of its scan windows (row0, row1, col0, col1)
     seconds: dict[str, float] = field(default_factory=dict)  # phase -> time spent
+    known: KnownArea | None = None  # the robot's known area (its own, grown at once)
+
+    @classmethod
+    def of(cls, robot: Agent) -> Effects:
+        """The effects of a task of ``robot``, which grow its known area as it scans."""
+        return cls(known=KNOWN_AREA.state_of(robot.features))
 
     def scanned(self, belief: BeliefGrid, update: Update) -> None:
         """A scan changed ``belief`` inside ``update``'s window."""
@@ -67,6 +75,8 @@ class Effects:
         """Scans changed ``belief`` inside ``window``."""
         self.belief = belief
         self.window = union_box(self.window, window)
+        if self.known is not None:
+            self.known.grow(window)
 
     def spend(self, phase: str, seconds: float) -> None:
         """Add ``seconds`` to ``phase``'s timer."""

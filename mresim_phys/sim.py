@@ -253,7 +253,7 @@ class Simulation:
     def sense_in_place(self, robot: Robot) -> None:
         """A scan where ``robot`` stands, outside the robots' tasks (at the start of a run,
         or for a robot whose drive has failed); the ledger learns its window at once."""
-        effects = Effects()
+        effects = Effects.of(robot)
         found = watch_discoveries(robot)
         self.sense(robot, effects)
         if found is not None:
@@ -267,7 +267,7 @@ class Simulation:
         """One robot's decide and move phases, then the stamping of its own changes in the
         comm ledger (which the communication phase would do otherwise: nothing changes the
         robot's map in between); what they did to shared state, held back."""
-        effects = Effects()
+        effects = Effects.of(robot)
         found = watch_discoveries(robot)
         if due:
             self.replan(robot, effects)

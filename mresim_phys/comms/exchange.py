@@ -34,6 +34,7 @@ import numpy as np
 from mresim_phys.agents import Agent
 from mresim_phys.comms.deltas import Cells, select_cells
 from mresim_phys.comms.ledger import Ledger, received_tick, sensed_tick
+from mresim_phys.knowledge.known_area import grow_known
 from mresim_phys.knowledge.latest import LATEST
 from mresim_phys.knowledge.teammates import TeammateInfo
 
@@ -367,7 +368,9 @@ def deliver(ledger: Ledger, receiver: Agent, cells: Cells | None, step: int, sen
     if cells is not None and len(cells[0]):
         grids = (receiver.belief, receiver.safe)
         observed = LATEST.state_of(receiver.features)
-        ledger.merge(receiver.index, cells, grids, step, sender, observed)
+        changed = ledger.merge(receiver.index, cells, grids, step, sender, observed)
+        if changed is not None:
+            grow_known(receiver.features, changed)
 
 
 def seen_of(sender: Agent, index: np.ndarray) -> np.ndarray | None:

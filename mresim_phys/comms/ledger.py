@@ -135,9 +135,10 @@ class Ledger:
         step: int,
         sender: int,
         observed: NDArray[np.int32] | None = None,
-    ) -> int:
+    ) -> Box | None:
         """Merge received ``cells`` (flat indices, codes[, observation steps]) into agent
-        ``index``'s grids (and its ``observed`` steps, with 'latest' beliefs)."""
+        ``index``'s grids (and its ``observed`` steps, with 'latest' beliefs); the box of
+        the cells that changed (None: none did)."""
         tick = received_tick(step)
         grid = (self.copies[index], self.stamps[index], self.tiles[index], self.origins[index])
         out = None if self.log is None else self.log.room(index, len(cells.flat))
@@ -146,9 +147,11 @@ class Ledger:
         )
         if self.log is not None:
             self.log.commit(index, tick, changed)
-        if changed:
-            self.add_box(index, tick, (tight[0], tight[1], tight[2], tight[3]))
-        return changed
+        if not changed:
+            return None
+        box = (tight[0], tight[1], tight[2], tight[3])
+        self.add_box(index, tick, box)
+        return box
 
     def mark_synced(self, members: list[int], tick: int) -> None:
         """Every pair of ``members`` now holds what the other had up to ``tick``."""

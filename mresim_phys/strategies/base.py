@@ -29,6 +29,7 @@ from typing import Any, ClassVar, Protocol, runtime_checkable
 import numpy as np
 
 from mresim_phys.ground.feature import GROUND
+from mresim_phys.knowledge.known_area import free_box
 from mresim_phys.knowledge.prior import PRIOR
 from mresim_phys.knowledge.prior import planning_map as belief_with_prior
 from mresim_phys.knowledge.teammates import LOST, Payload, TeammateInfo
@@ -180,8 +181,9 @@ class PlanContext:
 
     @cached_property
     def free_box(self) -> Box | None:
-        """The bounding box of the robot's FREE cells (None if none), found once."""
-        return bbox(self.view.belief == FREE)
+        """The bounding box of the robot's FREE cells (None if none), found once, inside its
+        known area (``knowledge/known_area.py``)."""
+        return free_box(self.view.belief, self.view.features)
 
     @cached_property
     def _passable(self) -> tuple[np.ndarray, Box | None]:
