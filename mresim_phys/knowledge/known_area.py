@@ -4,13 +4,13 @@ A replan crops every grid pass (C-space, frontiers, regions) to the bounding box
 robot's FREE cells (``strategies.base.PlanContext.free_box``). Found over the whole grid,
 that box cost a replan 4 ms on a campus of 4000 x 4000 cells, whatever the robot knew: a
 fifth of a 128-robot step. The feature :data:`KNOWN_AREA` keeps, per robot, a box that
-holds every cell its map has changed in: the windows of its scans (grown by
-``parallel.Effects``, the same windows the team coverage recounts) and the cells merges
-changed (``comms.exchange.deliver``). Every FREE cell of a robot's map got there by one of
-those, so the bounding box is found inside that box, in time that follows what the robot
-knows. Its value, the box (None: nothing written yet), is what strategies see; logs and
-snapshots do not record it. With ``MRESIM_CHECK_KNOWN_AREA=1`` every lookup is checked
-against the whole grid (for tests: a write path that forgot to grow the box fails loudly).
+holds the windows of its scans (grown by ``parallel.Effects``, the same windows the team
+coverage recounts) and the cells merges changed (``comms.exchange.deliver``). Every FREE
+cell of a robot's map got there by one of those (a bump only marks a wall), so the bounding
+box is found inside that box, in time that follows what the robot knows. Its value, the
+box (None: nothing written yet), is what strategies see; logs and snapshots do not record
+it. With ``MRESIM_CHECK_KNOWN_AREA=1`` every lookup is checked against the whole grid (for
+tests: a write path that forgot to grow the box fails loudly).
 """
 
 from __future__ import annotations
@@ -29,7 +29,8 @@ CHECK = "MRESIM_CHECK_KNOWN_AREA"
 
 @dataclass
 class KnownArea:
-    """A box holding every cell a robot's map has changed in (None: none yet)."""
+    """A box holding every cell a robot's scans and merges changed, so every FREE cell of
+    its map (None: none yet; a bump's wall mark may lie outside)."""
 
     box: Box | None = None
 
