@@ -20,6 +20,7 @@ from mresim_phys.cli import main
 from mresim_phys.ground.feature import GROUND
 from mresim_phys.ground.grid import Access, ground_of
 from mresim_phys.ground.spec import GroundSpec
+from mresim_phys.knowledge.known_area import grow_known
 from mresim_phys.strategies import Decision
 from mresim_phys.strategies.base import PlanContext
 from mresim_phys.types import FREE, OCCUPIED
@@ -77,9 +78,11 @@ def test_planning_leaves_out_the_ground_a_robot_cannot_cross() -> None:
     sim = Simulation.from_yaml(MIXED, steps=5)
     sim.run()
     wheels, drone = sim.robot("W1"), sim.robot("Q")
+    rows, cols = sim.world.occupied.shape
     for robot in (wheels, drone):
         robot.belief[:] = FREE  # as if it knew the whole site
         robot.belief[sim.world.occupied] = OCCUPIED
+        grow_known(robot.features, (0, rows, 0, cols))  # a write outside the phases
     stairs = sim.setup.ground.grid == 2  # type: ignore[union-attr]
     assert not (PlanContext(sim.view_of(wheels)).passable & stairs).any()
     assert (PlanContext(sim.view_of(drone)).passable & stairs).any()

@@ -9,8 +9,11 @@ coverage recounts) and the cells merges changed (``comms.exchange.deliver``). Ev
 cell of a robot's map got there by one of those (a bump only marks a wall), so the bounding
 box is found inside that box, in time that follows what the robot knows. Its value, the
 box (None: nothing written yet), is what strategies see; logs and snapshots do not record
-it. With ``MRESIM_CHECK_KNOWN_AREA=1`` every lookup is checked against the whole grid (for
-tests: a write path that forgot to grow the box fails loudly).
+it. Code that writes a robot's map outside the simulation's phases (a test, a what-if
+script) grows the box itself with :func:`grow_known`, as such a write is also unknown to the
+comm ledger and the coverage metric. With ``MRESIM_CHECK_KNOWN_AREA=1`` every lookup is
+checked against the whole grid (for tests: a write path that forgot to grow the box fails
+loudly).
 """
 
 from __future__ import annotations
