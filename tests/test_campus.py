@@ -10,6 +10,7 @@ import numpy as np
 import pytest
 
 from mresim_phys.agents import empty_belief
+from mresim_phys.cli import main
 from mresim_phys.comms.deltas import select_cells
 from mresim_phys.comms.ledger import NEVER, Ledger
 from mresim_phys.output import campus
@@ -95,3 +96,14 @@ def test_a_cells_origin_takes_a_byte_while_every_agent_and_own_fit_in_it(
     ledger.origins[last][0, :] = last - 1  # as if the first row came from agent last - 1
     index, _ = select_cells(boxes, NEVER, last - 1, *grids, ledger.copies[last - 1], False)
     assert sorted(index.tolist()) == list(range(8, 16))
+
+
+def test_a_cache_folder_that_cannot_be_written_is_one_paragraph_and_exit_2(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, capsys: pytest.CaptureFixture[str]
+) -> None:
+    blocked = tmp_path / "file"
+    blocked.write_text("not a folder")
+    monkeypatch.setenv("MRESIM_CACHE", str(blocked))
+    assert main(["bench", "--preset", "campus", "--robots", "1", "--steps", "1"]) == 2
+    err = capsys.readouterr().err
+    assert "MRESIM_CACHE" in err and str(blocked) in err and "Traceback" not in err

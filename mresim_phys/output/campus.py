@@ -17,6 +17,7 @@ from pathlib import Path
 
 import yaml
 
+from mresim_phys.errors import MresimError
 from mresim_phys.mapgen.generate import GENERATOR, generate, write_map
 from mresim_phys.mapgen.params import MapRequest
 
@@ -40,12 +41,18 @@ def campus_request() -> MapRequest:
 
 def campus_map(root: Path | None = None) -> Path:
     """The campus map's PNG, drawn into ``root`` (default :func:`cache_root`) unless a
-    drawing by this generator is there already."""
+    drawing by this generator is there already; MresimError if it cannot be written."""
     folder = (root or cache_root()) / f"campus-{CAMPUS_SIZE}-seed{CAMPUS_SEED}"
     png, meta = folder / "map.png", folder / "map.yaml"
     if png.is_file() and meta.is_file() and drawn_by_this_generator(meta):
         return png
-    write_map(generate(campus_request()), folder, name="campus")
+    try:
+        write_map(generate(campus_request()), folder, name="campus")
+    except OSError as exc:
+        raise MresimError(
+            f"cannot keep the campus map in {folder} ({exc.strerror or exc}); set MRESIM_CACHE"
+            " to a folder you can write, or give a map with --map."
+        ) from exc
     return png
 
 
