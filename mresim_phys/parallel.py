@@ -43,9 +43,9 @@ from typing import Generic, Literal, TypeVar, cast
 
 from mresim_phys.agents import Agent
 from mresim_phys.comms.exchange import run_in_turn
-from mresim_phys.comms.ledger import Box, union_box
 from mresim_phys.knowledge.known_area import KNOWN_AREA, KnownArea
 from mresim_phys.knowledge.mapping import Update
+from mresim_phys.planning.grid import Box, union_box
 from mresim_phys.types import BeliefGrid
 
 T = TypeVar("T")

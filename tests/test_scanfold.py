@@ -9,9 +9,9 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from mresim_phys.comms.ledger import union_box
 from mresim_phys.knowledge.mapping import integrate_scan
 from mresim_phys.knowledge.scanfold import ScanQueue, folds_in_one_call, scan_into_map
+from mresim_phys.planning.grid import union_box
 from mresim_phys.types import UNKNOWN
 from mresim_phys.world.sensing import Laser, scan
 from mresim_phys.world.space import World

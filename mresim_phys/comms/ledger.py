@@ -33,19 +33,12 @@ from numpy.typing import NDArray
 
 from mresim_phys.comms.changelog import ChangeLog
 from mresim_phys.comms.deltas import Cells, merge_cells, stamp_changes, tile_shape
+from mresim_phys.planning.grid import Box, union_box
 from mresim_phys.types import BeliefGrid, BoolGrid
 
-Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)
 OWN = -1  # origin of a cell value the agent sensed itself (255 in a one-byte grid)
 NEVER = 0  # the tick of a cell never stamped, and of a pair never synchronised
 MAX_BOXES = 96  # per agent; the oldest two are merged beyond this (a superset stays correct)
-
-
-def union_box(a: Box | None, b: Box | None) -> Box | None:
-    """The smallest box holding both (None is empty)."""
-    if a is None or b is None:
-        return a or b
-    return min(a[0], b[0]), max(a[1], b[1]), min(a[2], b[2]), max(a[3], b[3])
 
 
 def origin_type(n: int) -> type[np.integer[Any]]:

@@ -32,9 +32,10 @@ from mresim_phys.comms.exchange import (
     run_in_turn,
     stamp_base_contacts,
 )
-from mresim_phys.comms.ledger import Box, Ledger, box_around
+from mresim_phys.comms.ledger import Ledger, box_around
 from mresim_phys.comms.queued import QueuedExchange
 from mresim_phys.comms.radio import LinkLayer
+from mresim_phys.planning.grid import Box
 from mresim_phys.types import FloatArray
 from mresim_phys.world.space import World
 

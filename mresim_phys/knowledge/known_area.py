@@ -24,7 +24,7 @@ from dataclasses import dataclass
 from typing import Any
 
 from mresim_phys.features import RobotFeature
-from mresim_phys.planning.grid import Box, bbox
+from mresim_phys.planning.grid import Box, bbox, union_box
 from mresim_phys.types import FREE, BeliefGrid
 
 CHECK = "MRESIM_CHECK_KNOWN_AREA"
@@ -39,11 +39,7 @@ class KnownArea:
 
     def grow(self, box: Box) -> None:
         """Cells inside ``box`` may have changed."""
-        if self.box is None:
-            self.box = box
-            return
-        b = self.box
-        self.box = min(b[0], box[0]), max(b[1], box[1]), min(b[2], box[2]), max(b[3], box[3])
+        self.box = union_box(self.box, box)
 
 
 class KnownAreaFeature(RobotFeature[KnownArea, "Box | None"]):
@@ -60,7 +56,7 @@ class KnownAreaFeature(RobotFeature[KnownArea, "Box | None"]):
 KNOWN_AREA = KnownAreaFeature()
 
 
-def grow_known(states: dict[str, Any], box: Box) -> None:
+def grow_known(states: Mapping[str, Any], box: Box) -> None:
     """A robot (its feature ``states``) may have changed its map inside ``box``."""
     known = KNOWN_AREA.state_of(states)
     if known is not None:

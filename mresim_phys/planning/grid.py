@@ -63,6 +63,13 @@ DIAGONAL = SQRT2  # cost of a diagonal move
 Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)
 
 
+def union_box(a: Box | None, b: Box | None) -> Box | None:
+    """The smallest box holding both (None is empty)."""
+    if a is None or b is None:
+        return a or b
+    return min(a[0], b[0]), max(a[1], b[1]), min(a[2], b[2]), max(a[3], b[3])
+
+
 @njit(cache=True, nogil=True, inline="always")
 def passes_corner(beside_row: bool, beside_col: bool) -> bool:
     """The corner rule, given whether the two cells a diagonal move squeezes between are

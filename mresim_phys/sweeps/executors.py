@@ -68,11 +68,6 @@ class Backend(Protocol):
         """Stop the workers (or leave the cluster)."""
 
 
-def default_workers() -> int:
-    """Workers by default: the cores this process may use."""
-    return usable_cores()
-
-
 def worker_context() -> multiprocessing.context.BaseContext:
     """*forkserver* where the system has it (a clean server process imports mresim once,
     with no threads running, and forks each worker from it: numba's compiled kernels and
@@ -201,7 +196,7 @@ def make_backend(workers: int | None, dask: str | None) -> Backend:
     """The backend the command line asks for: Dask if ``dask``, else a local pool."""
     if dask is not None:
         return DaskPool.at(dask)
-    return LocalPool(workers or default_workers())
+    return LocalPool(workers or usable_cores())
 
 
 def execute(
