@@ -145,13 +145,20 @@ class PausedSearch:
         """Whether every reachable cell has its final cost."""
         return self._band < 0
 
-    def run_below(self, bound: float) -> None:
-        """Expand every band below ``bound`` (inf: to the end)."""
+    @property
+    def settled_below(self) -> float:
+        """Costs below this are final: those of the band the search stopped before too
+        (every cell that can lower one of them costs a move less, so was expanded)."""
+        return np.inf if self._band < 0 else self._band + 1.0
+
+    def run_below(self, bound: float, stop_at: int = -1) -> None:
+        """Expand every band below ``bound`` (inf: to the end); with a ``stop_at`` node,
+        stop sooner, once its cost is final."""
         if self.finished or bound <= self.final_below:
             return
         stop = NEVER if bound == np.inf else int(np.ceil(bound))
         self._band = _expand(
             self.window.pad, self.window.wp, self.dist, self.pred, self._ring, self._sizes,
-            self._band, np.inf, -1, stop,
+            self._band, np.inf, stop_at, stop,
         )  # fmt: skip
         self.final_below = np.inf if self._band < 0 else float(self._band)

@@ -11,13 +11,15 @@ by the exact path cost on the robot's map (``planning.goals``) before it can win
 from __future__ import annotations
 
 from collections.abc import Callable, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
 from mresim_phys.planning.dial import PausedSearch
+from mresim_phys.planning.fields import MAX_SNAP, snap_to_passable
+from mresim_phys.planning.goal_fields import Bounds, GoalFields
 from mresim_phys.planning.goals import GoalCosts, goal_costs
 from mresim_phys.strategies.base import PlanContext
 from mresim_phys.types import FloatArray, IntArray
@@ -55,17 +57,6 @@ class Bidder:
         if bounds is not None:
             costs = np.maximum(costs, bounds)
         return cls(name, costs, np.zeros(len(costs), dtype=bool), position, rank)
-
-    def refine(self, searched: GoalCosts | None) -> None:
-        """Take the exact path costs a search found; the bounds of the others rise to its
-        floor. Costs known exactly before stay (the same search from the same cell)."""
-        if searched is None:  # the teammate stands where this robot knows nothing: keep estimates
-            self.exact[:] = True
-            return
-        known = np.isfinite(searched.found) | (searched.floor == np.inf)
-        raised = np.where(self.exact, self.costs, np.maximum(self.costs, searched.floor))
-        self.costs = np.where(known, searched.found, raised)
-        self.exact = self.exact | known
 
 
 def utility(sizes: FloatArray, costs: FloatArray, power: int = 4) -> FloatArray:
@@ -166,45 +157,170 @@ def exact_costs(
     )  # fmt: skip
 
 
-def greedy_auction(bidders: list[Bidder], sizes: FloatArray, search: PathSearch) -> int:
+@dataclass
+class TeammateSearches:
+    """The teammates' own path searches of one auction (:func:`exact_costs`), kept by the
+    cell each starts from: teammates on one cell (a team started on one spot) have the same
+    exact costs, so a search from a cell answers every later question about a goal whose
+    cost it found."""
+
+    context: PlanContext
+    goals_rc: IntArray
+    done: dict[tuple[int, int], GoalCosts] = field(default_factory=dict)
+
+    def __call__(self, bidder: Bidder, wanted: int, limit: float) -> GoalCosts | None:
+        cell = snap_to_passable(self.context.passable, bidder.position, MAX_SNAP)
+        before = None if cell is None else self.done.get(cell)
+        if before is not None and (np.isfinite(before.found[wanted]) or before.floor == np.inf):
+            return before
+        found = exact_costs(self.context, bidder.position, self.goals_rc, wanted, limit)
+        if cell is not None and found is not None:
+            self.done[cell] = found
+        return found
+
+
+def greedy_auction(
+    bidders: list[Bidder], sizes: FloatArray, search: PathSearch, fields: GoalFields | None = None
+) -> int:
     """Index of the frontier bidder 0 wins in the greedy auction.
 
     Teammates bid with lower bounds (straight lines, raised by :func:`path_bounds`).
     A pair whose cost is only a lower bound is refined before it can win: the
     teammate's path search runs to 1.5 times the bound (at least ``MIN_SEARCH``
     cells more), so a teammate far away by path is ruled out by a small search, which
-    stops once the pair's cost is final (``planning.goals``). Which pair wins depends only
-    on the exact costs (lower bounds never win: they are refined first, and a bound's
-    utility is never below its exact one), so how far a search went never changes it.
-    Utilities are one (bidders x frontiers) matrix; a refinement recomputes its row.
+    stops once the pair's cost is final (``planning.goals``). With ``fields``
+    (``planning.goal_fields``) the search runs from the goal instead, and bounds every
+    teammate's cost to it at once, each within rounding once reached: a pair so bounded
+    wins without its own search when even its highest cost beats every other pair's
+    lowest, and is searched exactly only when the bounds cannot tell it from another.
+    Which pair wins depends only on the exact costs (lower bounds never win: they are
+    refined first, and a bound's utility is never below its exact one), so how far a
+    search went never changes it. Utilities are one (bidders x frontiers) matrix; a
+    refinement recomputes what it changed.
     When every frontier is taken before bidder 0 wins one, the auction starts again
     over all the frontiers among the bidders not yet assigned (the original's
     ``keepAssigningRobotsToFrontiers``), so robots that outnumber the frontiers
     spread over them instead of all following the best one.
     """
-    u = utility(sizes[None, :], np.array([b.costs for b in bidders]))
-    ranks = np.array([b.rank for b in bidders])
-    active = np.ones(len(bidders), dtype=bool)
-    taken = np.zeros(len(sizes), dtype=bool)
+    bids = Bids.of(bidders, sizes)
+    try:
+        return bids.run(bidders, search, fields)
+    finally:
+        for bidder, costs, exact in zip(bidders, bids.costs, bids.exact, strict=True):
+            bidder.costs, bidder.exact = costs.copy(), exact.copy()
+
+
+@dataclass
+class Bids:
+    """The auction's state: every pair's lower bound (``costs``), upper bound (``high``,
+    inf: none) and whether the cost is exact; the utilities of both bounds (``u`` of the
+    lower, ``u_low`` of the upper: -inf where there is none)."""
+
+    sizes: FloatArray
+    costs: FloatArray
+    high: FloatArray
+    exact: BoolArray
+    ranks: IntArray
+    u: FloatArray
+    u_low: FloatArray
+
+    @classmethod
+    def of(cls, bidders: list[Bidder], sizes: FloatArray) -> Bids:
+        costs = np.array([b.costs for b in bidders], dtype=np.float64)
+        exact = np.array([b.exact for b in bidders], dtype=bool)
+        ranks = np.array([b.rank for b in bidders], dtype=np.int64)
+        high = np.where(exact, costs, np.inf)
+        u = utility(sizes[None, :], costs)
+        return cls(sizes, costs, high, exact, ranks, u, utility(sizes[None, :], high))
+
+    def run(self, bidders: list[Bidder], search: PathSearch, fields: GoalFields | None) -> int:
+        """The greedy auction over these bids (:func:`greedy_auction`)."""
+        active = np.ones(len(self.costs), dtype=bool)
+        taken = np.zeros(len(self.sizes), dtype=bool)
+        while True:
+            who, which = assign(self.u, self.u_low, self.exact, self.ranks, active, taken)
+            if who == 0:
+                return which
+            if who < 0:
+                return int(np.argmax(self.u[0]))
+            self._refine(bidders[who], who, which, search, fields)
+
+    def _refine(
+        self, bidder: Bidder, who: int, which: int, search: PathSearch, fields: GoalFields | None
+    ) -> None:
+        bound = float(self.costs[who, which])
+        limit = max(SEARCH_GROWTH * bound, bound + MIN_SEARCH)
+        limit = np.inf if limit > MAX_BOUNDED_SEARCH else limit
+        if fields is not None and self.high[who, which] == np.inf and fields.cells[who, 0] >= 0:
+            self._take(which, fields.bounds(which, who, limit))
+            return
+        if self.high[who, which] < np.inf:  # bounded both ways: the exact cost is below
+            limit = float(self.high[who, which])
+        self._row(who, search(bidder, which, limit))
+        if not self.exact[who, which]:  # cannot happen with bounds that hold: forget them
+            self.high[who, which] = np.inf
+            self.u_low[who, which] = -np.inf
+
+    def _take(self, which: int, found: Bounds) -> None:
+        """Every inexact pair's bounds for goal ``which`` from the goal's search."""
+        open_ = ~self.exact[:, which]
+        column, high = self.costs[:, which], self.high[:, which]
+        column[open_] = np.maximum(column[open_], found.low[open_])
+        high[open_] = np.minimum(high[open_], found.high[open_])
+        known = open_ & found.known
+        column[known] = np.inf
+        high[known] = np.inf
+        self.exact[known, which] = True
+        self.u[:, which] = utility(self.sizes[which], column)
+        self.u_low[:, which] = utility(self.sizes[which], high)
+
+    def _row(self, who: int, searched: GoalCosts | None) -> None:
+        """Take the exact path costs a teammate's own search found; the bounds of the
+        others rise to its floor. Costs known exactly before stay (the same search from
+        the same cell). A teammate standing where this robot knows nothing (None) keeps
+        its estimates, as exact."""
+        costs, exact = self.costs[who], self.exact[who]
+        if searched is None:
+            exact[:] = True
+        else:
+            known = np.isfinite(searched.found) | (searched.floor == np.inf)
+            raised = np.where(exact, costs, np.maximum(costs, searched.floor))
+            costs[:] = np.where(known, searched.found, raised)
+            exact |= known
+        self.high[who] = np.where(exact, costs, self.high[who])
+        self.u[who] = utility(self.sizes, costs)
+        self.u_low[who] = utility(self.sizes, self.high[who])
+
+
+@njit(cache=True, nogil=True)
+def assign(
+    u: FloatArray,
+    u_low: FloatArray,
+    exact: BoolArray,
+    ranks: IntArray,
+    active: BoolArray,
+    taken: BoolArray,
+) -> tuple[int, int]:
+    """Assign the best pairs (:func:`best_pair`) until bidder 0 wins one, (0, frontier), or
+    a pair must be refined first, (bidder, frontier); (-1, -1) when no pair is left. A pair
+    is fixed when its cost is exact, or when its lowest utility (``u_low``) beats every
+    other open pair's highest (``u``). ``active`` and ``taken`` carry the state between
+    calls (a refinement changes only bounds)."""
     while active.any():
         if taken.all():  # more robots than frontiers: a new round for the unassigned
             taken[:] = False
         who, which = best_pair(u, ranks, active, taken)
         if who < 0:
             break
-        bidder = bidders[who]
-        if not bidder.exact[which]:
-            bound = float(bidder.costs[which])
-            limit = max(SEARCH_GROWTH * bound, bound + MIN_SEARCH)
-            limit = np.inf if limit > MAX_BOUNDED_SEARCH else limit
-            bidder.refine(search(bidder, which, limit))
-            u[who] = utility(sizes, bidder.costs)
-            continue
+        if not exact[who, which]:
+            low = u_low[who, which]
+            if low == -np.inf or not beats_the_rest(u, active, taken, who, which, low):
+                return who, which
         if who == 0:
-            return which
+            return who, which
         active[who] = False
         taken[which] = True
-    return int(np.argmax(utility(sizes, bidders[0].costs)))
+    return -1, -1
 
 
 @njit(cache=True, nogil=True)
@@ -230,3 +346,17 @@ def best_pair(
         if bid > top or (bid == top and bid > -np.inf and ranks[i] < top_rank):
             who, which, top, top_rank = i, pick, bid, ranks[i]
     return who, which
+
+
+@njit(cache=True, nogil=True)
+def beats_the_rest(
+    u: FloatArray, active: BoolArray, taken: BoolArray, who: int, which: int, bid: float
+) -> bool:
+    """Whether ``bid`` beats (strictly) the utility of every open pair but (who, which)."""
+    for i in range(u.shape[0]):
+        if not active[i]:
+            continue
+        for j in range(u.shape[1]):
+            if not taken[j] and (i != who or j != which) and u[i, j] >= bid:
+                return False
+    return True

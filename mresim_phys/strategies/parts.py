@@ -29,9 +29,10 @@ import numpy as np
 
 from mresim_phys.knowledge.frontiers import Frontiers
 from mresim_phys.knowledge.teammates import TeammateInfo
+from mresim_phys.planning.goal_fields import GoalFields, standing_cells
 from mresim_phys.strategies.auction import (
     Bidder,
-    exact_costs,
+    TeammateSearches,
     greedy_auction,
     teammate_bidders,
     utility,
@@ -183,9 +184,26 @@ class GreedyAuction:
         )  # fmt: skip
         bidders = [me, *others]
         won = greedy_auction(
-            bidders, sizes, lambda b, k, limit: exact_costs(context, b.position, goals, k, limit)
+            bidders,
+            sizes,
+            TeammateSearches(context, goals),
+            goal_fields(context, goals, [t.position for t in team]),
         )
         return int(candidates[won])
+
+
+def goal_fields(
+    context: PlanContext, goals: IntArray, positions: list[tuple[float, float]]
+) -> GoalFields | None:
+    """Searches from the auction's goals for the teammates at ``positions`` (bidders 1 on),
+    on the robot's passable map; None with terrain costs (a move's cost there is not the
+    same both ways) or no passable cell."""
+    box = context.passable_box
+    if context.slowness is not None or box is None or not positions:
+        return None
+    cells = standing_cells(context.passable, [(-1.0, -1.0), *positions])
+    cells[0] = -1  # bidder 0, this robot, bids its exact costs
+    return GoalFields(context.passable, box, goals, cells)
 
 
 @dataclass
