@@ -343,7 +343,8 @@ def test_given_up_cells_travel_through_the_run_log(
             if n == 4:  # as if A had tried a frontier from two spots in vain
                 strategy = sim.robots[0].strategy
                 tried = Tried.empty(sim.robots[0].belief.shape)
-                tried.given_up[20:30, 50:60] = True
+                rows, cols = np.mgrid[20:30, 50:60]
+                tried.give_up(rows.ravel(), cols.ravel())
                 strategy._tried = tried  # type: ignore[union-attr]
             writer.write(sim.snapshot())
             live.append(sim.snapshot().robots[0].given_up)

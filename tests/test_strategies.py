@@ -223,12 +223,14 @@ def test_an_unresolved_frontier_is_tried_from_another_spot_then_given_up_near_it
     assert len(frontiers) == 1
     tried = Tried.empty(belief.shape)
     tried.failed(frontiers.cells_rc, (5.5, 3.5), radius=10.0)
-    assert not tried.given_up.any() and tried.spots[3, 5] and not tried.spots[3, 8]
+    assert not tried.given_up.any() and not tried.gave_up_any
+    assert tried.spots[3, 5] and not tried.spots[3, 8]
     assert tried.set_aside[2, :15].all() and not tried.set_aside[2, 15:].any()
     spared = tried.target_cells(np.ones(belief.shape, dtype=bool))
     assert not spared[3, 5] and spared[3, 8]
     tried.failed(frontiers.cells_rc, (8.5, 3.5), radius=10.0)
     assert tried.given_up[2, :15].all() and not tried.given_up[2, 15:].any()
+    assert tried.gave_up_any  # read every step instead of scanning the grid
     left = find_frontiers(belief, exclude=tried.given_up)
     assert len(left) == 1 and left.cells_rc[:, 1].min() == 15
 

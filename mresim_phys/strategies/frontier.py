@@ -117,7 +117,7 @@ class FrontierExploration(Plugin):
     def given_up(self) -> BoolGrid | None:
         """The frontier cells this robot tried from two spots in vain and gave up
         (``giveup``); None before it tried any. Run health leaves them out."""
-        if self._tried is None or not self._tried.given_up.any():
+        if self._tried is None or not self._tried.gave_up_any:
             return None
         return self._tried.given_up
 

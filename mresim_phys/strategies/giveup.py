@@ -42,6 +42,7 @@ class Tried:
     given_up: BoolGrid
     tries: NDArray[np.uint8]
     spots: BoolGrid
+    gave_up_any: bool = False  # whether any cell is given up (read every step: no grid scan)
 
     @classmethod
     def empty(cls, shape: tuple[int, ...]) -> Tried:
@@ -63,7 +64,13 @@ class Tried:
         self.tries[rows, cols] = np.minimum(self.tries[rows, cols], MAX_TRIES - 1) + 1
         self.set_aside[rows, cols] = True
         self.given_up[rows, cols] |= self.tries[rows, cols] >= MAX_TRIES
+        self.gave_up_any = self.gave_up_any or bool(self.given_up[rows, cols].any())
         self.mark_spot(position)
+
+    def give_up(self, rows: IntArray, cols: IntArray) -> None:
+        """Give the cells (rows[i], cols[i]) up at once (and set them aside)."""
+        self.given_up[rows, cols] = self.set_aside[rows, cols] = True
+        self.gave_up_any = self.gave_up_any or len(rows) > 0
 
     def mark_spot(self, position: tuple[float, float]) -> None:
         """The cells whose centres lie within :data:`SPOT` of ``position``."""

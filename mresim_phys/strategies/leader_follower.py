@@ -109,7 +109,7 @@ class LeaderFollower(FrontierExploration):
         that frontier (its cells) and search again at the next decision."""
         if self._chasing is not None and self._tried is not None:
             rows, cols = self._chasing[:, 0], self._chasing[:, 1]
-            self._tried.given_up[rows, cols] = self._tried.set_aside[rows, cols] = True
+            self._tried.give_up(rows, cols)
         self._goal, self._searched = None, -(10**9)
 
     def _follow(self, view: RobotView, context: PlanContext) -> Decision:
