@@ -50,9 +50,9 @@ def forward(passable: np.ndarray, position: tuple[float, float], goals: np.ndarr
 @settings(max_examples=60, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), limits=st.lists(st.floats(1.0, 80.0), max_size=4))
 def test_a_goals_search_bounds_every_teammates_exact_cost(seed: int, limits: list[float]) -> None:
-    """Paused at any cost, grown to any window, then run to the end: each teammate's exact
-    cost lies in its bounds, within rounding where the search reached it, and a cost the
-    search calls unreachable is."""
+    """Paused at any cost, grown to any window, then run until a teammate is reached: each
+    teammate's exact cost stays within its bounds, within rounding where the search reached
+    it, and a cost the search calls unreachable is."""
     found = scene(seed, 7)
     if found is None:
         return
@@ -62,21 +62,22 @@ def test_a_goals_search_bounds_every_teammates_exact_cost(seed: int, limits: lis
     assert box is not None
     fields = GoalFields(passable, box, goals, cells)
     exact = np.array([forward(passable, xy, goals) for xy in positions])
+    low = np.zeros_like(exact)  # every bound starts at zero, as loose as it gets
+    high = np.full_like(exact, np.inf)
+    known = np.zeros(exact.shape, dtype=bool)
+    has_cell = cells[:, 0] >= 0
     for step, limit in enumerate([*sorted(limits), np.inf]):
-        goal = step % len(goals)
-        bounds = fields.bounds(goal, step % len(positions), limit)
-        has_cell = cells[:, 0] >= 0
-        cost = exact[:, goal]
-        assert np.all(bounds.low[has_cell] <= cost[has_cell])
-        assert np.all(cost[has_cell] <= bounds.high[has_cell])
-        reached = np.isfinite(bounds.high)
-        assert np.all(bounds.high[reached] - bounds.low[reached] < 1e-6)
-        assert np.all(cost[bounds.known] == np.inf)
-        assert not bounds.known[~has_cell].any()
-    for who in np.flatnonzero(cells[:, 0] >= 0):  # unbounded: it runs until who is known
-        done = fields.bounds(1, int(who), np.inf)
-        assert np.isfinite(done.high[who]) != done.known[who]
-        assert done.known[who] == (exact[who, 1] == np.inf)
+        fields.tighten(step % len(goals), step % len(positions), limit, low, high, known)
+        assert np.all(low[has_cell] <= exact[has_cell])
+        assert np.all(exact[has_cell] <= high[has_cell])
+        reached = np.isfinite(high)
+        assert np.all(high[reached] - low[reached] < 1e-6)
+        assert np.all(exact[known] == np.inf)
+        assert not known[~has_cell].any() and np.all(low[~has_cell] == 0.0)
+    for who in np.flatnonzero(has_cell):  # unbounded: it runs until who is known
+        fields.tighten(1, int(who), np.inf, low, high, known)
+        assert np.isfinite(high[who, 1]) != known[who, 1]
+        assert known[who, 1] == (exact[who, 1] == np.inf)
 
 
 @settings(max_examples=40, deadline=None)
@@ -185,3 +186,18 @@ def test_teammates_on_one_cell_share_one_search(monkeypatch: pytest.MonkeyPatch)
     assert len(calls) == 2
     exact = goal_costs(passable, (10.5, 10.5), goals, 1, np.inf, (0, 20, 0, 20))
     assert exact is not None and search.done[(10, 10)].found[1] == exact.found[1]
+
+
+def test_a_goal_on_no_passable_cell_is_out_of_every_teammates_reach() -> None:
+    """A goal its own search could not start from (a wall cell, or outside the passable
+    box) costs every teammate inf, exactly: no teammate's own search would reach it."""
+    passable = np.ones((10, 10), dtype=bool)
+    passable[5, 5] = False
+    cells = np.array([[-1, -1], [1, 1], [8, 8]])
+    fields = GoalFields(passable, (0, 10, 0, 10), np.array([[5, 5], [1, 2]]), cells)
+    low, high = np.zeros((3, 2)), np.full((3, 2), np.inf)
+    known = np.zeros((3, 2), dtype=bool)
+    fields.tighten(0, 1, 20.0, low, high, known)
+    assert known[:, 0].tolist() == [False, True, True] and np.all(low[1:, 0] == np.inf)
+    fields.tighten(1, 1, 20.0, low, high, known)  # a passable goal: bounds, not exact
+    assert low[1, 1] <= 1.0 <= high[1, 1] and not known[:, 1].any()

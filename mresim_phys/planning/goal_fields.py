@@ -8,12 +8,13 @@ corner rule are the same both ways), but a cost is a float sum of the moves take
 and the reverse order can round differently. A cost is the least such sum over the paths
 (the distance field's fixed point, whatever order cells were expanded in), so the two
 differ by at most the rounding of a sum of ``c`` moves of at most ``c`` each:
-``c**2 * 2**-53``, well under :func:`rounding` (``1e-9 * (1 + c)``) up to costs of ~9e6.
+``c**2 * 2**-53``, well under the margin allowed (``1e-9 * (1 + c)``) up to costs of ~9e6.
 
-So :class:`GoalFields` gives each teammate an interval holding its exact cost, or a lower
-bound where the goal's search has not reached it yet. The searches pause (``dial``) and go
-on when the auction asks for more; each runs in a window around its goal, grown (searched
-again) when a farther teammate is asked for, so that a near goal costs a near search.
+So :class:`GoalFields` narrows each teammate's bounds to an interval holding its exact cost,
+or raises its lower bound where the goal's search has not reached it yet. The searches
+pause (``dial``) and go on when the auction asks for more; each runs in a window around its
+goal, grown (searched again) when a farther teammate is asked for, so that a near goal
+costs a near search.
 """
 
 from __future__ import annotations
@@ -22,6 +23,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 from numpy.typing import NDArray
 
 from mresim_phys.planning.dial import PausedSearch
@@ -32,11 +34,6 @@ from mresim_phys.types import BoolGrid, FloatArray, IntArray
 RELATIVE_ROUNDING = 1e-9  # of a cost: what a sum of moves in another order may round away
 GROWTH = 1.5  # a window searched again grows to at least this multiple of its reach
 SMALLEST_REACH = 16  # cells: the first window's least reach around its goal
-
-
-def rounding(costs: FloatArray | float) -> FloatArray:
-    """How far a path cost summed from the other end may lie from ``costs``."""
-    return RELATIVE_ROUNDING * (1.0 + np.abs(np.asarray(costs, dtype=np.float64)))
 
 
 def standing_cells(
@@ -54,17 +51,6 @@ def standing_cells(
         snapped = snap_to_passable(passable, (float(xy[i, 0]), float(xy[i, 1])), max_snap)
         cells[i] = (-1, -1) if snapped is None else snapped
     return cells
-
-
-@dataclass(frozen=True)
-class Bounds:
-    """What a goal's search tells of each teammate's path cost to the goal: it lies in
-    ``[low, high]`` (``high`` inf: only the lower bound is known); where ``known``, it is
-    inf exactly (the goal is unreachable from the teammate)."""
-
-    low: FloatArray
-    high: FloatArray
-    known: NDArray[np.bool_]
 
 
 @dataclass
@@ -110,16 +96,30 @@ class GoalFields:
     cells: IntArray
     _searches: dict[int, _GoalSearch] = field(default_factory=dict)
 
-    def bounds(self, goal: int, who: int, limit: float) -> Bounds:
-        """Every teammate's bounds on its cost to ``goal`` after the goal's search has
-        expanded the costs below ``limit``, or sooner, once teammate ``who``'s is final."""
+    def tighten(
+        self,
+        goal: int,
+        who: int,
+        limit: float,
+        costs: FloatArray,
+        high: FloatArray,
+        exact: NDArray[np.bool_],
+    ) -> None:
+        """Raise the lower bounds ``costs[i, goal]`` and lower the upper bounds
+        ``high[i, goal]`` of every teammate ``i`` whose cost is not ``exact``, after the
+        goal's search has expanded the costs below ``limit``, or sooner, once teammate
+        ``who``'s is final. A teammate the whole search never reached cannot reach the goal:
+        its cost becomes exact, inf."""
         rc = (int(self.goals_rc[goal, 0]), int(self.goals_rc[goal, 1]))
-        if not self._passable(rc):  # no teammate's search ever reaches it
-            n = len(self.cells)
-            return Bounds(np.full(n, np.inf), np.full(n, np.inf), self.cells[:, 0] >= 0)
+        if not self._passable(rc):  # no teammate's own search ever reaches it
+            _tighten(np.empty(1), np.full(len(self.cells), -1), self.cells[:, 0] >= 0, np.inf,
+                     costs, high, exact, goal)  # fmt: skip
+            return
         found = self._search(goal, rc, limit)
         found.search.run_below(limit, int(found.nodes[who]))
-        return self._read(found)
+        has_cell = self.cells[:, 0] >= 0
+        _tighten(found.search.dist, found.nodes, has_cell, found.settled_below, costs, high,
+                 exact, goal)  # fmt: skip
 
     def _passable(self, rc: tuple[int, int]) -> bool:
         r0, r1, c0, c1 = self.box
@@ -137,15 +137,31 @@ class GoalFields:
         self._searches[goal] = found
         return found
 
-    def _read(self, found: _GoalSearch) -> Bounds:
-        below = found.settled_below
-        has_cell = self.cells[:, 0] >= 0
-        on = found.nodes >= 0
-        cost = np.where(on, found.search.dist[np.maximum(found.nodes, 0)], np.inf)
-        settled = on & (cost < below)
-        low = np.full(len(cost), below - rounding(below) if below < np.inf else np.inf)
-        high = np.full(len(cost), np.inf)
-        low[settled] = cost[settled] - rounding(cost[settled])
-        high[settled] = cost[settled] + rounding(cost[settled])
-        low[~has_cell] = -np.inf
-        return Bounds(low, high, has_cell & ~settled & (below == np.inf))
+
+@njit(cache=True, nogil=True)
+def _tighten(
+    dist: FloatArray,
+    nodes: IntArray,
+    has_cell: NDArray[np.bool_],
+    below: float,
+    costs: FloatArray,
+    high: FloatArray,
+    exact: NDArray[np.bool_],
+    goal: int,
+) -> None:
+    """:meth:`GoalFields.tighten` for a search's costs ``dist`` (teammate ``i`` at node
+    ``nodes[i]``, -1 off the window), final below ``below``: a reached teammate's cost lies
+    within ``RELATIVE_ROUNDING * (1 + cost)`` of its reverse cost, the others' at least
+    ``below`` (less that margin), and with ``below`` inf they cannot reach the goal."""
+    for i in range(len(nodes)):
+        if not has_cell[i] or exact[i, goal]:
+            continue
+        cost = dist[nodes[i]] if nodes[i] >= 0 else np.inf
+        if cost < below:
+            margin = RELATIVE_ROUNDING * (1.0 + cost)
+            costs[i, goal] = max(costs[i, goal], cost - margin)
+            high[i, goal] = min(high[i, goal], cost + margin)
+        elif below == np.inf:
+            costs[i, goal], high[i, goal], exact[i, goal] = np.inf, np.inf, True
+        else:
+            costs[i, goal] = max(costs[i, goal], below - RELATIVE_ROUNDING * (1.0 + below))

@@ -19,7 +19,7 @@ from numpy.typing import NDArray
 
 from mresim_phys.planning.dial import PausedSearch
 from mresim_phys.planning.fields import MAX_SNAP, snap_to_passable
-from mresim_phys.planning.goal_fields import Bounds, GoalFields
+from mresim_phys.planning.goal_fields import GoalFields
 from mresim_phys.planning.goals import GoalCosts, goal_costs
 from mresim_phys.strategies.base import PlanContext
 from mresim_phys.types import FloatArray, IntArray
@@ -252,27 +252,15 @@ class Bids:
         limit = max(SEARCH_GROWTH * bound, bound + MIN_SEARCH)
         limit = np.inf if limit > MAX_BOUNDED_SEARCH else limit
         if fields is not None and self.high[who, which] == np.inf and fields.cells[who, 0] >= 0:
-            self._take(which, fields.bounds(which, who, limit))
+            fields.tighten(which, who, limit, self.costs, self.high, self.exact)
+            self.u[:, which] = utility(self.sizes[which], self.costs[:, which])
+            self.u_low[:, which] = utility(self.sizes[which], self.high[:, which])
             return
         if self.high[who, which] < np.inf:  # bounded both ways: the exact cost is below
             limit = float(self.high[who, which])
         self._row(who, search(bidder, which, limit))
-        if not self.exact[who, which]:  # cannot happen with bounds that hold: forget them
-            self.high[who, which] = np.inf
-            self.u_low[who, which] = -np.inf
-
-    def _take(self, which: int, found: Bounds) -> None:
-        """Every inexact pair's bounds for goal ``which`` from the goal's search."""
-        open_ = ~self.exact[:, which]
-        column, high = self.costs[:, which], self.high[:, which]
-        column[open_] = np.maximum(column[open_], found.low[open_])
-        high[open_] = np.minimum(high[open_], found.high[open_])
-        known = open_ & found.known
-        column[known] = np.inf
-        high[known] = np.inf
-        self.exact[known, which] = True
-        self.u[:, which] = utility(self.sizes[which], column)
-        self.u_low[:, which] = utility(self.sizes[which], high)
+        if not self.exact[who, which]:  # bounds that did not hold (cannot happen): search on
+            self._row(who, search(bidder, which, np.inf))
 
     def _row(self, who: int, searched: GoalCosts | None) -> None:
         """Take the exact path costs a teammate's own search found; the bounds of the
