@@ -4,8 +4,10 @@ The original's greedy auction: the best (robot, frontier) pair by utility
 ``U = size * 1e8 / d**4`` is fixed, that robot and that frontier leave the auction, until
 the best pair is the deciding robot's. The robot knows its own path costs; a teammate bids
 with lower bounds (the straight line from its last known position, raised by the triangle
-inequality through the robot's own search: :func:`path_bounds`), and a bound is replaced
-by the exact path cost on the robot's map (``planning.goals``) before it can win.
+inequality through the robot's own search: :func:`path_bounds`). Before a bound can win it
+is narrowed by a search from the goal (``planning.goal_fields``: every teammate's cost within
+rounding at once), and replaced by the exact path cost on the robot's map
+(``planning.goals``) only where the narrowed bounds cannot tell two bids apart.
 """
 
 from __future__ import annotations

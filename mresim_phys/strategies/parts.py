@@ -196,8 +196,9 @@ def goal_fields(
     context: PlanContext, goals: IntArray, positions: list[tuple[float, float]]
 ) -> GoalFields | None:
     """Searches from the auction's goals for the teammates at ``positions`` (bidders 1 on),
-    on the robot's passable map; None with terrain costs (a move's cost there is not the
-    same both ways) or no passable cell."""
+    on the robot's passable map; None with terrain costs (the teammates' own searches then
+    run ``costs.dijkstra_weighted``, which the goal searches do not follow) or no passable
+    cell."""
     box = context.passable_box
     if context.slowness is not None or box is None or not positions:
         return None
