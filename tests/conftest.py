@@ -89,3 +89,20 @@ def csv_row(record: Any) -> list[str]:
     from mresim_phys.columns import FLAGS, Layout
 
     return Layout(tuple(r.name for r in record.robots), frozenset(FLAGS)).row(record)
+
+
+@pytest.fixture
+def searched_from(monkeypatch: pytest.MonkeyPatch) -> list[tuple[float, float]]:
+    """The start of every teammate path search the frontier auction runs (its calls of
+    ``planning.goals.goal_costs``), in order; the searches themselves run as usual."""
+    import mresim_phys.strategies.auction as auction
+
+    starts: list[tuple[float, float]] = []
+    real = auction.goal_costs
+
+    def counted(passable: np.ndarray, start_xy: tuple[float, float], *args: Any) -> Any:
+        starts.append(start_xy)
+        return real(passable, start_xy, *args)
+
+    monkeypatch.setattr(auction, "goal_costs", counted)
+    return starts

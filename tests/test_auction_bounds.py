@@ -8,10 +8,7 @@ they must never exceed the exact cost, and the winner must not change.
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
-import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from test_frontiers import random_belief
@@ -111,7 +108,7 @@ def corridor_world() -> np.ndarray:
 
 
 def test_a_teammate_behind_a_wall_is_ruled_out_without_a_search(
-    monkeypatch: pytest.MonkeyPatch,
+    searched_from: list[tuple[float, float]],
 ) -> None:
     """The teammate stands ~17 cells from this robot's frontier, through a wall, but ~370
     cells away by path: its straight-line bound beat this robot's own bid and cost a
@@ -124,14 +121,6 @@ def test_a_teammate_behind_a_wall_is_ruled_out_without_a_search(
         clearance=1.0, speed=2.0, sensor_range=40.0, role="explorer",
         base_position=(30.5, 5.5), teammates={"B": mate}, rng=np.random.default_rng(0),
     )  # fmt: skip
-    searched_from: list[tuple[float, float]] = []
-    real = auction.goal_costs
-
-    def counted(passable: np.ndarray, start_xy: tuple[float, float], *args: Any) -> Any:
-        searched_from.append(start_xy)
-        return real(passable, start_xy, *args)
-
-    monkeypatch.setattr(auction, "goal_costs", counted)
     params = frontier.FrontierParams(horizon=10.0)  # its first search settles both robots
     decision = frontier.FrontierExploration(params).decide(view)
     assert decision.goal is not None and decision.goal[1] < 10  # its own, north corridor

@@ -11,12 +11,10 @@ from __future__ import annotations
 from typing import Any
 
 import numpy as np
-import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 from test_frontiers import random_belief
 
-import mresim_phys.strategies.auction as auction
 from mresim_phys.planning.fields import distance_field, snap_to_passable, traversable
 from mresim_phys.planning.goal_fields import GoalFields, standing_cells
 from mresim_phys.planning.goals import goal_costs
@@ -115,9 +113,7 @@ def run_auction(seed: int, mates: int, with_fields: bool, counted: list[Any]) ->
     ]
     fields = None
     if with_fields:
-        cells = standing_cells(passable, [(-1.0, -1.0), *positions])
-        cells[0] = -1
-        fields = GoalFields(passable, bbox(passable), goals, cells)  # type: ignore[arg-type]
+        fields = GoalFields.for_auction(passable, bbox(passable), goals, positions)  # type: ignore[arg-type]
     search = TeammateSearches(context_of(passable), goals)
     counted.append(search)
     return greedy_auction(bidders, sizes, search, fields)
@@ -136,7 +132,7 @@ def test_searching_from_the_goals_never_changes_the_winner(seed: int, mates: int
 
 
 def test_a_crowd_behind_the_goal_costs_one_search_not_one_each(
-    monkeypatch: pytest.MonkeyPatch,
+    searched_from: list[tuple[float, float]],
 ) -> None:
     """Twenty teammates down a corridor, each nearer the frontier than this robot in a
     straight line: the goal's search bounds them all; before, each cost a search of its own."""
@@ -148,36 +144,24 @@ def test_a_crowd_behind_the_goal_costs_one_search_not_one_each(
     me = (20.5, 5.5)
     mine = forward(passable, me, goals)
     mates = [(float(x) + 0.5, 5.5) for x in range(70, 110, 2)]
-    calls: list[tuple[float, float]] = []
-    real = auction.goal_costs
-
-    def counted(passable: np.ndarray, start_xy: tuple[float, float], *args: Any) -> Any:
-        calls.append(start_xy)
-        return real(passable, start_xy, *args)
-
-    monkeypatch.setattr(auction, "goal_costs", counted)
     won = {}
     for with_fields in (False, True):
-        calls.clear()
+        searched_from.clear()
         bidders = [Bidder("me", mine.copy(), np.ones(2, dtype=bool), me, rank=99)]
         bidders += [Bidder.estimated(f"m{i}", xy, goals, i) for i, xy in enumerate(mates)]
         fields = None
         if with_fields:
-            cells = standing_cells(passable, [(-1.0, -1.0), *mates])
-            cells[0] = -1
-            fields = GoalFields(passable, (1, 6, 1, 119), goals, cells)  # bbox(passable)
+            fields = GoalFields.for_auction(passable, (1, 6, 1, 119), goals, mates)  # bbox
         search = TeammateSearches(context_of(passable), goals)
-        won[with_fields] = (greedy_auction(bidders, sizes, search, fields), len(calls))
+        won[with_fields] = (greedy_auction(bidders, sizes, search, fields), len(searched_from))
     assert won[True][0] == won[False][0]
     assert won[False][1] >= 10 and won[True][1] <= 2
 
 
-def test_teammates_on_one_cell_share_one_search(monkeypatch: pytest.MonkeyPatch) -> None:
+def test_teammates_on_one_cell_share_one_search(searched_from: list[tuple[float, float]]) -> None:
     passable = np.ones((20, 20), dtype=bool)
     goals = np.array([[10, 12], [19, 1]])
-    calls: list[Any] = []
-    real = auction.goal_costs
-    monkeypatch.setattr(auction, "goal_costs", lambda *a: calls.append(a) or real(*a))
+    calls = searched_from
     search = TeammateSearches(context_of(passable), goals)
     first = search(Bidder.estimated("a", (10.2, 10.7), goals), 0, 30.0)
     again = search(Bidder.estimated("b", (10.9, 10.1), goals), 0, 30.0)

@@ -96,6 +96,19 @@ class GoalFields:
     cells: IntArray
     _searches: dict[int, _GoalSearch] = field(default_factory=dict)
 
+    @classmethod
+    def for_auction(
+        cls,
+        passable: BoolGrid,
+        box: Box,
+        goals_rc: IntArray,
+        positions: Sequence[tuple[float, float]],
+    ) -> GoalFields:
+        """The searches of an auction whose bidder 0 is the robot itself (it bids its exact
+        costs: no cell) and bidders 1 on the teammates at world ``positions``."""
+        cells = np.vstack([[[-1, -1]], standing_cells(passable, positions)]).astype(np.int64)
+        return cls(passable, box, goals_rc, cells)
+
     def tighten(
         self,
         goal: int,
@@ -110,14 +123,15 @@ class GoalFields:
         goal's search has expanded the costs below ``limit``, or sooner, once teammate
         ``who``'s is final. A teammate the whole search never reached cannot reach the goal:
         its cost becomes exact, inf."""
+        has_cell = self.cells[:, 0] >= 0
         rc = (int(self.goals_rc[goal, 0]), int(self.goals_rc[goal, 1]))
         if not self._passable(rc):  # no teammate's own search ever reaches it
-            _tighten(np.empty(1), np.full(len(self.cells), -1), self.cells[:, 0] >= 0, np.inf,
-                     costs, high, exact, goal)  # fmt: skip
+            out = has_cell & ~exact[:, goal]
+            costs[out, goal] = high[out, goal] = np.inf
+            exact[out, goal] = True
             return
         found = self._search(goal, rc, limit)
         found.search.run_below(limit, int(found.nodes[who]))
-        has_cell = self.cells[:, 0] >= 0
         _tighten(found.search.dist, found.nodes, has_cell, found.settled_below, costs, high,
                  exact, goal)  # fmt: skip
 

@@ -29,7 +29,7 @@ import numpy as np
 
 from mresim_phys.knowledge.frontiers import Frontiers
 from mresim_phys.knowledge.teammates import TeammateInfo
-from mresim_phys.planning.goal_fields import GoalFields, standing_cells
+from mresim_phys.planning.goal_fields import GoalFields
 from mresim_phys.strategies.auction import (
     Bidder,
     TeammateSearches,
@@ -202,9 +202,7 @@ def goal_fields(
     box = context.passable_box
     if context.slowness is not None or box is None or not positions:
         return None
-    cells = standing_cells(context.passable, [(-1.0, -1.0), *positions])
-    cells[0] = -1  # bidder 0, this robot, bids its exact costs
-    return GoalFields(context.passable, box, goals, cells)
+    return GoalFields.for_auction(context.passable, box, goals, positions)
 
 
 @dataclass
