@@ -65,10 +65,10 @@ def astar_kernel(
     restricted = labels.size > 0
     tr, tc = target // wp, target % wp
     g[source], pred[source], state[source] = 0.0, NO_PRED, OPEN
-    fs, gs, nodes, size = heap_start(1024, source, octile(source // wp, source % wp, tr, tc))
+    heap, size = heap_start(1024, source, octile(source // wp, source % wp, tr, tc))
     expanded = 0
     while True:
-        u, size = pop_open(fs, gs, nodes, size, state)
+        u, size = pop_open(heap, size, state)
         if u < 0:
             break
         expanded += 1
@@ -91,5 +91,5 @@ def astar_kernel(
             if state[v] == UNSEEN or cost < g[v]:
                 g[v], pred[v], state[v] = cost, u, OPEN
                 f = cost + octile(ur + dr, uc + dc, tr, tc)
-                fs, gs, nodes, size = heap_add(fs, gs, nodes, size, f, cost, v)
+                heap, size = heap_add(heap, size, f, cost, v)
     return (g[target] if state[target] != UNSEEN else np.inf), expanded

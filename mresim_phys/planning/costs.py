@@ -72,10 +72,10 @@ def dijkstra_weighted(
     pred = np.full(pad.size, NO_FIELD_PRED, dtype=np.int32)
     state = np.zeros(pad.size, dtype=np.uint8)
     dist[source] = 0.0
-    fs, gs, nodes, size = heap_start(1024, source, 0.0)
+    heap, size = heap_start(1024, source, 0.0)
     step, beside_row, beside_col = flat_moves(wp)
     while True:
-        u, size = pop_open(fs, gs, nodes, size, state)
+        u, size = pop_open(heap, size, state)
         if u < 0:
             break
         here = dist[u]
@@ -91,5 +91,5 @@ def dijkstra_weighted(
                 cost = here + move_cost(STRAIGHT, slow, u, v)
             if cost <= limit and cost < dist[v]:
                 dist[v], pred[v] = cost, u
-                fs, gs, nodes, size = heap_add(fs, gs, nodes, size, cost, cost, v)
+                heap, size = heap_add(heap, size, cost, cost, v)
     return dist, pred

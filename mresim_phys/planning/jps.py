@@ -145,11 +145,11 @@ def jps_kernel(
     """
     tr, tc = target // wp, target % wp
     g[source], pred[source], state[source] = 0.0, NO_PRED, OPEN
-    fs, gs, nodes, size = heap_start(256, source, octile(source // wp, source % wp, tr, tc))
+    heap, size = heap_start(256, source, octile(source // wp, source % wp, tr, tc))
     directions = np.empty(8, dtype=np.int64)
     expanded = 0
     while True:
-        u, size = pop_open(fs, gs, nodes, size, state)
+        u, size = pop_open(heap, size, state)
         if u < 0:
             break
         expanded += 1
@@ -169,7 +169,7 @@ def jps_kernel(
             if state[v] == UNSEEN or cost < g[v]:
                 g[v], pred[v], state[v] = cost, u, OPEN
                 f = cost + octile(vr, vc, tr, tc)
-                fs, gs, nodes, size = heap_add(fs, gs, nodes, size, f, cost, v)
+                heap, size = heap_add(heap, size, f, cost, v)
     return (g[target] if state[target] != UNSEEN else np.inf), expanded
 
 
