@@ -130,3 +130,22 @@ def test_a_teammate_behind_a_wall_is_ruled_out_without_a_search(
     bounds = path_bounds(context.search, mate.position, context.field.cost_at(*north.T))
     assert bounds is not None and bounds[0] > 300
     assert mate.position not in searched_from
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 10_000), bidders=st.integers(1, 40), goals=st.integers(1, 300))
+def test_the_upper_bounds_utilities_are_those_of_the_exact_costs(
+    seed: int, bidders: int, goals: int
+) -> None:
+    """The auction's first utilities of the upper bounds are utility(high) exactly: the
+    exact pairs' utilities, and -inf where a pair has no upper bound yet."""
+    rng = np.random.default_rng(seed)
+    costs = rng.uniform(0.0, 3000.0, (bidders, goals)) * rng.choice([1.0, np.sqrt(2)], goals)
+    costs[rng.random((bidders, goals)) < 0.1] = np.inf
+    exact = rng.random((bidders, goals)) < 0.5
+    sizes = rng.integers(1, 400, goals).astype(np.float64)
+    team = [auction.Bidder(f"R{i}", costs[i], exact[i], (0.5, 0.5), i) for i in range(bidders)]
+    bids = auction.Bids.of(team, sizes)
+    expected = auction.utility(sizes[None, :], np.where(exact, costs, np.inf))
+    np.testing.assert_array_equal(bids.u_low, expected)
+    assert bids.u_low.tobytes() == expected.tobytes()

@@ -233,7 +233,10 @@ class Bids:
         ranks = np.array([b.rank for b in bidders], dtype=np.int64)
         high = np.where(exact, costs, np.inf)
         u = utility(sizes[None, :], costs)
-        return cls(sizes, costs, high, exact, ranks, u, utility(sizes[None, :], high))
+        # utility(high) without a second pass of powers: where a cost is exact its upper
+        # bound is the cost itself (the same element of a matrix of the same shape: the
+        # same float), elsewhere there is no upper bound (-inf)
+        return cls(sizes, costs, high, exact, ranks, u, np.where(exact, u, -np.inf))
 
     def run(self, bidders: list[Bidder], search: PathSearch, fields: GoalFields | None) -> int:
         """The greedy auction over these bids (:func:`greedy_auction`)."""
