@@ -185,3 +185,61 @@ def test_a_goal_on_no_passable_cell_is_out_of_every_teammates_reach() -> None:
     assert known[:, 0].tolist() == [False, True, True] and np.all(low[1:, 0] == np.inf)
     fields.tighten(1, 1, 20.0, low, high, known)  # a passable goal: bounds, not exact
     assert low[1, 1] <= 1.0 <= high[1, 1] and not known[:, 1].any()
+
+
+@settings(max_examples=60, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), pause=st.floats(1.0, 60.0))
+def test_a_steered_search_finds_the_teammates_own_float_cost(seed: int, pause: float) -> None:
+    """Steered by a goal's search paused anywhere (its final costs and, beyond them, its
+    bound), an A* from a teammate finds the very float the teammate's own search finds
+    (not one within rounding), or says it cannot tell where the cost is above the limit."""
+    found = scene(seed, 7, (90, 120))
+    if found is None:
+        return
+    passable, goals, positions = found
+    cells = standing_cells(passable, positions)
+    box = bbox(passable)
+    assert box is not None
+    fields = GoalFields(passable, box, goals, cells)
+    exact = np.array([forward(passable, xy, goals) for xy in positions])
+    low, high = np.zeros_like(exact), np.full_like(exact, np.inf)
+    known = np.zeros(exact.shape, dtype=bool)
+    for goal in range(len(goals)):
+        fields.tighten(goal, 0, pause, low, high, known)
+        for who in np.flatnonzero(cells[:, 0] >= 0):
+            cost = exact[who, goal]
+            if np.isfinite(cost) and cost > 2.0:
+                assert fields.exact_cost(goal, int(who), cost - 1.0) is None  # not cached
+            steered = fields.exact_cost(goal, int(who), cost + 1.0 if np.isfinite(cost) else 90)
+            assert steered == (cost if np.isfinite(cost) else None)
+
+
+def test_tied_teammates_are_told_apart_without_their_own_searches(
+    searched_from: list[tuple[float, float]],
+) -> None:
+    """Two teammates as far from the best frontier as each other: only their exact costs
+    (then their ranks) decide, and a search steered by the frontier's finds them, where
+    before each teammate searched on its own."""
+    passable = np.ones((21, 41), dtype=bool)
+    passable[4:17, 20] = False  # a wall between them: their paths run round it
+    goals = np.array([[10, 30], [0, 0]])
+    sizes = np.array([50.0, 1.0])
+    me = (0.5, 20.5)
+    mine = forward(passable, me, goals)
+    mates = [(10.5, 10.5), (30.5, 3.5), (30.5, 17.5)]
+    won = {}
+    for with_fields in (False, True):
+        searched_from.clear()
+        bidders = [Bidder("me", mine.copy(), np.ones(2, dtype=bool), me, rank=9)]
+        bidders += [Bidder.estimated(f"m{i}", xy, goals, 2 - i) for i, xy in enumerate(mates)]
+        fields = None
+        if with_fields:
+            fields = GoalFields.for_auction(passable, (0, 21, 0, 41), goals, mates)
+        search = TeammateSearches(context_of(passable), goals)
+        won[with_fields] = (greedy_auction(bidders, sizes, search, fields), len(searched_from))
+        if with_fields:
+            assert fields is not None
+            tied = [fields.exact_cost(0, who, 20.0) for who in (2, 3)]
+            assert tied[0] == tied[1] == forward(passable, mates[1], goals)[0]
+    assert won[True][0] == won[False][0]
+    assert won[False][1] >= 2 and won[True][1] == 0

@@ -15,6 +15,11 @@ or raises its lower bound where the goal's search has not reached it yet. The se
 pause (``dial``) and go on when the auction asks for more; each runs in a window around its
 goal, grown (searched again) when a farther teammate is asked for, so that a near goal
 costs a near search.
+
+Where two bids are closer than the bounds can tell (teammates as far from a goal as each
+other), :meth:`GoalFields.exact_cost` finds a teammate's exact cost by an A* from its cell
+steered by the goal's search (``bestfirst.guided``): the same fixed point, so the same
+float as its own search, but expanded along the near-best paths only.
 """
 
 from __future__ import annotations
@@ -26,9 +31,11 @@ import numpy as np
 from numba import njit
 from numpy.typing import NDArray
 
+from mresim_phys.planning.astar import NO_ALLOWED, NO_LABELS
+from mresim_phys.planning.bestfirst import astar_kernel
 from mresim_phys.planning.dial import PausedSearch
 from mresim_phys.planning.fields import MAX_SNAP, _window, snap_to_passable
-from mresim_phys.planning.grid import Box
+from mresim_phys.planning.grid import Box, Window, search_arrays
 from mresim_phys.types import BoolGrid, FloatArray, IntArray
 
 RELATIVE_ROUNDING = 1e-9  # of a cost: what a sum of moves in another order may round away
@@ -95,6 +102,7 @@ class GoalFields:
     goals_rc: IntArray
     cells: IntArray
     _searches: dict[int, _GoalSearch] = field(default_factory=dict)
+    _exact: dict[tuple[int, int, int], float] = field(default_factory=dict)
 
     @classmethod
     def for_auction(
@@ -135,6 +143,26 @@ class GoalFields:
         _tighten(found.search.dist, found.nodes, has_cell, found.settled_below, costs, high,
                  exact, goal)  # fmt: skip
 
+    def exact_cost(self, goal: int, who: int, limit: float) -> float | None:
+        """Teammate ``who``'s exact path cost to ``goal`` (the float its own search would
+        find) when it is at most ``limit``: an A* from its cell steered by the goal's
+        search (``bestfirst.guided``), in the window of cells within ``limit`` of it, as
+        its own search would run. None where this cannot tell: the teammate has no cell,
+        the goal no search yet, or the cost is above ``limit``. Teammates on one cell share
+        the answer."""
+        row, col = int(self.cells[who, 0]), int(self.cells[who, 1])
+        found = self._searches.get(goal)
+        if row < 0 or found is None:
+            return None
+        key = (row, col, goal)
+        cost = self._exact.get(key)
+        if cost is None:
+            cost = _steered(self.passable, self.box, (row, col), found, limit)
+            if cost > limit:  # beyond the window: more than limit, but how much is unknown
+                return None
+            self._exact[key] = cost
+        return cost if cost <= limit else None
+
     def _passable(self, rc: tuple[int, int]) -> bool:
         r0, r1, c0, c1 = self.box
         return r0 <= rc[0] < r1 and c0 <= rc[1] < c1 and bool(self.passable[rc])
@@ -150,6 +178,29 @@ class GoalFields:
         found = _GoalSearch.around(self.passable, self.box, rc, reach, self.cells)
         self._searches[goal] = found
         return found
+
+
+def _steered(
+    passable: BoolGrid, box: Box, start: tuple[int, int], goal: _GoalSearch, limit: float
+) -> float:
+    """The path cost from ``start`` to the cell ``goal`` searches from, by an A* steered
+    by that search, in ``box`` cut to the cells within ``limit`` of ``start``; inf where the
+    goal lies outside that window or cannot be reached in it."""
+    window = Window.around(passable, _window(start, box, limit))
+    target = window.node_inside(goal.search.start)
+    if target is None:
+        return np.inf
+    frame = goal.search.window
+    guide = (
+        goal.search.dist, window.origin[0] - frame.origin[0], window.origin[1] - frame.origin[1],
+        frame.wp, frame.pad.size // frame.wp, float(goal.settled_below),
+    )  # fmt: skip
+    g, pred, state = search_arrays(window.pad.size)
+    cost, _ = astar_kernel(
+        window.pad, window.wp, window.node(start), target, NO_LABELS, NO_ALLOWED, None, g,
+        pred, state, guide,
+    )  # fmt: skip
+    return float(cost)
 
 
 @njit(cache=True, nogil=True)

@@ -194,7 +194,9 @@ def greedy_auction(
     (``planning.goal_fields``) the search runs from the goal instead, and bounds every
     teammate's cost to it at once, each within rounding once reached: a pair so bounded
     wins without its own search when even its highest cost beats every other pair's
-    lowest, and is searched exactly only when the bounds cannot tell it from another.
+    lowest; when the bounds cannot tell it from another, an A* steered by the goal's search
+    finds its exact cost (the same float as the teammate's own search, which stays the
+    fallback).
     Which pair wins depends only on the exact costs (lower bounds never win: they are
     refined first, and a bound's utility is never below its exact one), so how far a
     search went never changes it. Utilities are one (bidders x frontiers) matrix; a
@@ -263,9 +265,22 @@ class Bids:
             return
         if self.high[who, which] < np.inf:  # bounded both ways: the exact cost is below
             limit = float(self.high[who, which])
+            steered = None if fields is None else fields.exact_cost(which, who, limit)
+            if self._settle(who, which, steered):
+                return
         self._row(who, search(bidder, which, limit))
         if not self.exact[who, which]:  # bounds that did not hold (cannot happen): search on
             self._row(who, search(bidder, which, np.inf))
+
+    def _settle(self, who: int, which: int, cost: float | None) -> bool:
+        """Take a pair's exact cost (None: not known; nothing changes); whether it was."""
+        if cost is None:
+            return False
+        self.costs[who, which] = self.high[who, which] = cost
+        self.exact[who, which] = True
+        self.u[:, which] = utility(self.sizes[which], self.costs[:, which])
+        self.u_low[:, which] = utility(self.sizes[which], self.high[:, which])
+        return True
 
     def _row(self, who: int, searched: GoalCosts | None) -> None:
         """Take the exact path costs a teammate's own search found; the bounds of the
