@@ -149,3 +149,21 @@ def test_the_upper_bounds_utilities_are_those_of_the_exact_costs(
     expected = auction.utility(sizes[None, :], np.where(exact, costs, np.inf))
     np.testing.assert_array_equal(bids.u_low, expected)
     assert bids.u_low.tobytes() == expected.tobytes()
+
+
+@settings(max_examples=40, deadline=None)
+@given(seed=st.integers(0, 10_000), size=st.integers(1, 5000))
+def test_a_rescored_column_holds_the_floats_utility_gives(seed: int, size: int) -> None:
+    """A refinement rescores a column of the bids in one compiled pass; its utilities are
+    utility()'s floats, byte for byte (ties between bids are decided on them)."""
+    rng = np.random.default_rng(seed)
+    costs = np.concatenate(
+        (rng.uniform(0.0, 12.0, 64), rng.uniform(1.0, 6000.0, 256),
+         rng.integers(0, 3000, 64) + rng.integers(0, 2000, 64) * np.sqrt(2), [np.inf, 0.0])
+    )  # fmt: skip
+    grid = np.stack((costs, costs[::-1], costs * 1.5), axis=1)  # a column is a strided view
+    u, u_low = np.zeros_like(grid), np.zeros_like(grid)
+    auction.pair_utilities(float(size), grid[:, 0], grid[:, 2], u[:, 1], u_low[:, 1])
+    sizes = np.array([float(size)])
+    assert u[:, 1].tobytes() == auction.utility(sizes, grid[:, 0]).tobytes()
+    assert u_low[:, 1].tobytes() == auction.utility(sizes, grid[:, 2]).tobytes()
