@@ -45,27 +45,36 @@ def forward(passable: np.ndarray, position: tuple[float, float], goals: np.ndarr
     return distance_field(passable, position).cost_at(goals[:, 0], goals[:, 1])
 
 
+def fields_with_exact_costs(seed: int, shape: tuple[int, int] = (40, 48)) -> Any:
+    """A :func:`scene`'s goal searches for its 7 teammates and each teammate's exact costs
+    to the goals (rows: teammates); None where the map has too few passable cells."""
+    found = scene(seed, 7, shape)
+    if found is None:
+        return None
+    passable, goals, positions = found
+    box = bbox(passable)
+    assert box is not None
+    fields = GoalFields(passable, box, goals, standing_cells(passable, positions))
+    return fields, np.array([forward(passable, xy, goals) for xy in positions])
+
+
 @settings(max_examples=60, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), limits=st.lists(st.floats(1.0, 80.0), max_size=4))
 def test_a_goals_search_bounds_every_teammates_exact_cost(seed: int, limits: list[float]) -> None:
     """Paused at any cost, grown to any window, then run until a teammate is reached: each
     teammate's exact cost stays within its bounds, within rounding where the search reached
     it, and a cost the search calls unreachable is."""
-    found = scene(seed, 7)
-    if found is None:
+    made = fields_with_exact_costs(seed)
+    if made is None:
         return
-    passable, goals, positions = found
-    cells = standing_cells(passable, positions)
-    box = bbox(passable)
-    assert box is not None
-    fields = GoalFields(passable, box, goals, cells)
-    exact = np.array([forward(passable, xy, goals) for xy in positions])
+    fields, exact = made  # exact: a row per teammate, a column per goal
+    cells = fields.cells
     low = np.zeros_like(exact)  # every bound starts at zero, as loose as it gets
     high = np.full_like(exact, np.inf)
     known = np.zeros(exact.shape, dtype=bool)
     has_cell = cells[:, 0] >= 0
     for step, limit in enumerate([*sorted(limits), np.inf]):
-        fields.tighten(step % len(goals), step % len(positions), limit, low, high, known)
+        fields.tighten(step % exact.shape[1], step % exact.shape[0], limit, low, high, known)
         assert np.all(low[has_cell] <= exact[has_cell])
         assert np.all(exact[has_cell] <= high[has_cell])
         reached = np.isfinite(high)
@@ -193,15 +202,11 @@ def test_a_steered_search_finds_the_teammates_own_float_cost(seed: int, pause: f
     """Steered by a goal's search paused anywhere (its final costs and, beyond them, its
     bound), an A* from a teammate finds the very float the teammate's own search finds
     (not one within rounding), or says it cannot tell where the cost is above the limit."""
-    found = scene(seed, 7, (90, 120))
-    if found is None:
+    made = fields_with_exact_costs(seed, (90, 120))
+    if made is None:
         return
-    passable, goals, positions = found
-    cells = standing_cells(passable, positions)
-    box = bbox(passable)
-    assert box is not None
-    fields = GoalFields(passable, box, goals, cells)
-    exact = np.array([forward(passable, xy, goals) for xy in positions])
+    fields, exact = made
+    goals, cells = fields.goals_rc, fields.cells
     low, high = np.zeros_like(exact), np.full_like(exact, np.inf)
     known = np.zeros(exact.shape, dtype=bool)
     for goal in range(len(goals)):
