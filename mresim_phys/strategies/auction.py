@@ -84,6 +84,7 @@ def pair_utilities(
 
 @njit(cache=True, nogil=True, inline="always")
 def _utility(size: float, cost: float) -> float:
+    """One pair's :func:`utility` (power 4): -inf for an unreachable frontier."""
     if not np.isfinite(cost):
         return -np.inf
     value: float = size * UTILITY_SCALE / max(cost, 1.0) ** 4.0
