@@ -158,9 +158,8 @@ class GoalFields:
         cost = self._exact.get(key)
         if cost is None:
             cost = _steered(self.passable, self.box, (row, col), found, limit)
-            if cost > limit:  # beyond the window: more than limit, but how much is unknown
-                return None
-            self._exact[key] = cost
+            if cost <= limit:  # above it the window was too small to say how much more
+                self._exact[key] = cost
         return cost if cost <= limit else None
 
     def _passable(self, rc: tuple[int, int]) -> bool:

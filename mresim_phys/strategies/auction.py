@@ -6,8 +6,10 @@ the best pair is the deciding robot's. The robot knows its own path costs; a tea
 with lower bounds (the straight line from its last known position, raised by the triangle
 inequality through the robot's own search: :func:`path_bounds`). Before a bound can win it
 is narrowed by a search from the goal (``planning.goal_fields``: every teammate's cost within
-rounding at once), and replaced by the exact path cost on the robot's map
-(``planning.goals``) only where the narrowed bounds cannot tell two bids apart.
+rounding at once), and replaced by the exact path cost on the robot's map only where the
+narrowed bounds cannot tell two bids apart: by an A* steered by the goal's search
+(``GoalFields.exact_cost``), or the teammate's own search (``planning.goals``) where that
+cannot tell.
 """
 
 from __future__ import annotations
