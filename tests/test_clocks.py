@@ -77,17 +77,19 @@ def test_a_compute_delay_d_makes_a_new_plan_move_the_robot_d_steps_later(delay: 
     sim = office(compute_delay=delay)
     robot = sim.robot("A")
     asks = record_asks(robot, sim)
-    adopted: dict[int, int] = {}  # id of the decision followed -> first step it was
+    # id of the decision followed -> (first step it was, the decision: held so that no
+    # later decision can reuse a collected one's id)
+    adopted: dict[int, tuple[int, Decision]] = {}
     odometer = [robot.distance]
     for _ in range(100):
         sim.step()
         if robot.decision is not None:
-            adopted.setdefault(id(robot.decision), sim.t)
+            adopted.setdefault(id(robot.decision), (sim.t, robot.decision))
         odometer.append(robot.distance)
     standing = [(t, d) for t, d, stood in asks if stood and t + delay <= sim.t]
     assert len(standing) >= 3
     for t, decision in standing:
-        assert adopted.get(id(decision)) == t + delay
+        assert adopted[id(decision)] == (t + delay, decision)
         assert all(odometer[s] == odometer[t] for s in range(t, t + delay))  # stood still
         assert odometer[t + delay] > odometer[t + delay - 1]  # first move: d steps later
 
