@@ -28,6 +28,7 @@ from mresim_phys.broken_parts import (
 from mresim_phys.knowledge.teammates import PAYLOAD, TeammateInfo, keep_payload
 from mresim_phys.localization.feature import believed_pose
 from mresim_phys.localization.odometry import Pose
+from mresim_phys.memory import sparse_zeros
 from mresim_phys.planning import Planner
 from mresim_phys.strategies.base import Decision, Strategy
 from mresim_phys.types import BeliefGrid, BoolGrid, FloatArray
@@ -49,8 +50,9 @@ class Body:
 
 def empty_belief(shape: tuple[int, int]) -> tuple[BeliefGrid, BoolGrid]:
     """A fresh all-unknown belief grid and an empty safe-space grid: zeros (UNKNOWN is 0),
-    so the operating system maps a page of them only once a cell in it is written."""
-    return np.zeros(shape, dtype=np.uint8), np.zeros(shape, dtype=bool)
+    so the operating system maps a page of them only once a cell in it is written
+    (:func:`~mresim_phys.memory.sparse_zeros`)."""
+    return sparse_zeros(shape, np.uint8), sparse_zeros(shape, bool)
 
 
 ESCAPED = 1.0  # cells from where a bump taught it nothing: it plans as usual again

@@ -23,6 +23,7 @@ import numpy as np
 
 from mresim_phys.columns import column
 from mresim_phys.features import RobotFeature
+from mresim_phys.memory import sparse_zeros
 from mresim_phys.world.beam import KINDS
 
 if TYPE_CHECKING:
@@ -66,7 +67,7 @@ class ReadingCounts:
     @classmethod
     def on(cls, shape: tuple[int, int]) -> ReadingCounts:
         """No readings yet, no evidence on a map of ``shape``."""
-        return cls(np.zeros(shape, dtype=np.int8))
+        return cls(sparse_zeros(shape, np.int8))
 
 
 class ReadingsFeature(RobotFeature[ReadingCounts, Readings]):

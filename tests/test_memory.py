@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import ctypes
+import mmap
 import resource
 import sys
 
@@ -9,7 +11,10 @@ import numpy as np
 import pytest
 
 from mresim_phys import memory
+from mresim_phys.agents import empty_belief
+from mresim_phys.comms.ledger import Ledger
 from mresim_phys.planning.dial import _dijkstra
+from mresim_phys.strategies.giveup import Tried
 
 glibc_only = pytest.mark.skipif(not sys.platform.startswith("linux"), reason="glibc's mallopt")
 
@@ -49,3 +54,41 @@ def test_the_user_can_keep_mallocs_own_settings(
         monkeypatch.undo()
         memory.keep_freed_memory.cache_clear()
         memory.keep_freed_memory()
+
+
+def resident_pages(grid: np.ndarray) -> int:
+    """How many of the pages under ``grid`` are in memory (``mincore``)."""
+    libc = ctypes.CDLL(None, use_errno=True)
+    libc.mincore.argtypes = (ctypes.c_void_p, ctypes.c_size_t, ctypes.c_void_p)
+    page = mmap.PAGESIZE
+    start = grid.ctypes.data - grid.ctypes.data % page
+    pages = -(-(grid.ctypes.data + grid.nbytes - start) // page)
+    flags = np.zeros(pages, dtype=np.uint8)
+    assert libc.mincore(ctypes.c_void_p(start), pages * page, flags.ctypes.data) == 0
+    return int(np.count_nonzero(flags & 1))
+
+
+def campus_grids(shape: tuple[int, int]) -> list[np.ndarray]:
+    """A robot's whole-map grids: belief, safe space, ledger rows, tried frontiers."""
+    belief, safe = empty_belief(shape)
+    ledger = Ledger(shape, 1)
+    tried = Tried.empty(shape)
+    return [belief, safe, ledger.stamps[0], ledger.copies[0], ledger.origins[0], tried.set_aside]
+
+
+@glibc_only
+def test_a_robots_whole_map_grids_take_memory_only_where_written() -> None:
+    """A robot made after the heap has held freed blocks of its grids' size (as any robot
+    made after the world's build, or a frontier tried at step 30, is): its grids take the
+    pages it writes, not the whole map. With ``np.zeros`` the heap handed the freed blocks
+    back, ``calloc`` cleared them, and every page stayed mapped (1.2 GB of tried-frontier
+    grids on the campus at step 30)."""
+    assert memory.keep_freed_memory()
+    shape = (4000, 4000)
+    dirty = [np.ones(shape, dtype=dtype) for dtype in (np.uint8, np.int32, np.uint8, np.bool_)]
+    del dirty  # freed into the heap, every page of them written
+    huge_page = 512  # a write may map 2 MB at once where transparent huge pages are on
+    for grid in campus_grids(shape):
+        grid[2000, 17] = 1
+        assert resident_pages(grid) <= huge_page < grid.nbytes // mmap.PAGESIZE
+        assert grid.sum() == 1 and grid.shape == shape  # (reading maps the zero page)

@@ -223,7 +223,7 @@ def test_an_unresolved_frontier_is_tried_from_another_spot_then_given_up_near_it
     assert len(frontiers) == 1
     tried = Tried.empty(belief.shape)
     tried.failed(frontiers.cells_rc, (5.5, 3.5), radius=10.0)
-    assert not tried.given_up.any() and not tried.gave_up_any
+    assert not tried.given_up.any() and not tried.gave_up_any and tried.set_aside_any
     assert tried.spots[3, 5] and not tried.spots[3, 8]
     assert tried.set_aside[2, :15].all() and not tried.set_aside[2, 15:].any()
     spared = tried.target_cells(np.ones(belief.shape, dtype=bool))

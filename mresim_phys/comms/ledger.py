@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 
 from mresim_phys.comms.changelog import ChangeLog
 from mresim_phys.comms.deltas import Cells, merge_cells, stamp_changes, tile_shape
+from mresim_phys.memory import sparse_zeros
 from mresim_phys.planning.grid import Box, union_box
 from mresim_phys.types import BeliefGrid, BoolGrid
 
@@ -63,11 +64,11 @@ class Ledger:
 
     def __init__(self, shape: tuple[int, int], n: int, latest: bool = False) -> None:
         self.latest = latest  # cells carry their observation step; the newer value wins
-        self.stamps = [np.zeros(shape, dtype=np.int32) for _ in range(n)]  # NEVER
+        self.stamps = [sparse_zeros(shape, np.int32) for _ in range(n)]  # NEVER
         # the newest stamp in each tile of an agent's grid (``deltas.TILE``)
         self.tiles = [np.zeros(tile_shape(shape), dtype=np.int32) for _ in range(n)]
-        self.copies = [np.zeros(shape, dtype=np.uint8) for _ in range(n)]
-        self.origins = [np.zeros(shape, dtype=origin_type(n)) for _ in range(n)]
+        self.copies = [sparse_zeros(shape, np.uint8) for _ in range(n)]
+        self.origins = [sparse_zeros(shape, origin_type(n)) for _ in range(n)]
         self.box_ticks = np.zeros((n, MAX_BOXES + 1), dtype=np.int64)
         self.boxes = np.zeros((n, MAX_BOXES + 1, 4), dtype=np.int64)
         self.box_count = np.zeros(n, dtype=np.int64)

@@ -33,6 +33,7 @@ from numpy.typing import NDArray
 from mresim_phys.features import ReadOnlyGrid
 from mresim_phys.knowledge.coverage import Coverage
 from mresim_phys.knowledge.mapping import Update
+from mresim_phys.memory import sparse_zeros
 from mresim_phys.types import FREE, OCCUPIED, BeliefGrid, BoolGrid
 
 Box = tuple[int, int, int, int]  # row0, row1, col0, col1 (half-open)
@@ -92,7 +93,7 @@ class LatestCoverage(Coverage):
     def _fold(self, belief: BeliefGrid, window: tuple[slice, slice]) -> None:
         """Move one map's window into the holder counts and recount the window."""
         if id(belief) not in self._held:
-            self._held[id(belief)] = np.zeros(belief.shape, np.uint8)  # all UNKNOWN
+            self._held[id(belief)] = sparse_zeros(belief.shape, np.uint8)  # UNKNOWN
         rows, cols = window
         held = self._held[id(belief)]
         second = self.reachable if self.connected is None else self.connected

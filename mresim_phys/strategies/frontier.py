@@ -89,7 +89,7 @@ class FrontierExploration(Plugin):
         reach = self.params.reach or target_reach(view.clearance)
         goal_met = len(frontiers) > 0 and self.parts.done.met(view)
         found = self._search(frontiers, context, reach) if not goal_met else None
-        if found is None and not goal_met and tried.set_aside.any():
+        if found is None and not goal_met and tried.set_aside_any:
             frontiers = self._frontiers(view, context, tried.given_up)
             found = self._search(frontiers, context, reach, retry=True)
         if found is None:

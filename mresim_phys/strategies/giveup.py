@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from mresim_phys.memory import sparse_zeros
 from mresim_phys.types import BoolGrid, IntArray
 
 MAX_TRIES = 2  # tries (from different spots) before a frontier cell is given up
@@ -43,15 +44,16 @@ class Tried:
     tries: NDArray[np.uint8]
     spots: BoolGrid
     gave_up_any: bool = False  # whether any cell is given up (read every step: no grid scan)
+    set_aside_any: bool = False  # whether any cell is set aside (read every replan)
 
     @classmethod
     def empty(cls, shape: tuple[int, ...]) -> Tried:
         """Nothing tried yet on a map of ``shape``."""
         return cls(
-            np.zeros(shape, dtype=bool),
-            np.zeros(shape, dtype=bool),
-            np.zeros(shape, dtype=np.uint8),
-            np.zeros(shape, dtype=bool),
+            sparse_zeros(shape, bool),
+            sparse_zeros(shape, bool),
+            sparse_zeros(shape, np.uint8),
+            sparse_zeros(shape, bool),
         )
 
     def failed(self, chasing: IntArray, position: tuple[float, float], radius: float) -> None:
@@ -63,6 +65,7 @@ class Tried:
         rows, cols = chasing[near, 0], chasing[near, 1]
         self.tries[rows, cols] = np.minimum(self.tries[rows, cols], MAX_TRIES - 1) + 1
         self.set_aside[rows, cols] = True
+        self.set_aside_any = self.set_aside_any or len(rows) > 0
         self.given_up[rows, cols] |= self.tries[rows, cols] >= MAX_TRIES
         self.gave_up_any = self.gave_up_any or bool(self.given_up[rows, cols].any())
         self.mark_spot(position)
@@ -71,6 +74,7 @@ class Tried:
         """Give the cells (rows[i], cols[i]) up at once (and set them aside)."""
         self.given_up[rows, cols] = self.set_aside[rows, cols] = True
         self.gave_up_any = self.gave_up_any or len(rows) > 0
+        self.set_aside_any = self.set_aside_any or len(rows) > 0
 
     def mark_spot(self, position: tuple[float, float]) -> None:
         """The cells whose centres lie within :data:`SPOT` of ``position``."""

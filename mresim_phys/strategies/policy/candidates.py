@@ -112,7 +112,7 @@ def frontier_targets(
     reach = target_reach(view.clearance)
     found = frontiers_in(view.belief, context.free_box, exclude=tried.set_aside)
     targets, costs = TargetFinder.of(found, context.passable, reach).targets(context.field)
-    if np.isfinite(costs).any() or not tried.set_aside.any():
+    if np.isfinite(costs).any() or not tried.set_aside_any:
         return found, targets, costs
     found = frontiers_in(view.belief, context.free_box, exclude=tried.given_up)
     cells = tried.target_cells(context.passable)
