@@ -9,7 +9,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mresim_phys.knowledge.known_area import CHECK, KNOWN_AREA, KnownArea, free_box
+from mresim_phys.knowledge.known_area import CHECK, KNOWN_AREA, KnownArea, free_box, free_count
 from mresim_phys.planning.grid import bbox
 from mresim_phys.scenario.load import load_scenario
 from mresim_phys.sim import Simulation
@@ -58,6 +58,8 @@ def test_the_box_is_found_inside_the_known_area() -> None:
     assert known.box == (8, 27, 4, 50)
     assert free_box(belief, {KNOWN_AREA.key: known.box}) == (10, 20, 30, 45)
     assert free_box(belief, {}) == (10, 20, 30, 45)  # a view without one: the whole grid
+    assert free_count(belief, {KNOWN_AREA.key: known.box}) == free_count(belief, {}) == 150
+    assert free_count(belief, {KNOWN_AREA.key: None}) == 0 == free_count(belief * 0, {})
 
 
 def test_the_check_mode_catches_a_free_cell_outside_the_known_area(
@@ -68,3 +70,22 @@ def test_the_check_mode_catches_a_free_cell_outside_the_known_area(
     belief[10:20, 30:45] = FREE
     with pytest.raises(AssertionError, match="outside the known area"):
         free_box(belief, {KNOWN_AREA.key: (10, 20, 30, 40)})
+    with pytest.raises(AssertionError, match="outside the known area"):
+        free_count(belief, {KNOWN_AREA.key: (10, 20, 30, 40)})
+
+
+def test_the_mission_complete_rule_counts_every_free_cell(monkeypatch: pytest.MonkeyPatch) -> None:
+    """The rule counts a robot's FREE cells inside its known area at every replan from
+    ``done_after`` on; in check mode each count is the whole grid's, and the rule still
+    sends robots out of the base's reach home (its fraction made small enough to be met
+    early)."""
+    monkeypatch.setenv(CHECK, "1")
+    strategy = {"name": "frontier", "params": {"done_after": 5, "done_fraction": 0.05}}
+    out_of_reach = {"team.comm_range": 5, "base_station.comm_range": 5}
+    sim = Simulation.from_yaml(
+        SCENARIOS / "11_library_8_robots.yaml",
+        steps=30,
+        **{"team.strategy": strategy, **out_of_reach},
+    )
+    sim.run()
+    assert any(r.strategy.parts.done.was_met for r in sim.robots)  # type: ignore[attr-defined]

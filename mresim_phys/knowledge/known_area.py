@@ -23,6 +23,8 @@ from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
 
+import numpy as np
+
 from mresim_phys.features import RobotFeature
 from mresim_phys.planning.grid import Box, bbox, union_box
 from mresim_phys.types import FREE, BeliefGrid
@@ -77,6 +79,25 @@ def free_box(belief: BeliefGrid, features: Mapping[str, Any]) -> Box | None:
             found = inner[0] + r0, inner[1] + r0, inner[2] + c0, inner[3] + c0
     if os.environ.get(CHECK) == "1":
         whole = bbox(belief == FREE)
+        if whole != found:
+            raise AssertionError(f"FREE cells outside the known area {known}: {whole} != {found}")
+    return found
+
+
+def free_count(belief: BeliefGrid, features: Mapping[str, Any]) -> int:
+    """How many of ``belief``'s cells are FREE, counted inside the robot's known area when
+    its view's ``features`` carry one, else over the whole grid (the mission-complete rule
+    asks at every replan after its first steps: 5 ms a call over a campus's 16 million
+    cells)."""
+    if KNOWN_AREA.key not in features:
+        return int(np.count_nonzero(belief == FREE))
+    known: Box | None = features[KNOWN_AREA.key]
+    found = 0
+    if known is not None:
+        r0, r1, c0, c1 = known
+        found = int(np.count_nonzero(belief[r0:r1, c0:c1] == FREE))
+    if os.environ.get(CHECK) == "1":
+        whole = int(np.count_nonzero(belief == FREE))
         if whole != found:
             raise AssertionError(f"FREE cells outside the known area {known}: {whole} != {found}")
     return found

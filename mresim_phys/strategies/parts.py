@@ -28,6 +28,7 @@ from typing import Protocol, runtime_checkable
 import numpy as np
 
 from mresim_phys.knowledge.frontiers import Frontiers
+from mresim_phys.knowledge.known_area import free_count
 from mresim_phys.knowledge.teammates import TeammateInfo
 from mresim_phys.planning.goal_fields import GoalFields
 from mresim_phys.strategies.auction import (
@@ -38,7 +39,7 @@ from mresim_phys.strategies.auction import (
     utility,
 )
 from mresim_phys.strategies.base import PlanContext, RobotView
-from mresim_phys.types import FREE, FloatArray, IntArray
+from mresim_phys.types import FloatArray, IntArray
 
 EXPLORES_WITHOUT = frozenset({"drive", "sensor"})  # a teammate with either failed takes no frontier
 
@@ -229,7 +230,7 @@ class MissionComplete:
             return False
         if self.delivered:  # it brought its map home once: it explores on to the end
             return False
-        met = int(np.count_nonzero(view.belief == FREE)) >= self.fraction * view.free_area
+        met = free_count(view.belief, view.features) >= self.fraction * view.free_area
         self.was_met = self.was_met or met
         return met
 
