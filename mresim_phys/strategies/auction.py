@@ -65,10 +65,24 @@ class Bidder:
 
 def utility(sizes: FloatArray, costs: FloatArray, power: int = 4) -> FloatArray:
     """The original's frontier utility ``size * 1e8 / d**4`` (``power``: another exponent
-    of the distance, as a candidate order may use); unreachable frontiers get -inf."""
-    with np.errstate(divide="ignore", over="ignore"):
-        u = sizes * UTILITY_SCALE / np.maximum(costs, 1.0) ** power
-    return np.where(np.isfinite(costs), u, -np.inf)
+    of the distance, as a candidate order may use), ``sizes`` and ``costs`` broadcast
+    together; unreachable frontiers get -inf.
+
+    Compiled (:func:`_utility`, the C library's ``pow``) rather than numpy's ``**``: on a
+    processor with AVX-512, numpy's power is a vector routine whose last bit differs from
+    ``pow`` on some distances, so the same run chose other frontiers on other machines, and
+    a bid rescored by :func:`pair_utilities` differed from its first score."""
+    s, c = np.broadcast_arrays(np.asarray(sizes, np.float64), np.asarray(costs, np.float64))
+    out = np.empty(c.shape)
+    _utilities(s.ravel(), c.ravel(), float(power), out.reshape(-1))
+    return out
+
+
+@njit(cache=True, nogil=True)
+def _utilities(sizes: FloatArray, costs: FloatArray, power: float, out: FloatArray) -> None:
+    """:func:`_utility` of each (size, cost) pair into ``out``."""
+    for i in range(len(costs)):
+        out[i] = _utility(sizes[i], costs[i], power)
 
 
 @njit(cache=True, nogil=True)
@@ -76,20 +90,19 @@ def pair_utilities(
     size: float, costs: FloatArray, high: FloatArray, u: FloatArray, u_low: FloatArray
 ) -> None:
     """:func:`utility` (power 4) of frontier ``size`` at each of ``costs`` into ``u`` and
-    each of ``high`` into ``u_low``: the same operations on each pair, in the same order,
-    so the same floats, without numpy's per-call cost (a refinement rescores a column of
-    bidders a few hundred times a step on the campus)."""
+    each of ``high`` into ``u_low``, without numpy's per-call cost (a refinement rescores a
+    column of bidders a few hundred times a step on the campus)."""
     for i in range(len(costs)):
-        u[i] = _utility(size, costs[i])
-        u_low[i] = _utility(size, high[i])
+        u[i] = _utility(size, costs[i], 4.0)
+        u_low[i] = _utility(size, high[i], 4.0)
 
 
 @njit(cache=True, nogil=True, inline="always")
-def _utility(size: float, cost: float) -> float:
-    """One pair's :func:`utility` (power 4): -inf for an unreachable frontier."""
+def _utility(size: float, cost: float, power: float) -> float:
+    """One pair's :func:`utility`: -inf for an unreachable frontier."""
     if not np.isfinite(cost):
         return -np.inf
-    value: float = size * UTILITY_SCALE / max(cost, 1.0) ** 4.0
+    value: float = size * UTILITY_SCALE / max(cost, 1.0) ** power
     return value
 
 
@@ -162,8 +175,9 @@ def teammate_bidders(
             settled, np.abs(here - mine) - BOUND_MARGIN, search.final_below - mine - BOUND_MARGIN
         )
         costs[on] = np.maximum(costs[on], bounds)
+    exact = np.zeros(costs.shape, dtype=bool)  # one array: a row of it for each teammate
     return [
-        Bidder(name, costs[i], np.zeros(costs.shape[1], dtype=bool), xy_i, rank)
+        Bidder(name, costs[i], exact[i], xy_i, rank)
         for i, (name, xy_i, rank) in enumerate(zip(names, positions, ranks, strict=True))
     ]
 
