@@ -62,6 +62,7 @@ def test_a_suite_writes_its_table_and_its_hashes(results: Path) -> None:
     record = json.loads((results / "results.json").read_text())
     assert len(record["instances"]) == 3 and len(record["runs"]) == 6
     assert record["packages"]["numpy"] != "unknown"
+    assert record["processor"]["machine"] and isinstance(record["processor"]["simd"], list)
     index = yaml.safe_load((results / "instances" / "set.yaml").read_text())
     assert record["instances"] == {i["id"]: i["grid_sha256"] for i in index["instances"]}
     page = (results / "results.md").read_text()
@@ -82,7 +83,12 @@ def test_check_confirms_the_runs_and_fails_on_a_doctored_file(
     (doctored / "results.json").write_text(json.dumps(record))
     capsys.readouterr()
     assert main(["benchmark", "--check", str(doctored), "--sample", "0"]) == 1
-    assert first in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert first in err and "other vector extensions" not in err
+    record["processor"]["simd"] = ["ANOTHER_PROCESSOR"]  # as if recorded elsewhere
+    (doctored / "results.json").write_text(json.dumps(record))
+    assert main(["benchmark", "--check", str(doctored), "--sample", "0"]) == 1
+    assert "other vector extensions than this one" in capsys.readouterr().err
 
 
 @pytest.mark.parametrize(

@@ -177,11 +177,22 @@ def write_results(out: Path, suite: SuiteSpec, index: dict[str, Any], text: str)
         "suite": suite.name,
         "suite_sha256": hashlib.sha256(text.encode("utf-8")).hexdigest(),
         "python": platform.python_version(),
+        "processor": processor(),
         "packages": {name: package_version(name) for name in PACKAGES},
         "instances": {i["id"]: i["grid_sha256"] for i in index["instances"]},
         "runs": runs,
     }
     (out / "results.json").write_text(json.dumps(record, indent=2) + "\n", encoding="utf-8")
+
+
+def processor() -> dict[str, Any]:
+    """This machine's architecture and the vector extensions numpy found on it: another
+    processor may round a library routine's last bit otherwise (docs/seeds.md)."""
+    try:
+        from numpy._core._multiarray_umath import __cpu_features__ as features
+    except ImportError:  # numpy moved it: the architecture alone
+        features = {}
+    return {"machine": platform.machine(), "simd": sorted(k for k, v in features.items() if v)}
 
 
 def package_version(name: str) -> str:
@@ -273,5 +284,16 @@ def check_results(folder: Path, sample: int) -> list[str]:
             metrics = again / "metrics.csv"
             same = metrics.is_file() and sha256_of(metrics) == expected.get("metrics_sha256")
             if done.returncode != 0 or not same:
-                problems.append(f"{name}: re-run gives another metrics.csv")
+                problems.append(f"{name}: re-run gives another metrics.csv{elsewhere(record)}")
     return problems
+
+
+def elsewhere(record: dict[str, Any]) -> str:
+    """A note when ``record`` was made on another kind of processor than this one."""
+    recorded = record.get("processor")
+    if recorded is None or recorded == processor():
+        return ""
+    return (
+        f" (recorded on a {recorded.get('machine')} processor with other vector extensions"
+        " than this one: floats may round otherwise, docs/seeds.md)"
+    )
