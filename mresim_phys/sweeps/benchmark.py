@@ -33,6 +33,7 @@ with the runs that differ.
 from __future__ import annotations
 
 import hashlib
+import importlib
 import json
 import platform
 import subprocess
@@ -188,9 +189,10 @@ def write_results(out: Path, suite: SuiteSpec, index: dict[str, Any], text: str)
 def processor() -> dict[str, Any]:
     """This machine's architecture and the vector extensions numpy found on it: another
     processor may round a library routine's last bit otherwise (docs/seeds.md)."""
-    try:
-        from numpy._core._multiarray_umath import __cpu_features__ as features
-    except ImportError:  # numpy moved it: the architecture alone
+    try:  # numpy's own (not public) table; the architecture alone if it moved
+        umath = importlib.import_module("numpy._core._multiarray_umath")
+        features: dict[str, bool] = dict(getattr(umath, "__cpu_features__", {}))
+    except ImportError:
         features = {}
     return {"machine": platform.machine(), "simd": sorted(k for k, v in features.items() if v)}
 
