@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import heapq
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -310,3 +311,31 @@ def test_path_length() -> None:
     assert path_length(np.empty((0, 2))) == 0.0
     assert path_length(np.array([[1.0, 1.0]])) == 0.0
     assert path_length(np.array([[0.0, 0.0], [3.0, 4.0], [3.0, 5.0]])) == pytest.approx(6.0)
+
+
+def test_a_reused_passable_mask_is_the_fresh_one_through_a_threaded_run(
+    monkeypatch: pytest.MonkeyPatch,
+) -> None:
+    """``passable_cells`` hands a thread its last mask again once nothing holds it: every
+    mask it gives, reused or new, equals the one a fresh grid would give, through a run of
+    8 robots on 2 threads (a write into a mask outside its box, or a reuse while a replan
+    still held it, would show here); and masks are reused."""
+    from mresim_phys import Simulation
+    from mresim_phys.planning import fields
+
+    given, reused = [0], [0]
+    whole_grid = fields._whole_grid
+
+    def checked(shape: tuple[int, ...], box: tuple[int, int, int, int]) -> np.ndarray:
+        held = getattr(fields._HELD, "grid", None)
+        grid = whole_grid(shape, box)
+        reused[0] += held is not None and held[0] is grid
+        given[0] += 1
+        assert not grid.any()  # what np.zeros gives, before the caller writes its box
+        return grid
+
+    monkeypatch.setattr(fields, "_whole_grid", checked)
+    scenario = Path(__file__).resolve().parent.parent / "scenarios" / "11_library_8_robots.yaml"
+    sim = Simulation.from_yaml(scenario, steps=40, **{"simulation.threads": 2})
+    sim.run()
+    assert given[0] > 40 and reused[0] > given[0] // 2

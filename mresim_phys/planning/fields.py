@@ -34,8 +34,11 @@ bytes per window cell. The kernel releases the GIL; csgraph held it.
 
 from __future__ import annotations
 
+import sys
+import threading
 from dataclasses import dataclass, field
 from functools import cached_property, lru_cache
+from typing import Any
 
 import cv2
 import numpy as np
@@ -43,7 +46,7 @@ from numpy.typing import NDArray
 
 from mresim_phys.planning.costs import dijkstra_weighted
 from mresim_phys.planning.dial import _NO_PRED, _dijkstra
-from mresim_phys.planning.grid import SQRT2, Box, Window, bbox
+from mresim_phys.planning.grid import SQRT2, Box, Window, bbox, forget_window
 from mresim_phys.types import FREE, OCCUPIED, BeliefGrid, BoolGrid, FloatArray, IntArray
 
 MAX_SNAP = 3.0  # cells: how far a start off the passable cells is moved onto them
@@ -117,10 +120,38 @@ def passable_cells(
     # radius from every FREE cell, so the border never reaches them.
     blocked = cv2.dilate(occupied, kernel, borderType=cv2.BORDER_CONSTANT, borderValue=1)
     inner = (crop == FREE) & (blocked == 0)
-    out = np.zeros(belief.shape, dtype=bool)
+    out = _whole_grid(belief.shape, (r0, r1, c0, c1))
     out[r0:r1, c0:c1] = inner
     box = bbox(inner)
     return out, None if box is None else (box[0] + r0, box[1] + r0, box[2] + c0, box[3] + c0)
+
+
+_HELD = threading.local()  # per thread: (the last mask passable_cells gave, its box)
+
+
+def _refs(holder: tuple[Any, ...]) -> int:
+    """``sys.getrefcount`` of ``holder[0]``, counted the same way wherever it is asked."""
+    return sys.getrefcount(holder[0])
+
+
+_ALONE = _refs((np.zeros(1),))  # the count of an object only its tuple holds
+
+
+def _whole_grid(shape: tuple[int, ...], box: Box) -> BoolGrid:
+    """A False grid of ``shape`` whose cells outside ``box`` stay False (the caller writes
+    the box): the last one made on this thread, its old box cleared, when nothing but
+    :data:`_HELD` holds it any more (the replan it was made for has ended), else a new one.
+    A replan on the campus (4000 x 4000 cells) cleared a new 16 MB grid otherwise."""
+    held = getattr(_HELD, "grid", None)
+    if held is not None and held[0].shape == shape and _refs(held) == _ALONE:
+        grid: BoolGrid = held[0]
+        r0, r1, c0, c1 = held[1]
+        forget_window(grid)
+        grid[r0:r1, c0:c1] = False
+    else:
+        grid = np.zeros(shape, dtype=bool)
+    _HELD.grid = (grid, box)
+    return grid
 
 
 # --------------------------------------------------------------------------- search

@@ -133,6 +133,14 @@ def remember_window(passable: BoolGrid, window: Window) -> None:
     _KNOWN.window = (weakref.ref(passable), window)
 
 
+def forget_window(passable: BoolGrid) -> None:
+    """Drop the note of :func:`remember_window` if it is of ``passable``: its cells are about
+    to be rewritten (``fields.passable_cells`` reuses a mask nobody holds any more)."""
+    known = getattr(_KNOWN, "window", None)
+    if known is not None and known[0]() is passable:
+        _KNOWN.window = None
+
+
 @dataclass(frozen=True)
 class Window:
     """A padded search window over a passable mask (flat, blocked border)."""
