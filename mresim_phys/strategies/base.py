@@ -50,6 +50,21 @@ from mresim_phys.planning.topological import TopologicalPlanner
 from mresim_phys.strategies.params import StrategyParams
 from mresim_phys.types import FREE, BeliefGrid, BoolGrid, FloatArray
 
+_RANKS: dict[int, tuple[tuple[str, ...], dict[str, int]]] = {}  # id(order) -> (order, ranks)
+MAX_ORDERS = 64  # orders whose ranks are kept (a run has one)
+
+
+def ranks_of(order: tuple[str, ...]) -> dict[str, int]:
+    """Each name's place in ``order`` (its first), found once per order: a simulation gives
+    every view the same tuple, and an auction of 128 robots asks for every teammate's."""
+    held = _RANKS.get(id(order))
+    if held is None or held[0] is not order:
+        if len(_RANKS) >= MAX_ORDERS:
+            _RANKS.clear()
+        ranks = {name: i for i, name in reversed(list(enumerate(order)))}
+        held = _RANKS[id(order)] = (order, ranks)
+    return held[1]
+
 
 @dataclass(frozen=True)
 class RobotView:
@@ -98,13 +113,7 @@ class RobotView:
 
     def tie_rank(self, name: str) -> int:
         """Where ``name`` stands in the team's tie-break order (unknown names last)."""
-        return self._ranks.get(name, len(self.team_order))
-
-    @cached_property
-    def _ranks(self) -> dict[str, int]:
-        """Each name's place in ``team_order``, found once a view (an auction of 128
-        robots asks for every teammate's)."""
-        return {name: i for i, name in reversed(list(enumerate(self.team_order)))}
+        return ranks_of(self.team_order).get(name, len(self.team_order))
 
 
 @dataclass(frozen=True)
