@@ -19,9 +19,9 @@ loudly).
 from __future__ import annotations
 
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, TypeVar
 
 import numpy as np
 
@@ -30,6 +30,7 @@ from mresim_phys.planning.grid import Box, bbox, union_box
 from mresim_phys.types import FREE, BeliefGrid
 
 CHECK = "MRESIM_CHECK_KNOWN_AREA"
+T = TypeVar("T")
 
 
 @dataclass
@@ -68,20 +69,7 @@ def grow_known(states: Mapping[str, Any], box: Box) -> None:
 def free_box(belief: BeliefGrid, features: Mapping[str, Any]) -> Box | None:
     """The bounding box of ``belief``'s FREE cells (None: none), looked for inside the
     robot's known area when its view's ``features`` carry one, else over the whole grid."""
-    if KNOWN_AREA.key not in features:
-        return bbox(belief == FREE)
-    known: Box | None = features[KNOWN_AREA.key]
-    found = None
-    if known is not None:
-        r0, r1, c0, c1 = known
-        inner = bbox(belief[r0:r1, c0:c1] == FREE)
-        if inner is not None:
-            found = inner[0] + r0, inner[1] + r0, inner[2] + c0, inner[3] + c0
-    if os.environ.get(CHECK) == "1":
-        whole = bbox(belief == FREE)
-        if whole != found:
-            raise AssertionError(f"FREE cells outside the known area {known}: {whole} != {found}")
-    return found
+    return _inside_known(belief, features, _free_bbox)
 
 
 def free_count(belief: BeliefGrid, features: Mapping[str, Any]) -> int:
@@ -89,15 +77,30 @@ def free_count(belief: BeliefGrid, features: Mapping[str, Any]) -> int:
     its view's ``features`` carry one, else over the whole grid (the mission-complete rule
     asks at every replan after its first steps: 5 ms a call over a campus's 16 million
     cells)."""
+    return _inside_known(
+        belief, features, lambda window, r0, c0: int(np.count_nonzero(window == FREE))
+    )
+
+
+def _free_bbox(window: BeliefGrid, r0: int, c0: int) -> Box | None:
+    """The bounding box of the FREE cells of ``window`` (whose first cell is (r0, c0))."""
+    inner = bbox(window == FREE)
+    return None if inner is None else (inner[0] + r0, inner[1] + r0, inner[2] + c0, inner[3] + c0)
+
+
+def _inside_known(
+    belief: BeliefGrid, features: Mapping[str, Any], measure: Callable[[BeliefGrid, int, int], T]
+) -> T:
+    """``measure(window, row0, col0)`` of the robot's known area (an empty window while it
+    knows nothing), or of the whole grid when its view's ``features`` carry none; in the
+    check mode, compared with the whole grid's."""
     if KNOWN_AREA.key not in features:
-        return int(np.count_nonzero(belief == FREE))
+        return measure(belief, 0, 0)
     known: Box | None = features[KNOWN_AREA.key]
-    found = 0
-    if known is not None:
-        r0, r1, c0, c1 = known
-        found = int(np.count_nonzero(belief[r0:r1, c0:c1] == FREE))
+    r0, r1, c0, c1 = known if known is not None else (0, 0, 0, 0)
+    found = measure(belief[r0:r1, c0:c1], r0, c0)
     if os.environ.get(CHECK) == "1":
-        whole = int(np.count_nonzero(belief == FREE))
+        whole = measure(belief, 0, 0)
         if whole != found:
             raise AssertionError(f"FREE cells outside the known area {known}: {whole} != {found}")
     return found
