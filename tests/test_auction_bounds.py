@@ -19,6 +19,7 @@ from mresim_phys.knowledge.teammates import TeammateInfo
 from mresim_phys.planning.dial import PausedSearch
 from mresim_phys.planning.fields import distance_field, traversable
 from mresim_phys.planning.grid import bbox
+from mresim_phys.strategies import frontier_utility as fu
 from mresim_phys.strategies.auction import path_bounds, straight_line
 from mresim_phys.strategies.base import RobotView, plan_context
 from mresim_phys.types import FREE, OCCUPIED, UNKNOWN
@@ -146,7 +147,7 @@ def test_the_upper_bounds_utilities_are_those_of_the_exact_costs(
     sizes = rng.integers(1, 400, goals).astype(np.float64)
     team = [auction.Bidder(f"R{i}", costs[i], exact[i], (0.5, 0.5), i) for i in range(bidders)]
     bids = auction.Bids.of(team, sizes)
-    expected = auction.utility(sizes[None, :], np.where(exact, costs, np.inf))
+    expected = fu.utility(sizes[None, :], np.where(exact, costs, np.inf))
     np.testing.assert_array_equal(bids.u_low, expected)
     assert bids.u_low.tobytes() == expected.tobytes()
 
@@ -163,10 +164,10 @@ def test_a_rescored_column_holds_the_floats_utility_gives(seed: int, size: int) 
     )  # fmt: skip
     grid = np.stack((costs, costs[::-1], costs * 1.5), axis=1)  # a column is a strided view
     u, u_low = np.zeros_like(grid), np.zeros_like(grid)
-    auction.pair_utilities(float(size), grid[:, 0], grid[:, 2], u[:, 1], u_low[:, 1])
+    fu.pair_utilities(float(size), grid[:, 0], grid[:, 2], u[:, 1], u_low[:, 1])
     sizes = np.array([float(size)])
-    assert u[:, 1].tobytes() == auction.utility(sizes, grid[:, 0]).tobytes()
-    assert u_low[:, 1].tobytes() == auction.utility(sizes, grid[:, 2]).tobytes()
+    assert u[:, 1].tobytes() == fu.utility(sizes, grid[:, 0]).tobytes()
+    assert u_low[:, 1].tobytes() == fu.utility(sizes, grid[:, 2]).tobytes()
 
 
 @settings(max_examples=40, deadline=None)
@@ -179,9 +180,9 @@ def test_utilities_are_the_c_librarys_pow_on_every_machine(seed: int, power: int
     rng = np.random.default_rng(seed)
     costs = np.concatenate((rng.uniform(0.0, 400.0, (3, 60)), [[np.inf] * 60]))
     sizes = rng.integers(1, 5000, 60).astype(float)
-    got = auction.utility(sizes[None, :], costs, power)
+    got = fu.utility(sizes[None, :], costs, power)
     expected = [
-        [s * auction.UTILITY_SCALE / max(c, 1.0) ** float(power) if np.isfinite(c) else -np.inf
+        [s * fu.UTILITY_SCALE / max(c, 1.0) ** float(power) if np.isfinite(c) else -np.inf
          for s, c in zip(sizes.tolist(), row, strict=True)]
         for row in costs.tolist()
     ]  # fmt: skip

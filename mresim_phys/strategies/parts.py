@@ -36,9 +36,9 @@ from mresim_phys.strategies.auction import (
     TeammateSearches,
     greedy_auction,
     teammate_bidders,
-    utility,
 )
 from mresim_phys.strategies.base import PlanContext, RobotView
+from mresim_phys.strategies.frontier_utility import utility
 from mresim_phys.types import FloatArray, IntArray
 
 EXPLORES_WITHOUT = frozenset({"drive", "sensor"})  # a teammate with either failed takes no frontier
