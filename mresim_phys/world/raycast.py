@@ -47,16 +47,6 @@ def _occupied(grid: BoolGrid, row: int, col: int) -> bool:
     return bool(grid[row, col])
 
 
-@njit(cache=True, nogil=True)
-def _first_crossing(origin: float, cell: int, step: int, d: float) -> float:
-    """Distance along the ray to the first cell boundary in one axis (inf if parallel)."""
-    if step > 0:
-        return (cell + 1 - origin) / d
-    if step < 0:
-        return (cell - origin) / d
-    return math.inf
-
-
 @njit(cache=True, nogil=True, error_model="numpy")
 def _grid_hit(
     grid: BoolGrid, ox: float, oy: float, dx: float, dy: float, max_range: float
